@@ -1,0 +1,5 @@
+"""``python -m rigidid``."""
+
+from rigidid.cli import main
+
+main()

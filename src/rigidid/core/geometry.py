@@ -1,0 +1,194 @@
+"""Rigid-body kinematics: sensor transformation and change of reference point.
+
+Coordinates of rigid-body motion are ordered ``(x, y, z, rx, ry, rz)``: the
+translation of a reference point followed by the small rotation vector.
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.errors import InputError
+
+__all__ = [
+    "LayoutFrame",
+    "layout_condition",
+    "layout_frame",
+    "normalise_directions",
+    "sensor_matrix",
+    "skew",
+    "transfer_matrix",
+]
+
+Array = NDArray[np.float64]
+
+
+def skew(v: ArrayLike) -> Array:
+    """Return the cross-product matrix ``S(v)`` with ``S(v) @ w == cross(v, w)``.
+
+    Parameters
+    ----------
+    v : array_like, shape (3,)
+        Any 3-vector.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        The skew-symmetric matrix of `v`. ``H_dg`` of eq. (13) of [1] is
+        ``skew(g - d)``.
+    """
+    x, y, z = np.asarray(v, dtype=float)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def transfer_matrix(offset: ArrayLike) -> Array:
+    """Motion of a point from the motion of a reference point, eqs. (11)-(14) of [1].
+
+    Parameters
+    ----------
+    offset : array_like, shape (3,)
+        Position of the point minus position of the reference point (length).
+
+    Returns
+    -------
+    ndarray, shape (6, 6)
+        ``G`` with ``x_point = G @ x_ref`` for rigid motion, i.e.
+        ``[[I, -S(offset)], [0, I]]``. With ``offset = d - g`` this is ``G_dg``
+        of eq. (12); its inverse is ``transfer_matrix(-offset)`` (eq. (14)).
+    """
+    g = np.eye(6)
+    g[:3, 3:] = -skew(offset)
+    return g
+
+
+def normalise_directions(directions: ArrayLike) -> Array:
+    """Scale each measuring direction to unit length.
+
+    Parameters
+    ----------
+    directions : array_like, shape (p, 3)
+        Measuring axes, any length.
+
+    Returns
+    -------
+    ndarray, shape (p, 3)
+        Unit vectors.
+
+    Raises
+    ------
+    InputError
+        If a direction is zero or not finite.
+    """
+    d = np.asarray(directions, dtype=float).reshape(-1, 3)
+    norms = np.linalg.norm(d, axis=1)
+    bad = np.flatnonzero(~np.isfinite(norms) | (norms <= 0.0))
+    if bad.size:
+        raise InputError("direction is a zero or non-finite vector", location=f"sensor {bad[0] + 1}")
+    result: Array = d / norms[:, None]
+    return result
+
+
+def sensor_matrix(positions: ArrayLike, directions: ArrayLike, reference: ArrayLike = (0.0, 0.0, 0.0)) -> Array:
+    """Sensor transformation ``T_mo``: eq. (3) of [1] for any measuring direction.
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations (length).
+    directions : array_like, shape (p, 3)
+        Unit measuring axes of the sensors.
+    reference : array_like, shape (3,)
+        The reference point of the rigid-body coordinates (length).
+
+    Returns
+    -------
+    ndarray, shape (p, 6)
+        Row ``i`` is ``[n_i, (r_i - reference) x n_i]``, so that the reading of
+        sensor ``i`` is ``T[i] @ x`` for rigid motion ``x`` of the reference
+        point. For ``n_i = +x`` the row is ``[1, 0, 0, 0, w_i, -v_i]``, eq. (3).
+
+    Notes
+    -----
+    Directions are used as given; normalise them first
+    (:func:`normalise_directions`) unless they are already unit vectors.
+    """
+    r = np.asarray(positions, dtype=float).reshape(-1, 3) - np.asarray(reference, dtype=float)
+    n = np.asarray(directions, dtype=float).reshape(-1, 3)
+    return np.hstack([n, np.cross(r, n)])
+
+
+class LayoutFrame:
+    """A length scale and origin that make a sensor layout dimensionless.
+
+    Attributes
+    ----------
+    centre : ndarray, shape (3,)
+        Centroid of the sensor positions (length).
+    scale : float
+        RMS distance of the sensors from `centre` (length); 1 if they coincide.
+    """
+
+    __slots__ = ("centre", "scale")
+
+    def __init__(self, centre: Array, scale: float):
+        self.centre = centre
+        self.scale = scale
+
+    def to_local(self, points: ArrayLike) -> Array:
+        """Map points (length) to the dimensionless frame."""
+        result: Array = (np.asarray(points, dtype=float) - self.centre) / self.scale
+        return result
+
+
+def layout_frame(positions: ArrayLike) -> LayoutFrame:
+    """Centroid and RMS radius of a sensor layout.
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations (length).
+
+    Returns
+    -------
+    LayoutFrame
+        Used to make the identification independent of origin and units.
+    """
+    r = np.asarray(positions, dtype=float).reshape(-1, 3)
+    centre = r.mean(axis=0)
+    scale = float(np.sqrt(np.mean(np.sum((r - centre) ** 2, axis=1))))
+    return LayoutFrame(centre, scale if scale > 0.0 else 1.0)
+
+
+def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float, int]:
+    """Condition number and rank of the dimensionless sensor transformation.
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations (length).
+    directions : array_like, shape (p, 3)
+        Unit measuring axes.
+
+    Returns
+    -------
+    cond : float
+        2-norm condition number of ``T_mo`` built about the sensor centroid with
+        positions divided by the RMS radius (independent of origin and units);
+        ``inf`` when the rank is below 6.
+    rank : int
+        Numerical rank of that matrix (at most 6). The paper's step (3)
+        requires rank 6.
+    """
+    frame = layout_frame(positions)
+    t = sensor_matrix(frame.to_local(positions), directions)
+    s = np.linalg.svd(t, compute_uv=False)
+    tol = max(t.shape) * np.finfo(float).eps * (s[0] if s.size else 0.0) * 1e3
+    rank = int(np.sum(s > tol))
+    cond = float(s[0] / s[-1]) if rank == 6 and s.size == 6 else float("inf")
+    return cond, rank

@@ -1,0 +1,579 @@
+"""Centre of gravity, inertia, stiffness and damping from rigid-body modes.
+
+The identity behind everything here is eq. (18) of [1],
+``M_g G_go Q = K_g G_go``, with ``Q = M_o^-1 K_o`` the stiffness-to-mass matrix
+in the coordinates of the origin ``o`` (eq. (17)), and its damping twin
+``M_g G_go P = C_g G_go`` with ``P = M_o^-1 C_o``. Multiplying by
+``G_og = G_go^-1`` (eq. (14)) on the right gives ``D Q_g = K_g / m`` with
+``D = diag(I, J / m)`` and ``Q_g = G_go Q G_og`` the same matrix at the CG.
+Symmetry of ``K_g`` is the whole information: ``D Q_g`` must be symmetric.
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, sensor_matrix, transfer_matrix
+from rigidid.core.selection import project_rigid
+from rigidid.core.statespace import modal_from_poles, state_matrices, state_matrices_paper
+from rigidid.errors import IdentificationError, IllConditionedWarning, InputError, PhysicalPlausibilityWarning
+
+__all__ = [
+    "DAMPING_WEIGHT",
+    "METHODS",
+    "Diagnostics",
+    "Identification",
+    "identify",
+    "principal_axes",
+    "solve_paper",
+    "solve_structured",
+]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+Method = Literal["structured", "paper"]
+METHODS: tuple[str, ...] = ("structured", "paper")
+DAMPING_WEIGHT = 0.3
+"""Default weight of the damping equations against the stiffness equations."""
+
+_UPPER = np.triu_indices(6, 1)
+_SYM_BASIS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+
+
+def _inertia_from_params(j: Array) -> Array:
+    out = np.zeros((3, 3))
+    for value, (a, b) in zip(j, _SYM_BASIS, strict=True):
+        out[a, b] = out[b, a] = value
+    return out
+
+
+def _at_point(x: Array, g: Array) -> Array:
+    """``G_go X G_og``: a matrix of origin coordinates moved to the point ``g``."""
+    result: Array = transfer_matrix(g) @ x @ transfer_matrix(-g)
+    return result
+
+
+def _sym(a: Array) -> Array:
+    result: Array = 0.5 * (a + a.T)
+    return result
+
+
+def _scaled_inertia(j: Array) -> Array:
+    d = np.eye(6)
+    d[3:, 3:] = j
+    return d
+
+
+def _inertia_basis() -> Array:
+    basis = np.zeros((6, 6, 6))
+    for k, (a, b) in enumerate(_SYM_BASIS):
+        basis[k, 3 + a, 3 + b] = basis[k, 3 + b, 3 + a] = 1.0
+    return basis
+
+
+_BASIS = _inertia_basis()
+_TRANSLATION = np.diag([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+
+
+def _asym_system(g: Array, mats: list[tuple[Array, float]]) -> tuple[Array, Array]:
+    """Linear system ``A j + r0`` of the antisymmetric part of ``D X_g`` for fixed ``g``.
+
+    Returns ``A`` (15 n, 6) and ``r0`` (15 n,) for the n matrices in `mats`.
+    """
+    go, og = transfer_matrix(g), transfer_matrix(-g)
+    rows_a = []
+    rows_r = []
+    for x, weight in mats:
+        xg = go @ x @ og
+        y0 = _TRANSLATION @ xg
+        rows_r.append(weight * (y0 - y0.T)[_UPPER])
+        y = _BASIS @ xg
+        rows_a.append(weight * (y - y.transpose(0, 2, 1))[:, _UPPER[0], _UPPER[1]].T)
+    return np.vstack(rows_a), np.concatenate(rows_r)
+
+
+def _best_inertia(g: Array, mats: list[tuple[Array, float]]) -> tuple[Array, Array]:
+    a, r0 = _asym_system(g, mats)
+    j = np.asarray(np.linalg.lstsq(a, -r0, rcond=None)[0], dtype=np.float64)
+    return j, a @ j + r0
+
+
+def _levenberg_marquardt(fun: Callable[[Array], Array], x0: Array, max_iter: int = 200) -> tuple[Array, float]:
+    """Minimise ``|fun(x)|^2`` from `x0` (small problems; central-difference Jacobian)."""
+    x = x0.astype(float).copy()
+    r = fun(x)
+    cost = float(r @ r)
+    damping = 1e-3
+    for _ in range(max_iter):
+        if cost == 0.0:
+            break
+        jac = np.empty((r.size, x.size))
+        for i in range(x.size):
+            h = 1e-6 * (1.0 + abs(x[i]))
+            e = np.zeros_like(x)
+            e[i] = h
+            jac[:, i] = (fun(x + e) - fun(x - e)) / (2.0 * h)
+        scale = np.sqrt(np.maximum(np.sum(jac * jac, axis=0), 1e-30))
+        improved = False
+        while damping < 1e12:
+            lhs = np.vstack([jac, np.sqrt(damping) * np.diag(scale)])
+            rhs = np.concatenate([-r, np.zeros(x.size)])
+            step, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
+            r_new = fun(x + step)
+            cost_new = float(r_new @ r_new)
+            if cost_new < cost:
+                improved = True
+                x, r = x + step, r_new
+                small = np.linalg.norm(step) <= 1e-13 * (1.0 + np.linalg.norm(x))
+                flat = cost - cost_new <= 1e-15 * cost
+                cost = cost_new
+                damping = max(damping / 5.0, 1e-12)
+                if small or flat:
+                    return x, cost
+                break
+            damping *= 4.0
+        if not improved:
+            break
+    return x, cost
+
+
+def _eq36_cg(q: Array) -> tuple[Array, Array]:
+    """Linear system of eq. (36) of [1]: symmetry of ``Q11 - S(g) Q21``."""
+    a = np.empty((3, 3))
+    upper3 = np.triu_indices(3, 1)
+    for i in range(3):
+        e = np.zeros(3)
+        e[i] = 1.0
+        y = _at_point(q, e)[:3, :3] - q[:3, :3]
+        a[:, i] = (y - y.T)[upper3]
+    b = -(q[:3, :3] - q[:3, :3].T)[upper3]
+    return a, b
+
+
+def solve_structured(
+    stiffness: Array, damping: Array | None = None, damping_weight: float = 0.0
+) -> tuple[Array, Array]:
+    """CG and inertia per mass from the whole of eq. (18) of [1], solved together.
+
+    Parameters
+    ----------
+    stiffness : ndarray, shape (6, 6)
+        ``Q = M_o^-1 K_o`` in the coordinates of the origin (dimensionless
+        frame advised: lengths and times scaled to order one).
+    damping : ndarray, shape (6, 6), optional
+        ``P = M_o^-1 C_o``, used when `damping_weight` is positive.
+    damping_weight : float
+        Weight of the damping twin of eq. (18) against the stiffness equations.
+
+    Returns
+    -------
+    cg : ndarray, shape (3,)
+        Centre of gravity in the origin's frame (length).
+    inertia_per_mass : ndarray, shape (3, 3)
+        Symmetric ``J / m`` (length^2).
+
+    Notes
+    -----
+    Unknowns: the CG (3) and the symmetric ``J / m`` (6); equations: the 15
+    entries of the antisymmetric part of ``D Q_g`` (and of ``D P_g``), which
+    hold eqs. (32)-(35) once the symmetric ``K / m = sym(D Q_g)`` is
+    eliminated. ``J / m`` enters linearly and is solved by least squares for
+    each trial CG (variable projection); the CG is found by Levenberg-Marquardt
+    from two starts, eq. (36) and the origin. Unlike the sequential route
+    (eqs. (36)-(40)), this needs neither eq. (36) nor ``Q21`` to be regular, so
+    identical mounts at one height are fine.
+    """
+    mats: list[tuple[Array, float]] = [(np.asarray(stiffness, dtype=float), 1.0)]
+    if damping is not None and damping_weight > 0.0:
+        mats.append((np.asarray(damping, dtype=float), damping_weight))
+
+    def residual(g: Array) -> Array:
+        return _best_inertia(g, mats)[1]
+
+    a36, b36 = _eq36_cg(mats[0][0])
+    g36 = np.asarray(np.linalg.lstsq(a36, b36, rcond=1e-6)[0], dtype=np.float64)
+    best: tuple[Array, float] | None = None
+    for start in (g36, np.zeros(3)):
+        if not np.all(np.isfinite(start)):
+            continue
+        g, cost = _levenberg_marquardt(residual, start)
+        if best is None or cost < best[1]:
+            best = (g, cost)
+    assert best is not None
+    g = best[0]
+    j, _ = _best_inertia(g, mats)
+    return g, _inertia_from_params(j)
+
+
+def solve_paper(stiffness: Array) -> tuple[Array, Array]:
+    """CG and inertia per mass by the paper's sequential route, eqs. (36)-(39) of [1].
+
+    Parameters
+    ----------
+    stiffness : ndarray, shape (6, 6)
+        ``Q = M_o^-1 K_o`` in the origin's coordinates.
+
+    Returns
+    -------
+    cg : ndarray, shape (3,)
+        From eq. (36).
+    inertia_per_mass : ndarray, shape (3, 3)
+        ``J / m = (K12 / m)^T Q21^-1`` (eq. (39)), symmetrised as in the paper.
+
+    Raises
+    ------
+    IdentificationError
+        If eq. (36) or ``Q21`` is singular (for example identical mounts at one
+        height, where ``K21`` is singular in exact arithmetic).
+
+    Notes
+    -----
+    Fragile: 0.1 % noise on mode shapes can move the CG by a large fraction of
+    the body. Kept for comparison with the paper; eq. (40) is applied in its
+    corrected form ``K22 / m = (J / m) Q22 - (K21 / m) H_go`` by the caller
+    (:func:`identify` forms ``sym(D Q_g)``, which is the same matrix).
+    """
+    q = np.asarray(stiffness, dtype=float)
+    a36, b36 = _eq36_cg(q)
+    q21 = q[3:, :3]
+    for name, mat in (("eq. (36)", a36), ("Q21", q21)):
+        c = np.linalg.cond(mat)
+        if not np.isfinite(c) or c > 1e12:
+            raise IdentificationError(f"paper method: {name} is singular (condition {c:.3g}); use --method structured")
+        if c > 1e6:
+            warnings.warn(
+                f"paper method: {name} is ill-conditioned (condition {c:.3g})", IllConditionedWarning, stacklevel=3
+            )
+    g = np.asarray(np.linalg.solve(a36, b36), dtype=np.float64)
+    qg = _at_point(q, g)
+    k12 = qg[:3, 3:]
+    j = np.asarray(np.linalg.solve(q21.T, k12).T, dtype=np.float64)
+    return g, _sym(j)
+
+
+def principal_axes(inertia: ArrayLike) -> tuple[Array, Array]:
+    """Principal moments (ascending) and axes of a symmetric inertia tensor.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (3, 3)
+        Inertia tensor (or inertia per mass).
+
+    Returns
+    -------
+    moments : ndarray, shape (3,)
+        Eigenvalues, ascending.
+    axes : ndarray, shape (3, 3)
+        Column ``i`` is the unit axis of ``moments[i]``; the first two columns
+        have their largest component positive, the third completes a
+        right-handed frame.
+    """
+    w, v = np.linalg.eigh(_sym(np.asarray(inertia, dtype=float)))
+    for i in range(2):
+        if v[np.argmax(np.abs(v[:, i])), i] < 0:
+            v[:, i] = -v[:, i]
+    v[:, 2] = np.cross(v[:, 0], v[:, 1])
+    return w, v
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """How well-posed the identification was and how well the result fits.
+
+    Attributes
+    ----------
+    layout_condition : float
+        Condition number of the dimensionless sensor transformation.
+    layout_rank : int
+        Its rank (6 needed).
+    rigid_fit_residual : ndarray, shape (6,)
+        Per mode used, ``|psi - T T^+ psi| / |psi|`` (0 with six sensors).
+    structure_residual : float
+        ``|D Q_g - (D Q_g)^T| / |D Q_g|`` at the solution: 0 for data an exact
+        rigid body explains.
+    model_frequency_hz, model_damping_ratio : ndarray, shape (6,)
+        Modes of the identified model, matched to the measured modes.
+    model_mac : ndarray, shape (6,)
+        MAC between each measured shape and the identified model's shape.
+    warnings : tuple of str
+        The physical-plausibility and conditioning warnings raised.
+    """
+
+    layout_condition: float
+    layout_rank: int
+    rigid_fit_residual: Array
+    structure_residual: float
+    model_frequency_hz: Array
+    model_damping_ratio: Array
+    model_mac: Array
+    warnings: tuple[str, ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Identified rigid-body properties, at the CG, in the layout's units.
+
+    Attributes
+    ----------
+    center_of_gravity : ndarray, shape (3,)
+        CG in the layout's axes (length).
+    inertia_per_mass : ndarray, shape (3, 3)
+        Inertia tensor about the CG divided by mass (length^2).
+    stiffness_per_mass : ndarray, shape (6, 6)
+        Support stiffness at the CG over mass, DOF order x, y, z, rx, ry, rz
+        (1/s^2, length/s^2, length^2/s^2 blocks).
+    damping_per_mass : ndarray, shape (6, 6)
+        Viscous damping at the CG over mass (1/s, length/s, length^2/s).
+    mass : float or None
+        The mass, when known.
+    frequency_hz, damping_ratio : ndarray, shape (6,)
+        Measured modes used, in the order of `modes_used`.
+    method : str
+        ``"structured"`` or ``"paper"``.
+    diagnostics : Diagnostics
+    """
+
+    center_of_gravity: Array
+    inertia_per_mass: Array
+    stiffness_per_mass: Array
+    damping_per_mass: Array
+    mass: float | None
+    frequency_hz: Array
+    damping_ratio: Array
+    method: str
+    diagnostics: Diagnostics
+
+    def _absolute(self, per_mass: Array) -> Array | None:
+        return None if self.mass is None else self.mass * per_mass
+
+    @property
+    def inertia_tensor(self) -> Array | None:
+        """Inertia tensor about the CG (mass length^2), or None without mass."""
+        return self._absolute(self.inertia_per_mass)
+
+    @property
+    def stiffness_matrix(self) -> Array | None:
+        """Support stiffness at the CG (mass/s^2 ...), or None without mass."""
+        return self._absolute(self.stiffness_per_mass)
+
+    @property
+    def damping_matrix(self) -> Array | None:
+        """Support damping at the CG (mass/s ...), or None without mass."""
+        return self._absolute(self.damping_per_mass)
+
+    @property
+    def principal_moments_per_mass(self) -> Array:
+        """Principal moments of inertia per mass, ascending (length^2)."""
+        return principal_axes(self.inertia_per_mass)[0]
+
+    @property
+    def principal_moments(self) -> Array | None:
+        """Principal moments of inertia, ascending, or None without mass."""
+        return self._absolute(self.principal_moments_per_mass)
+
+    @property
+    def principal_axes(self) -> Array:
+        """Unit principal axes, column ``i`` for moment ``i``."""
+        return principal_axes(self.inertia_per_mass)[1]
+
+    def model_modes(self) -> tuple[CArray, CArray]:
+        """Modes of the identified model, eq. (1) of [1] with the identified matrices.
+
+        Returns
+        -------
+        poles : ndarray of complex, shape (6,)
+            One pole per pair, ``Im > 0`` (rad/s), ascending frequency.
+        shapes : ndarray of complex, shape (6, 6)
+            Column ``k``: motion of the CG ``(x, y, z, rx, ry, rz)`` in mode
+            ``k`` (length and rad), scaled to unit Euclidean norm.
+        """
+        poles, shapes = _model_modes(self.inertia_per_mass, self.stiffness_per_mass, self.damping_per_mass)
+        order = np.argsort(np.abs(poles))
+        shapes = shapes[:, order]
+        return poles[order], shapes / np.linalg.norm(shapes, axis=0)
+
+
+def _physical_checks(j: Array, k: Array, c: Array) -> list[str]:
+    found = []
+    moments = np.linalg.eigvalsh(_sym(j))
+    if moments[0] <= 0.0:
+        found.append(
+            f"inertia tensor is not positive definite (principal moments per mass {moments.round(6).tolist()})"
+        )
+    elif moments[2] > (moments[0] + moments[1]) * (1.0 + 1e-9):
+        found.append("principal moments break the triangle inequality (largest exceeds the sum of the other two)")
+    for name, mat in (("stiffness", k), ("damping", c)):
+        ev = np.linalg.eigvalsh(_sym(mat))
+        if ev[0] < -1e-9 * max(abs(ev[-1]), 1e-300):
+            share = 100.0 * ev[0] / max(abs(ev[-1]), 1e-300)
+            found.append(
+                f"{name} matrix is not positive semi-definite (smallest eigenvalue {share:.2g} % of the largest)"
+            )
+    return found
+
+
+def _model_modes(j: Array, k: Array, c: Array) -> tuple[CArray, CArray]:
+    d = _scaled_inertia(j)
+    a = np.block([[-np.linalg.solve(d, c), -np.linalg.solve(d, k)], [np.eye(6), np.zeros((6, 6))]])
+    mu, vec = np.linalg.eig(a)
+    upper = np.argsort(-mu.imag)[:6]
+    return mu[upper], vec[6:, upper]
+
+
+def _match_modes(measured: CArray, model_poles: CArray, model_shapes: CArray) -> tuple[CArray, Array]:
+    """Pair each measured mode with the model mode of best MAC; return model poles and MACs."""
+    num = np.abs(measured.conj().T @ model_shapes) ** 2
+    den = np.outer(np.sum(np.abs(measured) ** 2, axis=0), np.sum(np.abs(model_shapes) ** 2, axis=0))
+    mac = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+    chosen = np.argmax(mac, axis=1)
+    return model_poles[chosen], mac[np.arange(mac.shape[0]), chosen]
+
+
+def identify(
+    positions: ArrayLike,
+    directions: ArrayLike,
+    poles: ArrayLike,
+    shapes: ArrayLike,
+    *,
+    mass: float | None = None,
+    method: Method = "structured",
+    damping_weight: float = DAMPING_WEIGHT,
+) -> Identification:
+    """Identify CG, inertia, stiffness and damping from six rigid-body modes.
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations in the test's axes (length), ``p >= 6``.
+    directions : array_like, shape (p, 3)
+        Measuring axes (normalised here).
+    poles : array_like of complex, shape (6,)
+        One pole of each rigid-body mode (rad/s).
+    shapes : array_like of complex, shape (p, 6)
+        Mode shapes as each sensor reads them along its own direction; any
+        scaling per mode.
+    mass : float, optional
+        Mass of the body; without it only per-mass results are meaningful.
+    method : {"structured", "paper"}
+        ``"structured"``: exact state matrix (eq. (19)) and the whole of
+        eq. (18) solved together (:func:`solve_structured`). ``"paper"``:
+        eqs. (25)-(26) and the sequential eqs. (36)-(40), eq. (40) corrected.
+    damping_weight : float
+        With ``"structured"``, weight of the damping twin of eq. (18) in the
+        CG and inertia fit, in the dimensionless frame (0: stiffness only).
+        The default was chosen on ``benchmarks/noise_accuracy.py``; results
+        there change by under 0.1 % of span between 0 and 0.3.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    InputError
+        Shapes that do not match the layout, or a mass that is not positive.
+    IdentificationError
+        A layout of rank below 6, or modes that do not determine a rigid body.
+
+    Notes
+    -----
+    Shapes with more than six sensors are projected on rigid-body motion by
+    least squares (eq. (30) of [1] in spirit). The computation runs in a frame
+    centred on the sensors, with lengths divided by their RMS radius and times
+    by the mean natural frequency, so results are invariant to origin and
+    units. Physically impossible results raise
+    :class:`~rigidid.errors.PhysicalPlausibilityWarning` and are listed in the
+    diagnostics.
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    dirs = normalise_directions(directions)
+    lam = np.asarray(poles, dtype=complex).ravel()
+    psi = np.asarray(shapes, dtype=complex)
+    if psi.ndim != 2 or psi.shape != (pos.shape[0], lam.shape[0]) or dirs.shape != pos.shape:
+        raise InputError(
+            f"shapes must be (sensors, modes) = ({pos.shape[0]}, {lam.shape[0]}), got {psi.shape}; "
+            f"directions {dirs.shape}"
+        )
+    if lam.shape[0] != 6:
+        raise InputError(f"exactly six rigid-body modes are needed, got {lam.shape[0]}")
+    if np.any(lam.imag <= 0.0) or np.any(lam.real > 0.0):
+        raise InputError("poles must be stable with positive imaginary part")
+    if not np.all(np.isfinite(psi)) or not np.all(np.isfinite(pos)):
+        raise InputError("positions and shapes must be finite")
+    if mass is not None and not (np.isfinite(mass) and mass > 0.0):
+        raise InputError(f"mass must be positive, got {mass}")
+    if method not in METHODS:
+        raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+
+    cond, rank = layout_condition(pos, dirs)
+    if rank < 6:
+        raise IdentificationError(f"the sensor layout has rank {rank}; rigid-body motion needs rank 6")
+    frame = layout_frame(pos)
+    t = sensor_matrix(frame.to_local(pos), dirs)
+    phi, fit = project_rigid(t, psi)
+    omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
+    lam_s = lam / omega
+
+    caught: list[str] = []
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        if cond > 1e6:
+            warnings.warn(
+                f"sensor layout is ill-conditioned (condition {cond:.3g})", IllConditionedWarning, stacklevel=2
+            )
+        if method == "paper":
+            q, p = state_matrices_paper(lam_s, phi)
+            g, j = solve_paper(q)
+        else:
+            q, p = state_matrices(lam_s, phi)
+            g, j = solve_structured(q, p, damping_weight)
+        qg, pg = _at_point(q, g), _at_point(p, g)
+        d = _scaled_inertia(j)
+        dq, dp = d @ qg, d @ pg
+        structure = float(np.linalg.norm(dq - dq.T)) / max(float(np.linalg.norm(dq)), 1e-300)
+        k, c = _sym(dq), _sym(dp)
+        for message in _physical_checks(j, k, c):
+            warnings.warn(message, PhysicalPlausibilityWarning, stacklevel=2)
+    for w in record:
+        caught.append(str(w.message))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+    model_poles, model_phi = _model_modes(j, k, c)
+    model_psi = sensor_matrix(frame.to_local(pos), dirs, g) @ model_phi
+    matched, mac = _match_modes(psi, model_poles, model_psi)
+    model_f, model_z = modal_from_poles(matched * omega)
+    f, z = modal_from_poles(lam)
+
+    length, length2 = frame.scale, frame.scale**2
+    dof = np.array([1.0, 1.0, 1.0, length, length, length])
+    return Identification(
+        center_of_gravity=frame.centre + length * g,
+        inertia_per_mass=length2 * j,
+        stiffness_per_mass=omega**2 * k * np.outer(dof, dof),
+        damping_per_mass=omega * c * np.outer(dof, dof),
+        mass=None if mass is None else float(mass),
+        frequency_hz=f,
+        damping_ratio=z,
+        method=method,
+        diagnostics=Diagnostics(
+            layout_condition=cond,
+            layout_rank=rank,
+            rigid_fit_residual=fit,
+            structure_residual=structure,
+            model_frequency_hz=model_f,
+            model_damping_ratio=model_z,
+            model_mac=mac,
+            warnings=tuple(caught),
+        ),
+    )

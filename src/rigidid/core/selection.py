@@ -1,0 +1,102 @@
+"""How rigid-body-like a measured mode shape is, and which modes to use.
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.errors import IdentificationError
+
+__all__ = ["project_rigid", "rigid_fit_residuals", "select_rigid_modes"]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+
+
+def project_rigid(transformation: ArrayLike, shapes: ArrayLike) -> tuple[CArray, Array]:
+    """Least-squares rigid-body coordinates of measured shapes, eq. (30) of [1] in spirit.
+
+    Parameters
+    ----------
+    transformation : array_like, shape (p, 6)
+        Sensor transformation ``T_mo`` (see :func:`rigidid.core.geometry.sensor_matrix`).
+    shapes : array_like of complex, shape (p, n)
+        Measured mode shapes, one column per mode.
+
+    Returns
+    -------
+    coordinates : ndarray of complex, shape (6, n)
+        ``T^+ psi``: the rigid motion that best explains each shape.
+    residual : ndarray, shape (n,)
+        ``|psi - T T^+ psi| / |psi|`` per mode: 0 for exact rigid-body motion,
+        near 1 for a shape rigid motion cannot explain.
+
+    Notes
+    -----
+    With ``p = 6`` every shape fits exactly and the residual carries no
+    information; it needs ``p > 6``.
+    """
+    t = np.asarray(transformation, dtype=float)
+    psi = np.asarray(shapes, dtype=complex)
+    coords, *_ = np.linalg.lstsq(t.astype(complex), psi, rcond=None)
+    misfit = np.linalg.norm(psi - t @ coords, axis=0)
+    norms = np.linalg.norm(psi, axis=0)
+    residual = np.divide(misfit, norms, out=np.ones_like(misfit), where=norms > 0)
+    return coords, residual
+
+
+def rigid_fit_residuals(transformation: ArrayLike, shapes: ArrayLike) -> Array:
+    """Relative residual of each mode shape's least-squares fit by rigid-body motion.
+
+    Parameters
+    ----------
+    transformation : array_like, shape (p, 6)
+        Sensor transformation.
+    shapes : array_like of complex, shape (p, n)
+        Measured mode shapes.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        See :func:`project_rigid`.
+    """
+    return project_rigid(transformation, shapes)[1]
+
+
+def select_rigid_modes(transformation: ArrayLike, shapes: ArrayLike, count: int = 6) -> NDArray[np.intp]:
+    """Indices of the `count` modes whose shapes are closest to rigid-body motion.
+
+    Parameters
+    ----------
+    transformation : array_like, shape (p, 6)
+        Sensor transformation, ``p > 6``.
+    shapes : array_like of complex, shape (p, n)
+        Measured mode shapes, ``n >= count``.
+    count : int
+        How many modes to keep.
+
+    Returns
+    -------
+    ndarray of int, shape (count,)
+        Column indices into `shapes`, in ascending order.
+
+    Raises
+    ------
+    IdentificationError
+        With six sensors or fewer (every shape fits rigid motion exactly, so
+        there is nothing to choose by) or fewer than `count` modes.
+    """
+    t = np.asarray(transformation, dtype=float)
+    psi = np.asarray(shapes, dtype=complex)
+    if t.shape[0] <= 6:
+        raise IdentificationError("choosing the rigid-body modes needs more than six sensors; pass --modes")
+    if psi.shape[1] < count:
+        raise IdentificationError(f"need at least {count} modes, got {psi.shape[1]}")
+    residual = rigid_fit_residuals(t, psi)
+    return np.sort(np.argsort(residual, kind="stable")[:count])

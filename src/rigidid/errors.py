@@ -1,0 +1,62 @@
+"""Exceptions and warning categories of rigidid.
+
+Every error rigidid raises on purpose is a :class:`RigididError`. The concrete
+classes also derive from :class:`ValueError`, so code that already catches
+``ValueError`` keeps working. The command line catches :class:`RigididError`
+only at its top level and turns it into one line on standard error.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "IdentificationError",
+    "IllConditionedWarning",
+    "InputError",
+    "PhysicalPlausibilityWarning",
+    "RigididError",
+    "RigididWarning",
+]
+
+
+class RigididError(Exception):
+    """Root of every error raised by rigidid."""
+
+
+class InputError(RigididError, ValueError):
+    """A file, argument or array that rigidid cannot use.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in words a user understands.
+    source : str, optional
+        The file (or argument) the problem is in.
+    location : str, optional
+        Where in that source: ``"row 5"``, ``"sensors.3.direction"``...
+    """
+
+    def __init__(self, message: str, *, source: str | None = None, location: str | None = None):
+        self.message = message
+        self.source = source
+        self.location = location
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        parts = [p for p in (self.source, self.location) if p]
+        return ": ".join([*parts, self.message])
+
+
+class IdentificationError(RigididError, ValueError):
+    """The data are valid but do not determine a rigid body (singular, inconsistent...)."""
+
+
+class RigididWarning(UserWarning):
+    """Root category of rigidid's warnings."""
+
+
+class PhysicalPlausibilityWarning(RigididWarning):
+    """An identified quantity is physically impossible (e.g. inertia not positive definite)."""
+
+
+class IllConditionedWarning(RigididWarning):
+    """A step of the computation is badly conditioned; results may be inaccurate."""

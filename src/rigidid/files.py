@@ -1,0 +1,308 @@
+"""Reading and writing rigidid's files: layout.json, modes.csv, body.json, results.
+
+Every reader validates once, here, and raises :class:`~rigidid.errors.InputError`
+naming the file and the row or field. Writers are atomic: the file appears
+whole or not at all.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ValidationError
+
+from rigidid.errors import InputError
+from rigidid.models import BodyFile, LayoutFile, ModeRow
+
+__all__ = [
+    "MODES_COLUMNS",
+    "ModeTable",
+    "layout_arrays",
+    "load_body",
+    "load_layout",
+    "load_modes",
+    "modes_csv_text",
+    "write_text_atomic",
+]
+
+MODES_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "sensor", "real", "imag")
+_REQUIRED = MODES_COLUMNS[:5]
+
+M = TypeVar("M", bound=BaseModel)
+
+
+@dataclass(frozen=True)
+class ModeTable:
+    """Modal parameters read from ``modes.csv``, ordered like the layout's sensors.
+
+    Attributes
+    ----------
+    labels : tuple of int
+        Mode labels in file order of first appearance.
+    frequency_hz, damping_ratio : ndarray, shape (n,)
+        Per mode.
+    sensor_ids : tuple of str
+        The layout's sensor ids, the row order of `shapes`.
+    shapes : ndarray of complex, shape (p, n)
+        Mode-shape values as each sensor reads them along its own direction.
+    """
+
+    labels: tuple[int, ...]
+    frequency_hz: NDArray[np.float64]
+    damping_ratio: NDArray[np.float64]
+    sensor_ids: tuple[str, ...]
+    shapes: NDArray[np.complex128]
+
+    def subset(self, labels: Sequence[int]) -> ModeTable:
+        """The modes with the given labels, in that order."""
+        index = [self.labels.index(label) for label in labels]
+        return ModeTable(
+            tuple(labels),
+            self.frequency_hz[index],
+            self.damping_ratio[index],
+            self.sensor_ids,
+            self.shapes[:, index],
+        )
+
+
+def _first_error(exc: ValidationError) -> tuple[str, str]:
+    """Location and message of the first validation error, in file terms."""
+    errors = exc.errors()
+    # a misspelt field shows as "unknown" plus "missing": the unknown one explains both
+    err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
+    loc = ".".join(str(part) for part in err["loc"] if not (isinstance(part, str) and "[" in part))
+    loc = loc.replace(".str", "").replace(".tuple", "")
+    message = str(err["msg"]).removeprefix("Value error, ")
+    if err["type"] == "missing":
+        message = "required field is missing"
+    elif err["type"] == "extra_forbidden":
+        message = "unknown field"
+    return loc, message
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError("file not found", source=str(path)) from None
+    except IsADirectoryError:
+        raise InputError("is a directory, not a file", source=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read: {exc}", source=str(path)) from None
+
+
+def _load_json_model(path: Path, model: type[M]) -> M:
+    text = _read_text(path)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"invalid JSON: {exc.msg}", source=str(path), location=f"line {exc.lineno}") from None
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        loc, message = _first_error(exc)
+        raise InputError(message, source=str(path), location=loc or None) from None
+
+
+def load_layout(path: str | os.PathLike[str], *, require_rank: bool = True) -> LayoutFile:
+    """Read and validate a sensor layout (``layout.json``).
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    require_rank : bool
+        Also require at least six sensors that see all six rigid-body motions
+        (true for identification; false to inspect a layout being planned).
+
+    Returns
+    -------
+    LayoutFile
+        The validated layout.
+
+    Raises
+    ------
+    InputError
+        Missing file, invalid JSON, a field that breaks the contract, or a
+        layout whose sensors cannot see all six rigid-body motions (rank < 6).
+    """
+    from rigidid.core.geometry import layout_condition
+
+    p = Path(path)
+    layout = _load_json_model(p, LayoutFile)
+    if not require_rank:
+        return layout
+    _, positions, directions = layout_arrays(layout)
+    if len(layout.sensors) < 6:
+        raise InputError(f"{len(layout.sensors)} sensors; at least six are needed", source=str(p), location="sensors")
+    _, rank = layout_condition(positions, directions)
+    if rank < 6:
+        raise InputError(
+            f"the sensors see only {rank} of the 6 rigid-body motions (rank {rank} < 6); "
+            "add sensors along other axes or away from a common line/point",
+            source=str(p),
+            location="sensors",
+        )
+    return layout
+
+
+def layout_arrays(layout: LayoutFile) -> tuple[tuple[str, ...], NDArray[np.float64], NDArray[np.float64]]:
+    """Sensor ids, positions (p, 3) and unit directions (p, 3) of a layout."""
+    ids = tuple(s.id for s in layout.sensors)
+    positions = np.array([s.position for s in layout.sensors], dtype=float).reshape(-1, 3)
+    directions = np.array([s.unit_direction() for s in layout.sensors], dtype=float).reshape(-1, 3)
+    return ids, positions, directions
+
+
+def load_body(path: str | os.PathLike[str]) -> BodyFile:
+    """Read and validate a body description (``body.json``) for ``simulate``.
+
+    Raises
+    ------
+    InputError
+        As :func:`load_layout`.
+    """
+    return _load_json_model(Path(path), BodyFile)
+
+
+def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeTable:
+    """Read and validate ``modes.csv`` against the layout's sensor ids.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    sensor_ids : sequence of str
+        The layout's sensor ids; every mode must give each exactly once.
+
+    Returns
+    -------
+    ModeTable
+
+    Raises
+    ------
+    InputError
+        Naming the file and the row (line number, header = 1) for: a missing
+        or unknown column, a bad value (not a number, NaN, frequency <= 0,
+        damping outside [0, 1)), an unknown sensor, a sensor given twice in a
+        mode, frequency or damping differing between rows of one mode, a mode
+        missing a sensor, or no rows at all.
+    """
+    p = Path(path)
+    src = str(p)
+    reader = csv.reader(io.StringIO(_read_text(p)))
+    header = next(reader, None)
+    if header is None:
+        raise InputError("file is empty", source=src)
+    columns = [c.strip() for c in header]
+    for name in _REQUIRED:
+        if name not in columns:
+            raise InputError(
+                f"missing column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
+            )
+    for name in columns:
+        if name not in MODES_COLUMNS:
+            raise InputError(
+                f"unknown column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
+            )
+    if len(set(columns)) != len(columns):
+        raise InputError("a column appears twice", source=src, location="row 1")
+    index = {sid: i for i, sid in enumerate(sensor_ids)}
+    labels: list[int] = []
+    freq: dict[int, tuple[float, float, int]] = {}
+    values: dict[int, dict[str, complex]] = {}
+    for line, row in enumerate(reader, start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        where = f"row {line}"
+        if len(row) != len(columns):
+            raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
+        record: dict[str, Any] = {c: v.strip() for c, v in zip(columns, row, strict=True)}
+        if record.get("imag") == "":
+            del record["imag"]
+        try:
+            parsed = ModeRow.model_validate(record)
+        except ValidationError as exc:
+            loc, message = _first_error(exc)
+            raise InputError(message, source=src, location=f"{where}: {loc}") from None
+        if parsed.sensor not in index:
+            raise InputError(f"sensor {parsed.sensor!r} is not in the layout", source=src, location=where)
+        mode = parsed.mode
+        if mode not in freq:
+            labels.append(mode)
+            freq[mode] = (parsed.frequency_hz, parsed.damping_ratio, line)
+            values[mode] = {}
+        else:
+            f0, z0, first = freq[mode]
+            if not (np.isclose(f0, parsed.frequency_hz, rtol=1e-6) and np.isclose(z0, parsed.damping_ratio, rtol=1e-6)):
+                raise InputError(
+                    f"mode {mode}: frequency or damping differs from row {first}", source=src, location=where
+                )
+        if parsed.sensor in values[mode]:
+            raise InputError(f"mode {mode} gives sensor {parsed.sensor!r} twice", source=src, location=where)
+        values[mode][parsed.sensor] = complex(parsed.real, parsed.imag)
+    if not labels:
+        raise InputError("no mode rows", source=src)
+    shapes = np.zeros((len(sensor_ids), len(labels)), dtype=complex)
+    for k, mode in enumerate(labels):
+        missing = [sid for sid in sensor_ids if sid not in values[mode]]
+        if missing:
+            raise InputError(f"mode {mode} has no value for sensor {missing[0]!r}", source=src)
+        shapes[:, k] = [values[mode][sid] for sid in sensor_ids]
+        if not np.any(shapes[:, k]):
+            raise InputError(f"mode {mode}: every shape value is zero", source=src)
+    return ModeTable(
+        tuple(labels),
+        np.array([freq[m][0] for m in labels]),
+        np.array([freq[m][1] for m in labels]),
+        tuple(sensor_ids),
+        shapes,
+    )
+
+
+def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
+    """``modes.csv`` text of a mode table (values with `digits` significant digits)."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(MODES_COLUMNS)
+    fmt = f"{{:.{digits}g}}"
+    for k, label in enumerate(table.labels):
+        f, z = fmt.format(table.frequency_hz[k]), fmt.format(table.damping_ratio[k])
+        for i, sid in enumerate(table.sensor_ids):
+            v = table.shapes[i, k]
+            writer.writerow([label, f, z, sid, fmt.format(v.real), fmt.format(v.imag)])
+    return out.getvalue()
+
+
+def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
+    """Write `text` to `path` atomically (temporary file in the same folder, then rename).
+
+    Raises
+    ------
+    InputError
+        If the folder does not exist or is not writable.
+    """
+    import tempfile
+
+    p = Path(path)
+    folder = p.parent if str(p.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise InputError(f"cannot write: {exc.strerror}", source=str(p)) from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

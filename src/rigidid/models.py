@@ -1,0 +1,252 @@
+"""pydantic models of rigidid's files: the validation boundary.
+
+Only :mod:`rigidid.files`, :mod:`rigidid.render` and the schema generator use
+these models; the numerical core never sees them. The JSON Schemas in
+``schemas/`` are generated from them (``python -m rigidid.schemas``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+
+__all__ = [
+    "AXIS_DIRECTIONS",
+    "BodyFile",
+    "LayoutFile",
+    "ModeRow",
+    "MountSpec",
+    "ResultFile",
+    "SensorSpec",
+    "Units",
+]
+
+LengthUnit = Literal["m", "cm", "mm", "in", "ft"]
+MassUnit = Literal["kg", "g", "lb"]
+
+AXIS_DIRECTIONS: dict[str, tuple[float, float, float]] = {
+    "+x": (1.0, 0.0, 0.0),
+    "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise ValueError("must be a finite number")
+    return value
+
+
+Finite = Annotated[float, AfterValidator(_finite)]
+Vector3 = tuple[Finite, Finite, Finite]
+Matrix3 = tuple[Vector3, Vector3, Vector3]
+Matrix6 = list[list[float]]
+
+
+def _axis_name(value: object) -> object:
+    if isinstance(value, str):
+        key = value.strip().lower()
+        key = key if key[:1] in "+-" else "+" + key
+        if key not in AXIS_DIRECTIONS:
+            raise ValueError(f"unknown direction {value!r}: use +x, -x, +y, -y, +z, -z or a vector [x, y, z]")
+        return key
+    return value
+
+
+def _nonzero(value: Vector3 | str) -> Vector3 | str:
+    if not isinstance(value, str) and all(c == 0.0 for c in value):
+        raise ValueError("direction is a zero vector")
+    return value
+
+
+def _text_id(value: object) -> object:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    return value
+
+
+class _Strict(BaseModel):
+    # defer_build: a model's validator is built on first use, so that start-up
+    # does not pay for models a command never touches.
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
+
+
+class Units(_Strict):
+    """Units of every number in a file; time is always seconds."""
+
+    length: LengthUnit
+    mass: MassUnit
+
+
+class SensorSpec(_Strict):
+    """One single-axis sensor: where it is and along which axis it reads."""
+
+    id: Annotated[str, BeforeValidator(_text_id), Field(min_length=1, description="unique sensor id (text)")]
+    position: Vector3 = Field(description="location in the test's axes (length unit)")
+    direction: Annotated[
+        str | Vector3,
+        BeforeValidator(_axis_name),
+        AfterValidator(_nonzero),
+        Field(description="+x, -x, +y, -y, +z, -z (bare x means +x), or a vector, normalised by the reader"),
+    ]
+
+    def unit_direction(self) -> tuple[float, float, float]:
+        """The measuring axis as a unit vector."""
+        if isinstance(self.direction, str):
+            return AXIS_DIRECTIONS[self.direction]
+        x, y, z = self.direction
+        n = math.sqrt(x * x + y * y + z * z)
+        return (x / n, y / n, z / n)
+
+
+class LayoutFile(_Strict):
+    """``layout.json``: the sensors of a test and, optionally, the body's mass."""
+
+    name: str | None = None
+    units: Units
+    mass: Annotated[float, Field(gt=0.0, description="mass of the body (mass unit)")] | None = None
+    sensors: Annotated[list[SensorSpec], Field(min_length=1)]
+
+    @field_validator("mass")
+    @classmethod
+    def _mass_finite(cls, value: float | None) -> float | None:
+        return None if value is None else _finite(value)
+
+    @model_validator(mode="after")
+    def _unique_ids(self) -> LayoutFile:
+        seen: set[str] = set()
+        for i, sensor in enumerate(self.sensors):
+            if sensor.id in seen:
+                raise ValueError(f"sensors.{i}.id: duplicate sensor id {sensor.id!r}")
+            seen.add(sensor.id)
+        return self
+
+
+def _matrix3(value: object) -> object:
+    """Accept three per-axis values as a diagonal matrix."""
+    if isinstance(value, list | tuple) and len(value) == 3 and all(isinstance(v, int | float) for v in value):
+        return [[float(value[0]), 0.0, 0.0], [0.0, float(value[1]), 0.0], [0.0, 0.0, float(value[2])]]
+    return value
+
+
+def _symmetric(value: Matrix3) -> Matrix3:
+    scale = max(abs(v) for row in value for v in row) or 1.0
+    for i in range(3):
+        for j in range(i + 1, 3):
+            if abs(value[i][j] - value[j][i]) > 1e-9 * scale:
+                raise ValueError("matrix must be symmetric")
+    return value
+
+
+Matrix3Sym = Annotated[
+    Matrix3, BeforeValidator(_matrix3, json_schema_input_type=Vector3 | Matrix3), AfterValidator(_symmetric)
+]
+
+
+class MountSpec(_Strict):
+    """A massless elastic support acting at one point of the body."""
+
+    position: Vector3 = Field(description="where the mount acts (length unit)")
+    stiffness: Matrix3Sym = Field(description="3 per-axis values or a symmetric 3x3 matrix (mass/s^2)")
+    damping: Matrix3Sym = Field(
+        default=((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+        description="3 per-axis values or a symmetric 3x3 matrix (mass/s)",
+    )
+
+
+class BodyFile(_Strict):
+    """``body.json``: a rigid body on mounts, the truth ``rigidid simulate`` starts from."""
+
+    name: str | None = None
+    units: Units
+    mass: Annotated[float, Field(gt=0.0)]
+    center_of_gravity: Vector3
+    inertia_tensor: Matrix3Sym = Field(
+        description="about the CG (mass length^2); off-diagonal entries are minus the products of inertia"
+    )
+    mounts: Annotated[list[MountSpec], Field(min_length=1)]
+
+    @field_validator("mass")
+    @classmethod
+    def _mass_finite(cls, value: float) -> float:
+        return _finite(value)
+
+
+class ResultUnits(_Strict):
+    """Units of the result; time is seconds."""
+
+    length: LengthUnit
+    mass: MassUnit
+    time: Literal["s"] = "s"
+
+
+class ModeDiagnostics(_Strict):
+    """How one mode used was fitted."""
+
+    mode: int
+    frequency_hz: float
+    damping_ratio: float
+    rigid_fit_residual: float = Field(description="|psi - T T^+ psi| / |psi|: 0 for exact rigid-body motion")
+    model_frequency_hz: float = Field(description="natural frequency of the identified model's matching mode")
+    model_damping_ratio: float
+    model_mac: float = Field(description="MAC between the measured shape and the identified model's shape")
+
+
+class CandidateMode(_Strict):
+    """A mode given, with how well its shape fits rigid-body motion."""
+
+    mode: int
+    rigid_fit_residual: float
+
+
+class Diagnostics(_Strict):
+    """Conditioning and goodness of fit."""
+
+    layout_condition: float = Field(description="condition number of the dimensionless sensor transformation")
+    layout_rank: int
+    structure_residual: float = Field(description="relative asymmetry of (M/m) Q at the CG: 0 for an exact rigid body")
+    modes: list[ModeDiagnostics]
+    candidate_modes: list[CandidateMode] | None = Field(
+        default=None, description="every mode given, with its rigid-body fit residual, when the six were chosen"
+    )
+    warnings: list[str]
+
+
+class ResultFile(_Strict):
+    """The result JSON of ``rigidid identify`` (FORMATS.md); matrices are lists of rows, DOF x, y, z, rx, ry, rz."""
+
+    rigidid_version: str
+    method: Literal["structured", "paper"]
+    units: ResultUnits
+    mass: float | None
+    center_of_gravity: list[float]
+    inertia_per_mass: list[list[float]]
+    inertia_tensor: list[list[float]] | None
+    principal_moments: list[float] | None
+    principal_moments_per_mass: list[float]
+    principal_axes: list[list[float]]
+    stiffness_per_mass: Matrix6
+    stiffness_matrix: Matrix6 | None
+    damping_per_mass: Matrix6
+    damping_matrix: Matrix6 | None
+    modes_used: list[int]
+    modes_selected: Literal["all", "given", "automatic"] = Field(
+        description="all: exactly six given; given: --modes; automatic: the six most rigid-body-like"
+    )
+    diagnostics: Diagnostics
+
+
+class ModeRow(_Strict):
+    """One row of ``modes.csv``: one sensor's value in one mode."""
+
+    mode: Annotated[int, Field(gt=0)]
+    frequency_hz: Annotated[Finite, Field(gt=0.0)]
+    damping_ratio: Annotated[Finite, Field(ge=0.0, lt=1.0)]
+    sensor: Annotated[str, Field(min_length=1)]
+    real: Finite
+    imag: Finite = 0.0

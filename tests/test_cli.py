@@ -1,0 +1,147 @@
+"""The command line, run as a user runs it (``python -m rigidid``)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigidid.models import ResultFile
+
+from .conftest import DATA, PAPER, SAMPLES
+from .tolerances import EXACT_REL
+
+ENGINE = SAMPLES / "engine-on-mounts"
+
+
+def run(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True, cwd=cwd, check=False
+    )
+
+
+def test_identify_prints_tables() -> None:
+    out = run("identify", PAPER / "layout.json", PAPER / "modes.csv")
+    assert out.returncode == 0, out.stderr
+    for title in ("Centre of gravity", "Inertia tensor", "Principal moments", "Stiffness", "Damping", "Diagnostics"):
+        assert title in out.stdout
+    assert "-1.628" in out.stdout  # z of the CG
+    assert "rigidid: warning:" in out.stderr  # the paper's damping matrix is not positive semi-definite
+    assert "rigidid: warning:" not in out.stdout
+
+
+def test_json_to_stdout_is_only_json() -> None:
+    out = run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", "-")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    ResultFile.model_validate(data)
+    assert data["units"] == {"length": "in", "mass": "lb", "time": "s"}
+    assert data["mass"] == 136.0
+    assert data["modes_used"] == [1, 2, 3, 4, 5, 6]
+
+
+def test_json_file_and_tables(tmp_path: Path) -> None:
+    target = tmp_path / "result.json"
+    out = run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", target)
+    assert out.returncode == 0, out.stderr
+    assert "Centre of gravity" in out.stdout
+    assert json.loads(target.read_text())["method"] == "structured"
+    assert [p.name for p in tmp_path.iterdir()] == ["result.json"]  # no temporary file left
+
+
+def test_failure_writes_nothing_and_prints_one_line(tmp_path: Path) -> None:
+    target = tmp_path / "result.json"
+    out = run("identify", PAPER / "layout.json", DATA / "bad" / "modes_nan.csv", "--json", target)
+    assert out.returncode == 2
+    assert out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rigidid: error: ")
+    assert "modes_nan.csv: row 5: real" in lines[0]
+    assert "Traceback" not in out.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("--mass", "-3"), "mass must be positive"),
+        (("--method", "guess"), "--method: unknown method 'guess'"),
+        (("--modes", "1,2,x"), "--modes: expected mode labels"),
+        (("--modes", "1,2,3,4,5,7"), "--modes: mode 7 is not in the modes file"),
+    ],
+)
+def test_bad_options(args: tuple[str, ...], message: str) -> None:
+    out = run("identify", PAPER / "layout.json", PAPER / "modes.csv", *args)
+    assert out.returncode == 2
+    assert message in out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_missing_file_is_one_line() -> None:
+    out = run("identify", "nowhere.json", PAPER / "modes.csv")
+    assert out.returncode == 2
+    assert out.stderr.strip() == "rigidid: error: nowhere.json: file not found"
+
+
+def test_mass_option_overrides_layout() -> None:
+    a = json.loads(run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", "-").stdout)
+    b = json.loads(run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", "-", "--mass", "272").stdout)
+    assert b["mass"] == 272.0
+    np.testing.assert_allclose(np.array(b["inertia_tensor"]), 2 * np.array(a["inertia_tensor"]))
+    np.testing.assert_allclose(b["inertia_per_mass"], a["inertia_per_mass"])
+
+
+def test_paper_method_option() -> None:
+    data = json.loads(
+        run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--method", "paper", "--json", "-").stdout
+    )
+    assert data["method"] == "paper"
+    np.testing.assert_allclose(data["center_of_gravity"], [-0.39, -0.19, -1.63], atol=0.01)
+
+
+def test_automatic_and_given_mode_choice() -> None:
+    auto = json.loads(run("identify", ENGINE / "layout.json", ENGINE / "modes.csv", "--json", "-").stdout)
+    assert auto["modes_selected"] == "automatic" and auto["modes_used"] == [1, 2, 3, 4, 5, 6]
+    assert len(auto["diagnostics"]["candidate_modes"]) == 8
+    given = json.loads(
+        run("identify", ENGINE / "layout.json", ENGINE / "modes.csv", "--modes", "1,2,3,4,5,6", "--json", "-").stdout
+    )
+    assert given["modes_selected"] == "given"
+    np.testing.assert_allclose(given["center_of_gravity"], auto["center_of_gravity"])
+
+
+def test_simulate_then_identify_round_trip(tmp_path: Path) -> None:
+    body = json.loads((ENGINE / "body.json").read_text())
+    modes = tmp_path / "modes.csv"
+    out = run("simulate", ENGINE / "body.json", ENGINE / "layout.json", "-o", modes)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(run("identify", ENGINE / "layout.json", modes, "--json", "-").stdout)
+    np.testing.assert_allclose(data["center_of_gravity"], body["center_of_gravity"], rtol=EXACT_REL)
+    np.testing.assert_allclose(data["inertia_tensor"], body["inertia_tensor"], rtol=EXACT_REL, atol=EXACT_REL * 1e7)
+
+
+def test_simulate_noise_is_seeded() -> None:
+    args = ("simulate", ENGINE / "body.json", ENGINE / "layout.json", "--shape-noise", "0.01", "--seed", "3")
+    a, b = run(*args), run(*args)
+    exact = run("simulate", ENGINE / "body.json", ENGINE / "layout.json")
+    assert a.returncode == 0 and a.stdout == b.stdout and a.stdout != exact.stdout
+
+
+def test_simulate_rejects_unit_mismatch(tmp_path: Path) -> None:
+    layout = json.loads((ENGINE / "layout.json").read_text())
+    layout["units"]["length"] = "m"
+    (tmp_path / "layout.json").write_text(json.dumps(layout))
+    out = run("simulate", ENGINE / "body.json", tmp_path / "layout.json")
+    assert out.returncode == 2
+    assert "body units (mm, kg) differ from layout units (m, kg)" in out.stderr
+
+
+def test_help_and_version() -> None:
+    out = run("--help")
+    assert out.returncode == 0 and "identify" in out.stdout and "simulate" in out.stdout
+    version = run("--version")
+    assert version.returncode == 0 and version.stdout.startswith("rigidid ")
