@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from rigidid.core.identify import Identification
 from rigidid.core.identify import identify as _identify
 from rigidid.core.simulate import add_noise, body_modes, random_body, random_layout
-from rigidid.errors import PhysicalPlausibilityWarning
+from rigidid.errors import RigididWarning
 
 from .tolerances import EXACT_REL
 
@@ -19,9 +19,9 @@ seeds = st.integers(min_value=0, max_value=2**31 - 1)
 
 
 def identify(*args: object, **kwargs: object) -> Identification:
-    """Identify, with plausibility warnings (expected for noisy draws) ignored locally."""
+    """Identify, with rigidid's warnings (expected for some random draws) ignored locally."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PhysicalPlausibilityWarning)
+        warnings.simplefilter("ignore", RigididWarning)
         return _identify(*args, **kwargs)  # type: ignore[arg-type]
 
 

@@ -15,12 +15,25 @@ from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
+_API = (
+    "IdentifyResult",
+    "PlanResult",
+    "TestData",
+    "convert",
+    "estimate_modes",
+    "identify",
+    "load_arrays",
+    "load_layout",
+    "load_modes",
+    "load_records",
+    "load_uff",
+    "plan",
+    "report",
+    "simulate",
+    "simulate_records",
+)
 _EXPORTS = {
-    "identify": "rigidid.api",
-    "simulate": "rigidid.api",
-    "load_layout": "rigidid.api",
-    "load_modes": "rigidid.api",
-    "IdentifyResult": "rigidid.api",
+    **dict.fromkeys(_API, "rigidid.api"),
     "result_to_dict": "rigidid.render",
     "result_tables": "rigidid.render",
     "RigididError": "rigidid.errors",
@@ -33,19 +46,45 @@ __all__ = [
     "IdentificationError",
     "IdentifyResult",
     "InputError",
+    "PlanResult",
     "RigididError",
     "RigididWarning",
+    "TestData",
     "__version__",
+    "convert",
+    "estimate_modes",
     "identify",
+    "load_arrays",
     "load_layout",
     "load_modes",
+    "load_records",
+    "load_uff",
+    "plan",
+    "report",
     "result_tables",
     "result_to_dict",
     "simulate",
+    "simulate_records",
 ]
 
 if TYPE_CHECKING:
-    from rigidid.api import IdentifyResult, identify, load_layout, load_modes, simulate
+    from rigidid.api import (
+        IdentifyResult,
+        PlanResult,
+        TestData,
+        convert,
+        estimate_modes,
+        identify,
+        load_arrays,
+        load_layout,
+        load_modes,
+        load_records,
+        load_uff,
+        plan,
+        report,
+        simulate,
+        simulate_records,
+    )
     from rigidid.errors import IdentificationError, InputError, RigididError, RigididWarning
     from rigidid.render import result_tables, result_to_dict
 

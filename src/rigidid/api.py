@@ -10,9 +10,10 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Literal
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +28,30 @@ from rigidid.errors import InputError
 from rigidid.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
 
-__all__ = ["IdentifyResult", "body_from_file", "identify", "load_layout", "load_modes", "simulate"]
+if TYPE_CHECKING:
+    from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
+    from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.uncertainty import NoiseLevels, Uncertainty
+
+__all__ = [
+    "Arrays",
+    "IdentifyResult",
+    "PlanResult",
+    "TestData",
+    "body_from_file",
+    "convert",
+    "estimate_modes",
+    "identify",
+    "load_arrays",
+    "load_layout",
+    "load_modes",
+    "load_records",
+    "load_uff",
+    "plan",
+    "report",
+    "simulate",
+    "simulate_records",
+]
 
 PathLike = str | os.PathLike[str]
 Selection = Literal["all", "given", "automatic"]
@@ -52,6 +76,12 @@ class IdentifyResult:
         How the six modes were chosen.
     candidate_residuals : dict or None
         Rigid-body fit residual of every mode given, when chosen automatically.
+    poles : ndarray of complex, shape (6,)
+        Poles of the modes used (rad/s).
+    shapes : ndarray of complex, shape (p, 6)
+        Their shapes at the sensors.
+    uncertainty : Uncertainty or None
+        Monte Carlo intervals, when asked for.
     """
 
     identification: Identification
@@ -62,6 +92,9 @@ class IdentifyResult:
     modes_used: tuple[int, ...]
     selection: Selection
     candidate_residuals: dict[int, float] | None = None
+    poles: NDArray[np.complex128] | None = None
+    shapes: NDArray[np.complex128] | None = None
+    uncertainty: Uncertainty | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -72,6 +105,41 @@ def load_layout(path: PathLike) -> LayoutFile:
 def load_modes(path: PathLike, layout: LayoutFile) -> ModeTable:
     """Read and validate ``modes.csv`` against a layout (see :func:`rigidid.files.load_modes`)."""
     return files.load_modes(path, [s.id for s in layout.sensors])
+
+
+@dataclass(frozen=True)
+class Arrays:
+    """A layout and its modes as the numerical core takes them.
+
+    Attributes
+    ----------
+    sensor_ids : tuple of str
+    positions, directions : ndarray, shape (p, 3)
+        Sensor locations (length) and unit measuring axes.
+    labels : tuple of int
+        Mode labels.
+    poles : ndarray of complex, shape (n,)
+        One pole per mode (rad/s).
+    shapes : ndarray of complex, shape (p, n)
+    mass : float or None
+    """
+
+    sensor_ids: tuple[str, ...]
+    positions: NDArray[np.float64]
+    directions: NDArray[np.float64]
+    labels: tuple[int, ...]
+    poles: NDArray[np.complex128]
+    shapes: NDArray[np.complex128]
+    mass: float | None
+
+
+def load_arrays(layout: PathLike, modes: PathLike) -> Arrays:
+    """Read ``layout.json`` and ``modes.csv`` into the arrays :mod:`rigidid.core` takes."""
+    lay = load_layout(layout)
+    table = load_modes(modes, lay)
+    ids, positions, directions = files.layout_arrays(lay)
+    poles = poles_from_modal(table.frequency_hz, table.damping_ratio)
+    return Arrays(ids, positions, directions, table.labels, poles, table.shapes, lay.mass)
 
 
 def _choose_modes(
@@ -111,6 +179,9 @@ def identify(
     mass: float | None = None,
     modes_used: Sequence[int] | None = None,
     method: Method = "structured",
+    uncertainty: int = 0,
+    noise: NoiseLevels | Mapping[str, float] | None = None,
+    seed: int | None = 0,
 ) -> IdentifyResult:
     """Identify CG, inertia, stiffness and damping from a layout and its modes.
 
@@ -129,6 +200,17 @@ def identify(
         whose shapes fit rigid-body motion best.
     method : {"structured", "paper"}
         See :func:`rigidid.core.identify.identify`.
+    uncertainty : int
+        Number of Monte Carlo draws for uncertainty intervals (0: none).
+    noise : NoiseLevels or mapping, optional
+        Measurement uncertainty to propagate. By default
+        :data:`~rigidid.core.uncertainty.DEFAULT_NOISE` with the shape noise
+        estimated from the rigid-body fit residuals when there are more than
+        six sensors (:func:`~rigidid.core.uncertainty.estimate_noise`); a
+        mapping (e.g. ``{"shape": 0.02, "angle_deg": 1.0}``) overrides those
+        defaults field by field.
+    seed : int, optional
+        Seed of the Monte Carlo draws.
 
     Returns
     -------
@@ -153,14 +235,22 @@ def identify(
     t = sensor_matrix(frame.to_local(positions), directions)
     labels, selection, residuals = _choose_modes(table, t, modes_used, source)
     used = table.subset(labels)
-    result = identify_core(
-        positions,
-        directions,
-        poles_from_modal(used.frequency_hz, used.damping_ratio),
-        used.shapes,
-        mass=mass if mass is not None else lay.mass,
-        method=method,
-    )
+    poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
+    body_mass = mass if mass is not None else lay.mass
+    result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+    intervals = None
+    if uncertainty:
+        from rigidid.core.uncertainty import estimate_noise, propagate
+
+        if uncertainty < 2:
+            raise InputError(f"need at least 2 draws, got {uncertainty}", source="--uncertainty")
+        if isinstance(noise, Mapping) or noise is None:
+            levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
+        else:
+            levels = noise
+        intervals = propagate(
+            positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed
+        )
     return IdentifyResult(
         identification=result,
         units={"length": lay.units.length, "mass": lay.units.mass},
@@ -170,6 +260,9 @@ def identify(
         modes_used=labels,
         selection=selection,
         candidate_residuals=residuals,
+        poles=poles,
+        shapes=used.shapes,
+        uncertainty=intervals,
     )
 
 
@@ -222,16 +315,470 @@ def simulate(
     """
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
-    if spec.units != lay.units:
-        raise InputError(
-            f"body units ({spec.units.length}, {spec.units.mass}) differ from layout units "
-            f"({lay.units.length}, {lay.units.mass})",
-            source=None if isinstance(body, BodyFile) else str(body),
-            location="units",
-        )
+    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     ids, positions, directions = files.layout_arrays(lay)
     modes = body_modes(body_from_file(spec), positions, directions)
     if frequency_noise or damping_noise or shape_noise:
         modes = add_noise(modes, frequency=frequency_noise, damping=damping_noise, shape=shape_noise, seed=seed)
     f, z = modal_from_poles(modes.poles)
     return ModeTable(tuple(range(1, 7)), f, z, ids, modes.shapes)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A sensor layout checked before the test, with predictions when a body estimate is given.
+
+    Attributes
+    ----------
+    units : dict
+        The layout's units.
+    report : LayoutReport
+        Rank, condition and findings in words.
+    prediction : Prediction or None
+        Predicted standard deviations of CG and inertia (needs a body).
+    suggestions : SensorPlan or None
+        The sensors to add, best first (needs a body and ``add > 0``).
+    """
+
+    units: dict[str, str]
+    report: LayoutReport
+    prediction: Prediction | None = None
+    suggestions: SensorPlan | None = None
+
+
+def plan(
+    layout: LayoutFile | PathLike,
+    *,
+    body: BodyFile | PathLike | None = None,
+    candidates: LayoutFile | PathLike | None = None,
+    add: int = 0,
+    noise: Mapping[str, float] | None = None,
+    draws: int = 1000,
+    seed: int | None = 0,
+) -> PlanResult:
+    """Check a sensor layout before the test; predict and improve it with a body estimate.
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The planned sensors (any number, rank not required).
+    body : BodyFile or path-like, optional
+        An estimate of the body and its mounts (e.g. from CAD), in the layout's units.
+    candidates : LayoutFile or path-like, optional
+        Possible extra sensors, as a layout file (positions and directions); by
+        default a 3 x 3 x 3 grid over the sensors' bounding box, each point tried
+        along x, y and z.
+    add : int
+        How many sensors to suggest, one at a time (greedy).
+    noise : mapping, optional
+        Overrides of :data:`~rigidid.core.uncertainty.DEFAULT_NOISE`
+        (``frequency``, ``damping``, ``shape``, ``position``, ``angle_deg``).
+    draws : int
+        Monte Carlo draws of each prediction.
+    seed : int, optional
+        Seed of the draws.
+
+    Returns
+    -------
+    PlanResult
+
+    Raises
+    ------
+    InputError
+        Bad files, units that differ between files, ``add`` > 0 without a body.
+    """
+    from rigidid.core.plan import check_layout, predict_uncertainty, suggest_sensors
+    from rigidid.core.uncertainty import DEFAULT_NOISE
+
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
+    _, positions, directions = files.layout_arrays(lay)
+    units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    report = check_layout(positions, directions, unit=lay.units.length)
+    if body is None:
+        if add:
+            raise InputError("suggesting sensors needs a body estimate", source="--add")
+        return PlanResult(units, report)
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    core_body = body_from_file(spec)
+    levels = replace(DEFAULT_NOISE, **dict(noise or {}))
+    prediction = None
+    if report.rank == 6:
+        prediction = predict_uncertainty(core_body, positions, directions, noise=levels, draws=draws, seed=seed)
+    suggestions = None
+    if add:
+        if add < 0:
+            raise InputError(f"must be positive, got {add}", source="--add")
+        cand_pos = cand_dir = None
+        if candidates is not None:
+            cand = (
+                candidates if isinstance(candidates, LayoutFile) else files.load_layout(candidates, require_rank=False)
+            )
+            _same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
+            _, cand_pos, cand_dir = files.layout_arrays(cand)
+        suggestions = suggest_sensors(
+            core_body,
+            positions,
+            directions,
+            cand_pos,
+            cand_dir,
+            add=add,
+            noise=levels,
+            draws=min(draws, 300),
+            seed=seed,
+        )
+    return PlanResult(units, report, prediction, suggestions)
+
+
+def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:
+    if other.units != layout.units:
+        raise InputError(
+            f"units ({other.units.length}, {other.units.mass}) differ from layout units "
+            f"({layout.units.length}, {layout.units.mass})",
+            source=source,
+            location="units",
+        )
+
+
+# --------------------------------------------------------------------------- time records, UFF, report
+
+
+@dataclass(frozen=True)
+class TestData:
+    """What a test file set provides: the layout, and modes and/or time records.
+
+    Attributes
+    ----------
+    layout : LayoutFile
+    modes : ModeTable or None
+    records : list of (ndarray, float)
+        Per impact: samples x sensors (layout order) and the sample interval (s).
+    record_names : list of str
+        Where each record came from.
+    """
+
+    layout: LayoutFile
+    modes: ModeTable | None = None
+    records: list[tuple[NDArray[np.float64], float]] = field(default_factory=list)
+    record_names: list[str] = field(default_factory=list)
+
+
+def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[NDArray[np.float64], float]]:
+    """Read impact records (``records.csv``, one per impact), columns in layout order.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        One file per impact.
+    layout : LayoutFile
+        The sensors; every record has one column per sensor id.
+
+    Returns
+    -------
+    list of (ndarray, float)
+        Per record: samples x sensors, and the sample interval (s).
+
+    Raises
+    ------
+    InputError
+        See :func:`rigidid.records.read_record`.
+    """
+    from rigidid.records import read_record
+
+    ids = [s.id for s in layout.sensors]
+    return [read_record(p, ids) for p in paths]
+
+
+def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData:
+    """Read a test from a universal file (datasets 15/2411, 58, 55, 164) through pyuff.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.uff``/``.unv`` file.
+    units : dict, optional
+        ``{"length", "mass"}`` when the file has no dataset 164.
+
+    Returns
+    -------
+    TestData
+        Layout (sensors from the records' nodes and signed directions, or from
+        the mode shapes), the modes of dataset 55 if any, and the time records.
+
+    Raises
+    ------
+    InputError
+        Missing or contradictory pieces, naming the dataset and node.
+    """
+    from pydantic import ValidationError
+
+    from rigidid.uff import read_uff
+
+    src = str(path)
+    contents = read_uff(path, units=units)
+    try:
+        layout = LayoutFile.model_validate(contents.layout)
+    except ValidationError as exc:
+        raise InputError(
+            f"the sensors it describes are not a valid layout: {exc.errors()[0]['msg']}", source=src
+        ) from None
+    modes = None
+    if contents.mode_rows:
+        modes = _table_from_rows(contents.mode_rows, tuple(s.id for s in layout.sensors), src)
+    records = []
+    for record in contents.records:
+        time = np.asarray(record.time, dtype=float)
+        order = [record.sensor_ids.index(sid) for sid in (s.id for s in layout.sensors)]
+        records.append((np.asarray(record.data, dtype=float)[:, order], float(time[1] - time[0])))
+    return TestData(layout, modes, records, list(contents.record_labels))
+
+
+def _table_from_rows(
+    rows: Sequence[tuple[int, float, float, str, float, float]], ids: tuple[str, ...], src: str
+) -> ModeTable:
+    labels: list[int] = []
+    freq: dict[int, tuple[float, float]] = {}
+    values: dict[tuple[int, str], complex] = {}
+    for mode, f, z, sid, re, im in rows:
+        if mode not in freq:
+            labels.append(mode)
+            freq[mode] = (f, z)
+        values[(mode, sid)] = complex(re, im)
+    shapes = np.zeros((len(ids), len(labels)), dtype=complex)
+    for k, mode in enumerate(labels):
+        for i, sid in enumerate(ids):
+            if (mode, sid) not in values:
+                raise InputError(f"mode {mode} has no value for sensor {sid!r}", source=src)
+            shapes[i, k] = values[(mode, sid)]
+    return ModeTable(
+        tuple(labels),
+        np.array([freq[m][0] for m in labels]),
+        np.array([freq[m][1] for m in labels]),
+        ids,
+        shapes,
+    )
+
+
+def estimate_modes(
+    layout: LayoutFile | PathLike,
+    records: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    method: str | None = None,
+    n_modes: int = 6,
+    band: tuple[float, float] | None = None,
+    max_order: int | None = None,
+    decimate: int | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """Modal parameters from impact records (the paper's time-domain step).
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The sensors.
+    records : sequence of path-like, or of (data, dt)
+        One free-decay record per impact: ``records.csv`` files, or arrays
+        (samples x sensors in layout order) with their sample interval (s).
+    method : {"era", "ar"}, optional
+        Estimator (default :data:`rigidid.core.timedomain.DEFAULT_METHOD`).
+    n_modes : int
+        Number of modes to find (6 for the rigid-body modes; more when elastic
+        modes share the band, then :func:`identify` chooses the rigid six).
+    band : (float, float), optional
+        Frequency band (Hz).
+    max_order : int, optional
+        Highest model order of the stabilisation sweep.
+    decimate : int, optional
+        Decimation factor (default chosen from the records' spectrum).
+
+    Returns
+    -------
+    modes : ModeTable
+        Modes labelled 1..n_modes in ascending frequency.
+    estimate : ModalEstimate
+        Everything the estimator found, the stabilisation diagram included.
+
+    Raises
+    ------
+    InputError
+        Bad records or records of different sample rates.
+    IdentificationError
+        Fewer than `n_modes` stable modes.
+    """
+    from rigidid.core.timedomain import DEFAULT_METHOD
+    from rigidid.core.timedomain import estimate_modes as estimate
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    if not records:
+        raise InputError("no records given", source="records")
+    arrays: list[tuple[NDArray[np.float64], float]] = []
+    paths: list[PathLike] = []
+    for item in records:
+        if isinstance(item, tuple):
+            arrays.append(item)
+        else:
+            paths.append(item)
+    arrays += load_records(paths, lay)
+    dts = [dt for _, dt in arrays]
+    if max(dts) - min(dts) > 1e-9 * max(dts):
+        raise InputError(
+            f"records have different sample intervals ({min(dts):.6g} to {max(dts):.6g} s)", source="records"
+        )
+    result = estimate(
+        [data for data, _ in arrays],
+        dts[0],
+        method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
+        n_modes=n_modes,
+        band=band,
+        max_order=max_order,
+        decimate=decimate,
+    )
+    ids = tuple(s.id for s in lay.sensors)
+    table = ModeTable(tuple(range(1, n_modes + 1)), result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    return table, result
+
+
+def report(
+    result: IdentifyResult,
+    *,
+    mounts: Sequence[Sequence[float]] | None = None,
+    stabilisation: Sequence[Any] | None = None,
+    title: str = "rigidid report",
+) -> str:
+    """A self-contained HTML report of an identification (tables and pictures).
+
+    Parameters
+    ----------
+    result : IdentifyResult
+    mounts : sequence of (3,) positions, optional
+        Mount positions to draw (e.g. from a body estimate).
+    stabilisation : sequence, optional
+        The stabilisation diagram of :func:`estimate_modes` (``estimate.diagram``).
+    title : str
+        Heading of the document.
+
+    Returns
+    -------
+    str
+        One HTML document; it needs no network to open.
+    """
+    from rigidid.core.uncertainty import uncertainty_to_dict
+    from rigidid.reporting import render_report
+
+    return render_report(
+        result.identification,
+        result.positions,
+        result.directions,
+        result.sensor_ids,
+        result.units,
+        mounts=None if mounts is None else [np.asarray(m, dtype=float) for m in mounts],
+        stabilisation=stabilisation,
+        uncertainty=None if result.uncertainty is None else uncertainty_to_dict(result.uncertainty),
+        title=title,
+    )
+
+
+def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None) -> list[Path]:
+    """Turn a universal file into ``layout.json``, ``modes.csv`` and ``record-<k>.csv`` files.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.uff``/``.unv`` file (see :func:`load_uff`).
+    directory : path-like
+        Folder to write into (created if needed).
+    units : dict, optional
+        ``{"length", "mass"}`` when the file has no dataset 164.
+
+    Returns
+    -------
+    list of Path
+        The files written (atomically) in `directory`.
+    """
+    import json
+
+    from rigidid.records import write_record
+
+    data = load_uff(path, units=units)
+    folder = Path(directory)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = [folder / "layout.json"]
+    files.write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
+    if data.modes is not None:
+        written.append(folder / "modes.csv")
+        files.write_text_atomic(written[-1], files.modes_csv_text(data.modes))
+    ids = [s.id for s in data.layout.sensors]
+    for k, (values, dt) in enumerate(data.records, start=1):
+        written.append(folder / f"record-{k}.csv")
+        write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+    return written
+
+
+def simulate_records(
+    body: BodyFile | PathLike,
+    layout: LayoutFile | PathLike,
+    directory: PathLike,
+    *,
+    impacts: Sequence[tuple[Sequence[float], Sequence[float]]] | None = None,
+    sample_rate: float = 512.0,
+    duration: float = 8.0,
+    pretrigger: float = 0.1,
+    noise: float = 0.0,
+    seed: int | None = None,
+) -> list[Path]:
+    """Write impulse-response records of a body on its mounts, one ``record-<k>.csv`` per impact.
+
+    Parameters
+    ----------
+    body, layout : model or path-like
+        The body (``body.json``) and the sensors (``layout.json``), same units.
+    directory : path-like
+        Folder to write into (created if needed).
+    impacts : sequence of (position, direction), optional
+        Where each unit impulse acts and along which direction. Default: two
+        impacts, at the first sensor along (1, 1, 1) and at the sensor
+        farthest from it along (-1, 1, -1), which excite all six modes in
+        general.
+    sample_rate, duration, pretrigger : float
+        Samples per second; free decay and pre-trigger lengths (s).
+    noise : float
+        Gaussian noise relative to each channel's RMS.
+    seed : int, optional
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    from rigidid.core.timedomain import impulse_records, record_time
+    from rigidid.records import write_record
+
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    ids, positions, directions = files.layout_arrays(lay)
+    if impacts is None:
+        far = int(np.argmax(np.linalg.norm(positions - positions[0], axis=1)))
+        impacts = [(positions[0], (1.0, 1.0, 1.0)), (positions[far], (-1.0, 1.0, -1.0))]
+    for _, direction in impacts:
+        if not np.any(np.asarray(direction, dtype=float)):
+            raise InputError("an impact direction is the zero vector", source="--impact")
+    if sample_rate <= 0 or duration <= 0 or pretrigger < 0:
+        raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
+    data = impulse_records(
+        body_from_file(spec),
+        positions,
+        directions,
+        [(np.asarray(p, dtype=float), np.asarray(d, dtype=float)) for p, d in impacts],
+        sample_rate=sample_rate,
+        duration=duration,
+        pretrigger=pretrigger,
+        noise=noise,
+        seed=seed,
+    )
+    folder = Path(directory)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for k, values in enumerate(data, start=1):
+        written.append(folder / f"record-{k}.csv")
+        write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
+    return written

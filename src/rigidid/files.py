@@ -11,7 +11,8 @@ import csv
 import io
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -26,11 +27,13 @@ from rigidid.models import BodyFile, LayoutFile, ModeRow
 __all__ = [
     "MODES_COLUMNS",
     "ModeTable",
+    "atomic_path",
     "layout_arrays",
     "load_body",
     "load_layout",
     "load_modes",
     "modes_csv_text",
+    "write_bytes_atomic",
     "write_text_atomic",
 ]
 
@@ -283,8 +286,11 @@ def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
     return out.getvalue()
 
 
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
-    """Write `text` to `path` atomically (temporary file in the same folder, then rename).
+@contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside `path`; on success rename it to `path`, on failure remove it.
+
+    The file gets the usual permissions (0666 less the umask), not ``mkstemp``'s 0600.
 
     Raises
     ------
@@ -296,13 +302,29 @@ def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
     p = Path(path)
     folder = p.parent if str(p.parent) else Path(".")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
+        fd, name = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
     except OSError as exc:
         raise InputError(f"cannot write: {exc.strerror}", source=str(p)) from None
+    os.close(fd)
+    tmp = Path(name)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
+        mask = os.umask(0o022)
+        os.umask(mask)
+        tmp.chmod(0o666 & ~mask)
+        yield tmp
         os.replace(tmp, p)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
+
+
+def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
+    """Write `text` (UTF-8) to `path` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8", newline="")
+
+
+def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write `data` to `path` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)

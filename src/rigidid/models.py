@@ -8,7 +8,7 @@ these models; the numerical core never sees them. The JSON Schemas in
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
@@ -210,11 +210,46 @@ class Diagnostics(_Strict):
     layout_condition: float = Field(description="condition number of the dimensionless sensor transformation")
     layout_rank: int
     structure_residual: float = Field(description="relative asymmetry of (M/m) Q at the CG: 0 for an exact rigid body")
+    inertia_observability: float = Field(
+        description="0 (inertia not determined) to 1; typical rigs 0.1-0.3, below 0.03 a warning"
+    )
     modes: list[ModeDiagnostics]
     candidate_modes: list[CandidateMode] | None = Field(
         default=None, description="every mode given, with its rigid-body fit residual, when the six were chosen"
     )
     warnings: list[str]
+
+
+class EnergyDistribution(_Strict):
+    """Modal kinetic-energy distribution (decoupling table): one row per mode used, rows sum to 1."""
+
+    dof: list[str]
+    principal_dof: list[str]
+    modes: list[int]
+    cg_axes: list[list[float]] = Field(description="shares in x, y, z, rx, ry, rz at the CG, layout axes")
+    principal_axes: list[list[float]] = Field(description="shares with rotations about the principal axes")
+
+
+class Interval(_Strict):
+    """Monte Carlo estimate, standard deviation and 95 % interval of a quantity (scalars, vectors or matrices)."""
+
+    estimate: Any
+    std: Any
+    ci95: Any
+
+
+class UncertaintyResult(BaseModel):
+    """Uncertainty intervals (``identify --uncertainty N``); quantity keys end in ``_per_mass`` without a mass."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, defer_build=True)
+
+    center_of_gravity: Interval
+    per_mass: bool
+    draws: int
+    failed: int
+    implausible: int
+    seed: int | None
+    noise: dict[str, float]
 
 
 class ResultFile(_Strict):
@@ -238,7 +273,9 @@ class ResultFile(_Strict):
     modes_selected: Literal["all", "given", "automatic"] = Field(
         description="all: exactly six given; given: --modes; automatic: the six most rigid-body-like"
     )
+    energy_distribution: EnergyDistribution
     diagnostics: Diagnostics
+    uncertainty: UncertaintyResult | None = None
 
 
 class ModeRow(_Strict):

@@ -8,7 +8,16 @@ import numpy as np
 import pytest
 
 from rigidid.core.identify import identify, principal_axes
-from rigidid.core.simulate import Body, Modes, Mount, body_modes, random_body, random_layout, system_matrices
+from rigidid.core.simulate import (
+    Body,
+    Modes,
+    Mount,
+    add_noise,
+    body_modes,
+    random_body,
+    random_layout,
+    system_matrices,
+)
 from rigidid.errors import IdentificationError, IllConditionedWarning, InputError, PhysicalPlausibilityWarning
 
 from ..tolerances import EXACT_REL
@@ -167,3 +176,53 @@ def test_no_warning_leaks_for_clean_data() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         identify(positions, directions, modes.poles, modes.shapes, mass=body.mass)
+
+
+def _decoupled_body() -> Body:
+    """Mounts symmetric about the CG: the stiffness at the CG is diagonal."""
+    mounts = tuple(
+        Mount.from_values(p, [1e4, 2e4, 3e4], [10.0, 10.0, 10.0])
+        for p in ([1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0])
+    )
+    return Body(10.0, np.zeros(3), np.diag([1.0, 2.0, 2.5]), mounts)
+
+
+def test_unobservable_inertia_is_an_identification_error() -> None:
+    body = _decoupled_body()
+    positions, directions = random_layout(np.random.default_rng(0), 8)
+    modes = body_modes(body, positions, directions)
+    with pytest.raises(IdentificationError, match="inertia is not observable"):
+        identify(positions, directions, modes.poles, modes.shapes, mass=body.mass)
+
+
+def test_weakly_observable_inertia_warns() -> None:
+    body = _decoupled_body()
+    positions, directions = random_layout(np.random.default_rng(0), 8)
+    modes = add_noise(body_modes(body, positions, directions), shape=0.005, seed=1)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        r = identify(positions, directions, modes.poles, modes.shapes, mass=body.mass)
+    assert r.diagnostics.inertia_observability < 0.03
+    assert any(issubclass(w.category, IllConditionedWarning) and "poorly determined" in str(w.message) for w in record)
+
+
+def test_observability_of_a_coupled_rig_is_high() -> None:
+    body, positions, directions = _identical_mounts_rig()
+    modes = body_modes(body, positions, directions)
+    r = identify(positions, directions, modes.poles, modes.shapes, mass=body.mass)
+    assert r.diagnostics.inertia_observability > 0.05
+
+
+def test_measured_shapes_at_the_cg_match_the_body_modes() -> None:
+    rng = np.random.default_rng(6)
+    body = random_body(rng)
+    positions, directions = random_layout(rng, 9)
+    modes = body_modes(body, positions, directions)
+    r = identify(positions, directions, modes.poles, modes.shapes, mass=body.mass)
+    m, k, c = system_matrices(body)
+    a = np.block([[-np.linalg.solve(m, c), -np.linalg.solve(m, k)], [np.eye(6), np.zeros((6, 6))]])
+    mu, vec = np.linalg.eig(a)
+    for col in range(6):
+        truth = vec[6:, np.argmin(np.abs(mu - modes.poles[col]))]
+        mac = abs(np.vdot(truth, r.mode_shapes_cg[:, col])) ** 2 / (np.vdot(truth, truth).real)
+        assert mac == pytest.approx(1.0, abs=1e-9)

@@ -35,6 +35,7 @@ __all__ = [
     "Diagnostics",
     "Identification",
     "identify",
+    "inertia_observability",
     "principal_axes",
     "solve_paper",
     "solve_structured",
@@ -46,6 +47,10 @@ Method = Literal["structured", "paper"]
 METHODS: tuple[str, ...] = ("structured", "paper")
 DAMPING_WEIGHT = 0.3
 """Default weight of the damping equations against the stiffness equations."""
+UNOBSERVABLE = 1e-6
+"""Inertia observability below which the inertia is not determined at all (an error)."""
+WEAKLY_OBSERVABLE = 0.03
+"""Inertia observability below which the inertia is poorly determined (a warning)."""
 
 _UPPER = np.triu_indices(6, 1)
 _SYM_BASIS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
@@ -216,6 +221,36 @@ def solve_structured(
     return g, _inertia_from_params(j)
 
 
+def inertia_observability(stiffness: Array, cg: Array) -> float:
+    """How well eq. (18) of [1] determines the inertia: 0 (not at all) to 1.
+
+    Parameters
+    ----------
+    stiffness : ndarray, shape (6, 6)
+        ``Q = M_o^-1 K_o`` in the dimensionless frame.
+    cg : ndarray, shape (3,)
+        The CG in that frame.
+
+    Returns
+    -------
+    float
+        Ratio of the smallest to the largest singular value of the linear map
+        from ``J / m`` to the antisymmetric part of ``D Q_g``. Zero when the
+        supports do not couple rotations to translations (for example mounts
+        symmetric about the CG): then any inertia fits the modes, each with its
+        own stiffness. Typical test rigs give 0.1-0.3; measurement noise of
+        relative size e raises an unobservable case to about e.
+
+    Notes
+    -----
+    Only the stiffness equations are used: damping is too uncertain to carry
+    the inertia.
+    """
+    a, _ = _asym_system(np.asarray(cg, dtype=float), [(np.asarray(stiffness, dtype=float), 1.0)])
+    s = np.linalg.svd(a, compute_uv=False)
+    return float(s[-1] / s[0]) if s[0] > 0 else 0.0
+
+
 def solve_paper(stiffness: Array) -> tuple[Array, Array]:
     """CG and inertia per mass by the paper's sequential route, eqs. (36)-(39) of [1].
 
@@ -302,6 +337,8 @@ class Diagnostics:
     structure_residual : float
         ``|D Q_g - (D Q_g)^T| / |D Q_g|`` at the solution: 0 for data an exact
         rigid body explains.
+    inertia_observability : float
+        See :func:`inertia_observability`.
     model_frequency_hz, model_damping_ratio : ndarray, shape (6,)
         Modes of the identified model, matched to the measured modes.
     model_mac : ndarray, shape (6,)
@@ -314,6 +351,7 @@ class Diagnostics:
     layout_rank: int
     rigid_fit_residual: Array
     structure_residual: float
+    inertia_observability: float
     model_frequency_hz: Array
     model_damping_ratio: Array
     model_mac: Array
@@ -338,7 +376,11 @@ class Identification:
     mass : float or None
         The mass, when known.
     frequency_hz, damping_ratio : ndarray, shape (6,)
-        Measured modes used, in the order of `modes_used`.
+        Measured modes used, in the order given.
+    mode_shapes_cg : ndarray of complex, shape (6, 6)
+        Column ``k``: the rigid-body motion ``(x, y, z, rx, ry, rz)`` of the
+        CG (length, rad) that best explains measured mode ``k``, scaled to
+        unit Euclidean norm.
     method : str
         ``"structured"`` or ``"paper"``.
     diagnostics : Diagnostics
@@ -351,6 +393,7 @@ class Identification:
     mass: float | None
     frequency_hz: Array
     damping_ratio: Array
+    mode_shapes_cg: CArray
     method: str
     diagnostics: Diagnostics
 
@@ -538,6 +581,20 @@ def identify(
         else:
             q, p = state_matrices(lam_s, phi)
             g, j = solve_structured(q, p, damping_weight)
+        observability = inertia_observability(q, g)
+        if observability < UNOBSERVABLE:
+            raise IdentificationError(
+                "the inertia is not observable: the supports do not couple rotations to translations "
+                "(e.g. mounts symmetric about the CG), so inertia and stiffness cannot be separated "
+                f"(inertia observability {observability:.1e})"
+            )
+        if observability < WEAKLY_OBSERVABLE:
+            warnings.warn(
+                f"the inertia is poorly determined (inertia observability {observability:.2g}, typically "
+                "0.1-0.3): the supports couple rotations to translations only weakly",
+                IllConditionedWarning,
+                stacklevel=2,
+            )
         qg, pg = _at_point(q, g), _at_point(p, g)
         d = _scaled_inertia(j)
         dq, dp = d @ qg, d @ pg
@@ -557,6 +614,7 @@ def identify(
 
     length, length2 = frame.scale, frame.scale**2
     dof = np.array([1.0, 1.0, 1.0, length, length, length])
+    shapes_cg = (transfer_matrix(g) @ phi) * np.array([length, length, length, 1.0, 1.0, 1.0])[:, None]
     return Identification(
         center_of_gravity=frame.centre + length * g,
         inertia_per_mass=length2 * j,
@@ -565,12 +623,14 @@ def identify(
         mass=None if mass is None else float(mass),
         frequency_hz=f,
         damping_ratio=z,
+        mode_shapes_cg=shapes_cg / np.linalg.norm(shapes_cg, axis=0),
         method=method,
         diagnostics=Diagnostics(
             layout_condition=cond,
             layout_rank=rank,
             rigid_fit_residual=fit,
             structure_residual=structure,
+            inertia_observability=observability,
             model_frequency_hz=model_f,
             model_damping_ratio=model_z,
             model_mac=mac,

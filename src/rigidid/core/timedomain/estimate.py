@@ -1,0 +1,421 @@
+"""Modal parameters from free-decay records: the public entry point.
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.core.timedomain.ar import ar_fits, ar_modes, f_test_order
+from rigidid.core.timedomain.era import era_basis, era_modes
+from rigidid.core.timedomain.gram import lagged_gram
+from rigidid.core.timedomain.preprocess import Impact, auto_decimation, band_limit, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import decimate as decimate_record
+from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
+from rigidid.errors import IdentificationError, InputError
+
+__all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "estimate_modes"]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+Method = Literal["ar", "era"]
+METHODS: tuple[str, ...] = ("ar", "era")
+
+DEFAULT_METHOD: Method = "era"
+"""The default estimator (see the module notes of :func:`estimate_modes` for why)."""
+
+_DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest frequency kept
+_MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
+_MIN_BLOCK_ROWS = 20  # ERA: block rows of the Hankel matrix, at least
+_RANK_PER_MODE = 2  # principal components kept per mode sought
+_AR_EXTRA_STATES = 256  # AR: lags beyond the minimum, times the channels fitted
+_AR_SWEEP_MODELS = 16  # AR: about this many orders are solved for poles
+_FILTER_WIDENING = 1.25  # band-pass filter edges this factor outside the band of poles kept
+
+
+@dataclass(frozen=True)
+class ModalEstimate:
+    """Modes estimated from free decays, and how they were found.
+
+    Attributes
+    ----------
+    poles : ndarray of complex, shape (n_modes,)
+        One pole per mode, ``Im > 0`` (rad/s), ascending frequency.
+    shapes : ndarray of complex, shape (channels, n_modes)
+        Column ``k`` is the shape of mode ``k`` as each channel (sensor, along
+        its own direction) reads it, scaled so its largest value is ``1 + 0j``.
+    frequency_hz : ndarray, shape (n_modes,)
+        Undamped natural frequencies ``|lambda| / (2 pi)`` (Hz).
+    damping_ratio : ndarray, shape (n_modes,)
+        ``-Re(lambda) / |lambda|``.
+    stable_count : ndarray of int, shape (n_modes,)
+        At how many orders of the sweep each mode was stable.
+    model_order : ndarray of int, shape (n_modes,)
+        The order each mode's values were taken from.
+    diagram : tuple of OrderPoles
+        The stabilisation diagram: per model order, the physical poles found
+        (rad/s, ascending frequency), which of them were stable, and their
+        shapes at the channels (unscaled).
+    method : str
+        ``"ar"`` or ``"era"``.
+    sample_interval : float
+        Sample interval of the data the models were fitted to, after
+        decimation (s).
+    decimation : int
+        Decimation factor applied (1: none).
+    band : (float, float)
+        Frequency band physical poles were kept in (Hz).
+    channels_fitted : int
+        Number of channels (principal components) the models were fitted to.
+    adequate_order : int or None
+        AR only: the order after which the F-test found no significant
+        improvement (the last order of the sweep if every step helped).
+    impacts : tuple of Impact
+        Per record, where the impact and the free decay were found (sample
+        indices of the record as given).
+    """
+
+    poles: CArray
+    shapes: CArray
+    frequency_hz: Array
+    damping_ratio: Array
+    stable_count: NDArray[np.int_]
+    model_order: NDArray[np.int_]
+    diagram: tuple[OrderPoles, ...]
+    method: str
+    sample_interval: float
+    decimation: int
+    band: tuple[float, float]
+    channels_fitted: int
+    adequate_order: int | None
+    impacts: tuple[Impact, ...]
+
+
+def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
+    try:
+        step = float(dt)
+    except (TypeError, ValueError):
+        step = math.nan
+    if not (math.isfinite(step) and step > 0.0):
+        raise InputError(f"the sample interval must be positive, got {dt}")
+    arrays: list[Array] = []
+    for i, rec in enumerate(records):
+        a = np.asarray(rec, dtype=float)
+        if a.ndim != 2 or a.shape[0] < 2 or a.shape[1] < 1:
+            raise InputError(f"a record must be samples x channels, got shape {a.shape}", location=f"record {i + 1}")
+        if arrays and a.shape[1] != arrays[0].shape[1]:
+            raise InputError(
+                f"{a.shape[1]} channels, the first record has {arrays[0].shape[1]}", location=f"record {i + 1}"
+            )
+        if not np.all(np.isfinite(a)):
+            raise InputError("a value is NaN or infinite", location=f"record {i + 1}")
+        arrays.append(a)
+    if not arrays:
+        raise InputError("no records")
+    return arrays
+
+
+def _channel_scales(decays: list[Array]) -> Array:
+    m = decays[0].shape[1]
+    total = np.zeros(m)
+    count = 0
+    for d in decays:
+        for i in range(m):
+            column = d[:, i]
+            total[i] += float(column @ column)
+        count += d.shape[0]
+    rms: Array = np.sqrt(total / max(count, 1))
+    dead = np.flatnonzero(rms <= 0.0)
+    if dead.size:
+        raise InputError("the channel reads zero in every record", location=f"channel {dead[0] + 1}")
+    return rms
+
+
+def _principal_basis(decays: list[Array], rank: int) -> Array:
+    """Orthonormal basis (m, rank) of the leading principal components of the decays."""
+    m = decays[0].shape[1]
+    cov = np.zeros((m, m))
+    for d in decays:
+        cov += d.T @ d
+    _, vectors = np.linalg.eigh(cov)
+    basis: Array = vectors[:, ::-1][:, :rank]
+    return basis
+
+
+def _normalise_shapes(shapes: CArray) -> CArray:
+    if shapes.shape[1] == 0:
+        return shapes
+    peak = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(shapes.shape[1])]
+    result: CArray = shapes / np.where(peak == 0, 1.0, peak)
+    return result
+
+
+def estimate_modes(
+    records: Sequence[ArrayLike],
+    dt: float,
+    *,
+    method: Method = DEFAULT_METHOD,
+    n_modes: int = 6,
+    band: tuple[float, float] | None = None,
+    max_order: int | None = None,
+    decimate: int | None = None,
+    trim: bool = True,
+    pulse_width: float = 0.005,
+    criteria: Criteria | None = None,
+) -> ModalEstimate:
+    """Natural frequencies, damping ratios and complex mode shapes from impact records.
+
+    Parameters
+    ----------
+    records : sequence of array_like, shape (n_k, channels)
+        One record per impact, samples by channels, the same channels in every
+        record: accelerations (any consistent unit) read by each sensor along
+        its own direction. Pre-trigger samples before the impact may be
+        present; different impacts may excite different modes, but together
+        they must excite all `n_modes`.
+    dt : float
+        Sample interval of the records (s).
+    method : {"era", "ar"}
+        ``"era"`` (default): the Eigensystem Realization Algorithm in Gram
+        form, with the white-noise floor removed
+        (:mod:`~rigidid.core.timedomain.era`). ``"ar"``: vector
+        autoregressive models of increasing order fitted by least squares, the
+        Data Dependent Systems approach of [1]
+        (:mod:`~rigidid.core.timedomain.ar`).
+    n_modes : int
+        Number of modes to return (6 for the rigid-body modes).
+    band : (float, float), optional
+        Frequency band of interest (Hz): only poles strictly inside it are
+        kept, and the decimated records are band-pass filtered (zero-phase
+        Butterworth, order 4) with edges 25 % outside it, so that the
+        filter's shaping of the noise does not put poles inside the band.
+        Default: 0 to the Nyquist frequency after decimation.
+    max_order : int, optional
+        Highest model order of the sweep: the number of lags of the AR model,
+        or the number of states of the ERA realization. Default: AR
+        ``ceil(2 n_modes / r) + ceil(256 / r)`` lags, ERA
+        ``max(8 n_modes, 48)`` states, with ``r`` the number of channels
+        fitted (see Notes).
+    decimate : int, optional
+        Decimation factor. Default: chosen so that the new Nyquist frequency
+        is at least 4 times the band's upper edge, or, without a band, 4 times
+        the highest frequency standing out of the noise floor of the spectrum
+        (:func:`~rigidid.core.timedomain.preprocess.content_range`); if fewer
+        than `n_modes` modes are then found, the estimation is repeated with
+        the factor divided by 3 until it is 1. An automatic factor leaves at
+        least 1000 samples in the shortest record. 1 disables decimation.
+    trim : bool
+        Find the impact in each record and keep only the free decay after it
+        (:func:`~rigidid.core.timedomain.preprocess.find_impact`). With false
+        the records are used whole and must hold only free decay.
+    pulse_width : float
+        Longest expected duration of the impact force (s), for the trimming.
+    criteria : Criteria, optional
+        Stabilisation tolerances (default: frequency 0.5 %, damping 5 %, MAC
+        0.98, damping ratio below 30 %).
+
+    Returns
+    -------
+    ModalEstimate
+
+    Raises
+    ------
+    InputError
+        For records that are not 2-D, differ in channel count, hold NaN or
+        infinite values, or are too short; a channel that is zero in every
+        record; invalid options.
+    IdentificationError
+        When fewer than `n_modes` stable modes are found.
+
+    Notes
+    -----
+    Steps: (1) trim each record to its free decay; (2) decimate with a
+    zero-phase FIR anti-alias filter (:func:`~rigidid.core.timedomain.preprocess.decimate`);
+    (3) band-pass filter if a band is given;
+    (4) scale each channel to unit RMS and, with more than ``2 n_modes``
+    channels, project on the ``2 n_modes`` leading principal components
+    (shapes are mapped back to every channel afterwards); (5) accumulate the
+    lagged Gram matrix of all records at once, so memory does not grow with
+    record length; (6) sweep the model order, keep physical poles (inside the
+    band, damping ratio between 0 and 30 %), mark those stable against the
+    previous order; (7) cluster the stable poles and return the `n_modes`
+    found stable at the most orders (a cluster must be stable at a third of
+    the orders or more). AR solves about 16 orders spread over its sweep for
+    poles, ERA every even number of states.
+
+    Why ERA is the default: on simulated records of 20 random bodies (8
+    sensors, 3 impacts) both methods found all modes at 1 % noise, ERA with a
+    median damping error of 0.2 % (AR 0.25 %, worst 0.7 % against 1.6 %); at
+    5 % noise ERA's median damping error was 0.55 % against AR's 2 % (worst
+    11 % and 18 %), its shapes better (MAC >= 0.9992 against 0.992). ERA is
+    also several times faster (one symmetric eigenproblem, then small ones;
+    AR solves a companion matrix of ``p r`` states per order) and needs no
+    scipy. AR is kept because it is the paper's approach.
+
+    Limits: modes must be underdamped (damping ratio below 30 %) and separated
+    by more than the frequency tolerance (0.5 %); two modes of nearly equal
+    frequency need records long enough to resolve them (several times
+    ``1 / (f2 - f1)``) and shapes that differ. Noise is assumed white and
+    roughly proportional to each channel's level. A mode excited by no record
+    is not found. The representative values of a mode come from one order of
+    the sweep (see :func:`~rigidid.core.timedomain.stabilisation.cluster_stable`).
+    """
+    decays_in = _check_records(records, dt)
+    if method not in METHODS:
+        raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if not (isinstance(n_modes, int) and n_modes >= 1):
+        raise InputError(f"the number of modes must be a positive integer, got {n_modes}")
+    if band is not None:
+        low, high = float(band[0]), float(band[1])
+        if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high):
+            raise InputError(f"the band must be two frequencies 0 <= low < high, got {band}")
+    if decimate is not None and not (isinstance(decimate, int) and decimate >= 1):
+        raise InputError(f"the decimation factor must be a positive integer, got {decimate}")
+    if max_order is not None and not (isinstance(max_order, int) and max_order >= 1):
+        raise InputError(f"the maximum order must be a positive integer, got {max_order}")
+    if not (math.isfinite(pulse_width) and pulse_width > 0.0):
+        raise InputError(f"the pulse width must be positive, got {pulse_width}")
+    crit = criteria if criteria is not None else Criteria()
+    dt = float(dt)
+
+    # (1) free decays
+    impacts: list[Impact] = []
+    decays: list[Array] = []
+    for rec in decays_in:
+        impact = find_impact(rec, dt, pulse_width=pulse_width) if trim else Impact(0, 0, 0)
+        impacts.append(impact)
+        decays.append(rec[impact.start :])
+
+    # (2) decimation factor; automatic factors are retried smaller if modes are missing
+    if decimate is not None:
+        factors = [decimate]
+    else:
+        if band is not None:
+            first = decimation_for(float(band[1]), dt, margin=_DECIMATION_MARGIN)
+        else:
+            first = auto_decimation(decays, dt, margin=_DECIMATION_MARGIN)
+        shortest = min(d.shape[0] for d in decays)
+        factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
+        while factors[-1] > 1 and band is None:
+            factors.append(max(1, factors[-1] // 3))
+    options = _Options(method, n_modes, band, max_order, crit)
+    for attempt, factor in enumerate(factors):
+        try:
+            result = _estimate(decays, dt, factor, options)
+        except IdentificationError:
+            if attempt == len(factors) - 1:
+                raise
+            continue
+        return replace(result, impacts=tuple(impacts))
+    raise AssertionError("unreachable")
+
+
+@dataclass(frozen=True)
+class _Options:
+    method: str
+    n_modes: int
+    band: tuple[float, float] | None
+    max_order: int | None
+    criteria: Criteria
+
+
+def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
+    """Steps (2)-(7) of :func:`estimate_modes` at one decimation factor."""
+    n_modes, band, max_order = options.n_modes, options.band, options.max_order
+    if factor > 1:
+        decays = [decimate_record(d, factor) for d in decays]
+    dt_fit = dt * factor
+    nyquist_fit = 0.5 / dt_fit
+
+    # (3) band limit
+    if band is not None:
+        fit_band = (float(band[0]), min(float(band[1]), nyquist_fit))
+        filter_band = (fit_band[0] / _FILTER_WIDENING, fit_band[1] * _FILTER_WIDENING)
+        decays = [band_limit(d, dt_fit, filter_band) for d in decays]
+    else:
+        fit_band = (0.0, nyquist_fit)
+
+    # (4) scaling and principal components
+    m = decays[0].shape[1]
+    scales = _channel_scales(decays)
+    r = min(m, _RANK_PER_MODE * n_modes)
+    scaled = [d / scales for d in decays]
+    if r < m:
+        basis = _principal_basis(scaled, r)
+        fitted = [x @ basis for x in scaled]
+    else:
+        basis = np.eye(m)
+        fitted = scaled
+    to_sensors = scales[:, None] * basis
+
+    # (5)-(6) sweep
+    min_samples = min(f.shape[0] for f in fitted)
+    models: list[tuple[int, CArray, CArray]] = []
+    adequate: int | None = None
+    if options.method == "ar":
+        p_min = max(1, math.ceil(2 * n_modes / r))
+        p_max = max_order if max_order is not None else p_min + math.ceil(_AR_EXTRA_STATES / r)
+        if p_max < p_min:
+            raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
+        if min_samples <= 2 * p_max + 1:
+            raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
+        gram, columns = lagged_gram(fitted, p_max)
+        orders = list(range(p_min, p_max + 1))
+        fits = ar_fits(gram, r, orders)
+        adequate = f_test_order([f.rss for f in fits], orders, columns, r)
+        stop = min(p_max, max(adequate + 4, p_min + 8))
+        step = max(1, math.ceil((stop - p_min) / _AR_SWEEP_MODELS))
+        for fit in fits[stop - p_min :: -step][::-1]:
+            poles, shapes = ar_modes(fit, dt_fit)
+            models.append((fit.order, poles, to_sensors @ shapes))
+    else:
+        n_max = max_order if max_order is not None else max(8 * n_modes, 48)
+        n_max += n_max % 2
+        rows = max(math.ceil(n_max / r) + 1, math.ceil(8 * n_modes / r), _MIN_BLOCK_ROWS)
+        if min_samples <= 2 * rows + 1:
+            raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
+        gram, _ = lagged_gram(fitted, rows)
+        basis_era = era_basis(gram, r)
+        for n in range(2, n_max + 1, 2):
+            poles, shapes = era_modes(basis_era, n, dt_fit)
+            models.append((n, poles, to_sensors @ shapes))
+
+    # (7) stabilisation and selection
+    diagram = stabilise(models, fit_band, options.criteria)
+    min_count = max(3, math.ceil(len(models) / 3))
+    clusters = cluster_stable(diagram, frequency=options.criteria.frequency, min_count=min_count)
+    if len(clusters) < n_modes:
+        raise IdentificationError(
+            f"found {len(clusters)} stable mode{'s' if len(clusters) != 1 else ''}, {n_modes} needed; "
+            "narrow the frequency band (--band) or raise the model order (--max-order)"
+        )
+    chosen = sorted(clusters[:n_modes], key=lambda c: abs(c.pole))
+    poles_out = np.array([c.pole for c in chosen], dtype=complex)
+    shapes_out = _normalise_shapes(np.stack([c.shape for c in chosen], axis=1).astype(complex))
+    w = np.abs(poles_out)
+    return ModalEstimate(
+        poles=poles_out,
+        shapes=shapes_out,
+        frequency_hz=w / (2.0 * np.pi),
+        damping_ratio=-poles_out.real / w,
+        stable_count=np.array([c.count for c in chosen], dtype=int),
+        model_order=np.array([c.order for c in chosen], dtype=int),
+        diagram=tuple(diagram),
+        method=options.method,
+        sample_interval=dt_fit,
+        decimation=factor,
+        band=fit_band,
+        channels_fitted=r,
+        adequate_order=adequate,
+        impacts=(),
+    )

@@ -1,0 +1,371 @@
+"""Reading and writing impact records, ``records.csv``: one file per impact.
+
+Format: a header ``time,<sensor id>,<sensor id>,...`` and one row per sample;
+``time`` in seconds, uniformly sampled; every other column is a sensor id of
+the layout, holding the acceleration that sensor reads along its own
+direction. A record holds the free decay after one impact, possibly preceded
+by pre-trigger samples.
+
+:func:`read_record` validates once, here, and raises
+:class:`~rigidid.errors.InputError` naming the file and the row (line number,
+header = row 1) or column. :func:`write_record` is atomic: the file appears
+whole or not at all.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.errors import InputError
+
+__all__ = [
+    "DECAY_RATIO",
+    "MIN_ROWS",
+    "TIME_TOLERANCE",
+    "read_record",
+    "write_record",
+]
+
+Array = NDArray[np.float64]
+
+TIME_TOLERANCE = 0.01
+"""Largest relative deviation of a time step from the mean sample interval.
+
+The mean interval is ``(t_last - t_first) / (n - 1)``. When the time column is
+written with few digits, the rounding (half a unit of the last digit of the
+last row's time, twice) is allowed on top."""
+
+DECAY_RATIO = 0.5
+"""A record decays when, after its energy peak, the RMS of the last 10 % of the
+samples is below this fraction of the RMS of the first 10 % (channels scaled
+by their peak value, then summed)."""
+
+MIN_ROWS = 16
+"""Fewest data rows a record may have."""
+
+_CHUNK_ROWS = 1 << 16
+_TOKEN_ROWS = 200
+
+
+def _where(line: int) -> str:
+    return f"row {line}"
+
+
+def _column(name: str) -> str:
+    return f"column {name!r}"
+
+
+def _split_header(text: str) -> list[str]:
+    return [cell.strip().strip('"').strip("'").strip() for cell in text.rstrip("\r\n").split(",")]
+
+
+def _resolution(token: str) -> float:
+    """Unit of the last digit of a number as written (``"0.125"`` -> 0.001, ``"1.5e-3"`` -> 1e-4)."""
+    text = token.strip().lower()
+    exponent = 0
+    if "e" in text:
+        text, _, exp = text.partition("e")
+        try:
+            exponent = int(exp)
+        except ValueError:
+            return 0.0
+    decimals = len(text.partition(".")[2]) if "." in text else 0
+    return float(10.0 ** (exponent - decimals))
+
+
+def _locate_bad_row(lines: list[str], first_line: int, n_fields: int, src: str, header: list[str]) -> InputError:
+    """The precise error for a chunk numpy could not parse (ragged row, non-numeric value)."""
+    line = first_line
+    for text in lines:
+        stripped = text.strip()
+        if stripped:
+            cells = stripped.split(",")
+            if len(cells) != n_fields:
+                return InputError(f"{len(cells)} fields, the header has {n_fields}", source=src, location=_where(line))
+            for name, cell in zip(header, cells, strict=True):
+                try:
+                    float(cell)
+                except ValueError:
+                    return InputError(
+                        f"{cell.strip()!r} is not a number", source=src, location=f"{_where(line)}, {_column(name)}"
+                    )
+        line += 1
+    return InputError("cannot read the data rows", source=src, location=_where(first_line))
+
+
+def _check_time(time: Array, lines: NDArray[np.int64], time_tokens: list[str], src: str) -> float:
+    n = time.shape[0]
+    dt: float = float(time[-1] - time[0]) / (n - 1)
+    if not dt > 0.0:
+        raise InputError("time does not increase from the first to the last row", source=src, location=_column("time"))
+    steps = np.diff(time)
+    typical = float(np.median(steps))
+    deviation = np.abs(steps - typical)
+    tolerance = TIME_TOLERANCE * typical
+    bad = np.flatnonzero(deviation > tolerance)
+    if bad.size:
+        # allow the rounding of the digits written (two roundings of half a unit each)
+        resolution = min((_resolution(token) for token in time_tokens), default=0.0)
+        if resolution > 0.5 * typical:
+            raise InputError(
+                f"time is written with too few digits (to {resolution:g} s) for the sample interval {typical:.6g} s",
+                source=src,
+                location=_column("time"),
+            )
+        allowed = max(tolerance, resolution) * (1.0 + 1e-6)
+        bad = np.flatnonzero((deviation > allowed) & (np.abs(steps - dt) > allowed))
+    if bad.size:
+        k = int(bad[0])
+        raise InputError(
+            f"time step {steps[k]:.6g} s differs from the sample interval {typical:.6g} s by more than "
+            f"{100 * TIME_TOLERANCE:g} % (time must be uniformly sampled and increasing)",
+            source=src,
+            location=_where(int(lines[k + 1])),
+        )
+    return dt
+
+
+def _check_decay(data: Array, lines: NDArray[np.int64], src: str) -> None:
+    energy = np.zeros(data.shape[0])
+    for i in range(data.shape[1]):
+        column = data[:, i]
+        energy += (column / np.max(np.abs(column))) ** 2
+    peak = int(np.argmax(energy))
+    after = energy[peak:]
+    k = after.shape[0] // 10
+    if k < 2:
+        raise InputError(
+            f"the largest sample is at the end of the record ({after.shape[0]} samples follow it): no free decay",
+            source=src,
+            location=_where(int(lines[peak])),
+        )
+    head = math.sqrt(float(np.mean(after[:k])))
+    tail = math.sqrt(float(np.mean(after[-k:])))
+    if not tail < DECAY_RATIO * head:
+        first, last = int(lines[-k]), int(lines[-1])
+        raise InputError(
+            f"the signal does not decay: after the peak (row {int(lines[peak])}) the RMS of the last 10 % of the "
+            f"samples is {100 * tail / head:.0f} % of that of the first 10 % (must be below {100 * DECAY_RATIO:g} %)",
+            source=src,
+            location=f"rows {first}-{last}",
+        )
+
+
+def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tuple[Array, float]:
+    """Read one impact record, its columns ordered like the layout's sensors.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``records.csv`` file of one impact.
+    sensor_ids : sequence of str
+        The layout's sensor ids: every one must have a column, and every
+        column but ``time`` must be one of them.
+
+    Returns
+    -------
+    data : ndarray, shape (n, len(sensor_ids))
+        Accelerations, column ``i`` for ``sensor_ids[i]``, one row per sample.
+    dt : float
+        Sample interval (s): ``(t_last - t_first) / (n - 1)``.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the row (line number, header = 1) or column, for:
+        a missing or empty file; a header not starting with ``time``; a column
+        not in `sensor_ids`, a sensor of `sensor_ids` without a column, a
+        column twice; a row with the wrong number of fields; a value that is
+        not a number, or is NaN or infinite; fewer than :data:`MIN_ROWS` rows;
+        time not uniformly sampled (a step off the mean interval by more than
+        :data:`TIME_TOLERANCE`, plus the rounding of the digits written); a
+        channel that is zero in every row; a signal that does not decay (see
+        :data:`DECAY_RATIO`).
+
+    Notes
+    -----
+    The file is read twice: once to count its lines, then in chunks of 65536
+    rows parsed by :func:`numpy.loadtxt` straight into a preallocated array,
+    so memory is the result plus one chunk. Blank lines are skipped (but
+    counted in row numbers).
+    """
+    src = str(path)
+    wanted = [str(s) for s in sensor_ids]
+    if len(set(wanted)) != len(wanted):
+        raise InputError("the layout has a sensor id twice", source=src)
+    p = Path(path)
+    try:
+        with p.open("rb") as raw:
+            n_lines = 0
+            last_byte = b""
+            while block := raw.read(1 << 24):
+                n_lines += block.count(b"\n")
+                last_byte = block[-1:]
+        if last_byte and last_byte != b"\n":
+            n_lines += 1
+        fh = p.open("r", encoding="utf-8-sig", newline="")
+    except FileNotFoundError:
+        raise InputError("file not found", source=src) from None
+    except IsADirectoryError:
+        raise InputError("is a folder, not a file", source=src) from None
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror}", source=src) from None
+
+    with fh:
+        try:
+            header_text = fh.readline()
+        except UnicodeDecodeError:
+            raise InputError("not a text file (UTF-8)", source=src, location=_where(1)) from None
+        if not header_text.strip():
+            raise InputError("the file is empty (no header)", source=src, location=_where(1))
+        header = _split_header(header_text)
+        if header[0].lower() != "time":
+            where = _column(header[0]) if "time" not in [h.lower() for h in header] else _column("time")
+            raise InputError(
+                "the first column must be 'time' (header: time,<sensor id>,<sensor id>,...)",
+                source=src,
+                location=f"{_where(1)}, {where}",
+            )
+        names = header[1:]
+        seen: set[str] = set()
+        for name in names:
+            if not name:
+                raise InputError("a column has no name", source=src, location=_where(1))
+            if name in seen:
+                raise InputError(f"column {name!r} appears twice", source=src, location=f"{_where(1)}, {_column(name)}")
+            seen.add(name)
+            if name not in wanted:
+                raise InputError(
+                    f"column {name!r} is not a sensor of the layout",
+                    source=src,
+                    location=f"{_where(1)}, {_column(name)}",
+                )
+        missing = [s for s in wanted if s not in seen]
+        if missing:
+            raise InputError(
+                f"sensor {missing[0]!r} of the layout has no column"
+                + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
+                source=src,
+                location=_where(1),
+            )
+        n_fields = len(header)
+        order = [names.index(s) + 1 for s in wanted]
+
+        capacity = max(n_lines - 1, 0)
+        data = np.empty((capacity, len(wanted)))
+        time = np.empty(capacity)
+        lines = np.empty(capacity, dtype=np.int64)
+        filled = 0
+        line = 2
+        time_tokens: list[str] = []
+        try:
+            while chunk := list(itertools.islice(fh, _CHUNK_ROWS)):
+                try:
+                    values = np.loadtxt(chunk, delimiter=",", dtype=float, ndmin=2)
+                except ValueError:
+                    raise _locate_bad_row(chunk, line, n_fields, src, header) from None
+                if values.shape[0] and values.shape[1] != n_fields:
+                    raise _locate_bad_row(chunk, line, n_fields, src, header)
+                rows = values.shape[0]
+                if rows == len(chunk):
+                    row_lines = np.arange(line, line + rows)
+                else:
+                    row_lines = np.array([line + i for i, text in enumerate(chunk) if text.strip()], dtype=np.int64)
+                if rows:
+                    if filled + rows > capacity:
+                        raise InputError("the file changed while it was read", source=src)
+                    data[filled : filled + rows] = values[:, order]
+                    time[filled : filled + rows] = values[:, 0]
+                    lines[filled : filled + rows] = row_lines
+                    filled += rows
+                    tail = [text for text in chunk[-_TOKEN_ROWS:] if text.strip()]
+                    time_tokens = [text.split(",", 1)[0] for text in tail]
+                line += len(chunk)
+        except UnicodeDecodeError:
+            raise InputError("not a text file (UTF-8)", source=src, location=_where(line)) from None
+
+    data, time, lines = data[:filled], time[:filled], lines[:filled]
+    if filled < MIN_ROWS:
+        raise InputError(
+            f"{filled} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(max(line - 1, 1))
+        )
+    finite = np.isfinite(data)
+    if not np.isfinite(time).all() or not finite.all():
+        bad_rows = np.flatnonzero(~np.isfinite(time) | ~finite.all(axis=1))
+        k = int(bad_rows[0])
+        name = "time" if not np.isfinite(time[k]) else wanted[int(np.argmin(finite[k]))]
+        raise InputError("a value is NaN or infinite", source=src, location=f"{_where(int(lines[k]))}, {_column(name)}")
+    dt = _check_time(time, lines, time_tokens, src)
+    for i, name in enumerate(wanted):
+        if not np.any(data[:, i]):
+            raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
+    _check_decay(data, lines, src)
+    return data, dt
+
+
+def write_record(
+    path: str | os.PathLike[str],
+    time: ArrayLike,
+    data: ArrayLike,
+    sensor_ids: Sequence[str],
+    *,
+    digits: int = 10,
+) -> None:
+    """Write one impact record atomically (temporary file in the same folder, then rename).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write (replaced if it exists).
+    time : array_like, shape (n,)
+        Sample times (s), written with 15 significant digits.
+    data : array_like, shape (n, len(sensor_ids))
+        Accelerations, column ``i`` for ``sensor_ids[i]``.
+    sensor_ids : sequence of str
+        Column names after ``time``.
+    digits : int
+        Significant digits of the data values.
+
+    Raises
+    ------
+    InputError
+        For mismatched shapes, a sensor id that is empty, repeated, ``time``
+        or contains a comma, quote or line break, or a folder that does not
+        exist or is not writable.
+    """
+    t = np.asarray(time, dtype=float).ravel()
+    x = np.asarray(data, dtype=float)
+    ids = [str(s) for s in sensor_ids]
+    if x.ndim != 2 or x.shape != (t.shape[0], len(ids)):
+        raise InputError(f"data must be (samples, sensors) = ({t.shape[0]}, {len(ids)}), got {x.shape}")
+    if len(set(ids)) != len(ids):
+        raise InputError("a sensor id appears twice")
+    for sid in ids:
+        if not sid or sid.lower() == "time" or any(c in sid for c in ",\"'\r\n") or sid != sid.strip():
+            raise InputError(f"sensor id {sid!r} cannot be a column name")
+    p = Path(path)
+    folder = p.parent if str(p.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise InputError(f"cannot write: {exc.strerror}", source=str(p)) from None
+    row_format = ",".join(["%.15g"] + [f"%.{digits}g"] * len(ids)) + "\n"
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(",".join(["time", *ids]) + "\n")
+            step = 4096
+            for start in range(0, t.shape[0], step):
+                block = np.column_stack([t[start : start + step], x[start : start + step]])
+                fh.write((row_format * block.shape[0]) % tuple(block.ravel().tolist()))
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

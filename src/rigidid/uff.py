@@ -1,0 +1,974 @@
+"""Universal File Format (UFF) input and output, through :mod:`pyuff`.
+
+A thin layer between UFF files and the plain data the rest of rigidid uses:
+the ``layout.json`` dictionary, ``modes.csv`` rows and per-impact time
+records (see ``FORMATS.md``). Parsing and formatting are pyuff's; this module
+maps UFF's numbering (nodes, signed direction codes, unit codes) onto
+rigidid's sensors and units, and turns whatever is missing or contradictory
+into :class:`~rigidid.errors.InputError` naming the data set.
+
+Datasets used
+-------------
+=====  ====================================================================
+15     nodes (coordinates, 6 significant digits); 2411 read as well (double)
+58     one time record per sensor and impact (``func_type`` 1)
+55     mode shapes at nodes (normal, 2, or complex, 3 and 7)
+82     trace lines (written only, for animation)
+151    header: the model name becomes the layout's ``name``
+164    units
+=====  ====================================================================
+
+Conventions
+-----------
+Sensors
+    A sensor is a (node, signed direction) pair of a dataset 58:
+    ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, in the
+    global axes. Rotations (4..6) and scalar records (0) are not
+    accelerometers and are refused. The sensors are listed in the order of
+    their first record in the file.
+Sensor ids
+    ``"<node>"`` (``"12"``) when the node carries one sensor, else
+    ``"<node><direction>"`` (``"12+x"``, ``"12+y"``, ``"12-z"``). Writing
+    reverses this: ids of these two forms keep their node numbers; other ids
+    are replaced by node numbers 1, 2, ... given to distinct positions in
+    order of first appearance.
+Impacts
+    Time records (58 with ``func_type`` 1) are grouped into impacts by
+    (``load_case_id``, ``ref_node``, ``ref_dir``), in order of first
+    appearance; every record of one impact must share one time axis. The
+    writer gives impact ``i`` (from 1) load case ``i`` and reference node 0.
+Mode shapes
+    A 55 gives a 3-vector per node in global axes; a sensor reads its
+    component along the sensor's direction. When the file has no dataset
+    58, every node component that is non-zero in some mode becomes a
+    sensor along +x, +y or +z (how modal software exports measured DOFs:
+    unmeasured components are zero). Complex eigenvalues (analysis types 3
+    and 7) are poles in rad/s; normal modes (type 2) give the frequency in Hz
+    and the viscous damping ratio.
+Units
+    Dataset 164's factors (UFF units per SI unit) decide: the length unit
+    from the length factor, the mass unit as ``force / (length / s^2)``
+    (coherent systems: SI, mm/mN, cm/cN, ft/poundal, or user-defined) or as
+    the mass whose weight is the force unit (gravitational systems: ft or in
+    with lbf give lb, m or mm with kgf give kg). A unit outside
+    m/cm/mm/in/ft and kg/g/lb is an :class:`~rigidid.errors.InputError`.
+
+pyuff pitfalls met here
+-----------------------
+- Dataset 15 stores coordinates with 6 significant digits, 55 stores shapes,
+  frequencies and eigenvalues with 6 (round trips to about 5e-6), and 58
+  stores its time step with 6: write time steps that are round in 6 digits
+  (1e-3, 5e-4, ...) if the time axis must come back exactly.
+- The dataset 15 writer fails on float node numbers: node numbers are ints.
+- pyuff replaces NaN samples by zeros when writing: the writers here refuse
+  non-finite data instead.
+- Binary 58 (the default here) is about 8x faster to read than ASCII and
+  exact; some vendor tools read pyuff's binary 58 wrongly (``binary=False``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.errors import InputError, RigididError, RigididWarning
+from rigidid.files import atomic_path
+
+if TYPE_CHECKING:
+    from rigidid.core.identify import Identification
+
+__all__ = [
+    "ModeRow",
+    "UffContents",
+    "UffRecord",
+    "read_uff",
+    "write_uff",
+    "write_uff_test",
+]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+
+ModeRow = tuple[int, float, float, str, float, float]
+"""One ``modes.csv`` row: ``(mode, frequency_hz, damping_ratio, sensor_id, real, imag)``."""
+
+_AXES = "xyz"
+_ID_PATTERN = re.compile(r"^\s*(\d+)\s*([+-]?[xyz])?\s*$", re.IGNORECASE)
+_G0 = 9.80665
+_LENGTH_PER_M = {"m": 1.0, "cm": 100.0, "mm": 1000.0, "in": 1.0 / 0.0254, "ft": 1.0 / 0.3048}
+_MASS_PER_KG = {"kg": 1.0, "g": 1000.0, "lb": 1.0 / 0.45359237}
+_LBF_PER_N = 1.0 / (0.45359237 * _G0)
+_POUNDAL_PER_N = 1.0 / (0.45359237 * 0.3048)
+# standard UFF unit codes -> (length, force) factors per SI unit, for files that leave the factors at zero
+_CODE_FACTORS = {
+    1: (1.0, 1.0),
+    2: (1.0 / 0.3048, _LBF_PER_N),
+    3: (1.0, 1.0 / _G0),
+    4: (1.0 / 0.3048, _POUNDAL_PER_N),
+    5: (1000.0, 1000.0),
+    6: (100.0, 100.0),
+    7: (1.0 / 0.0254, _LBF_PER_N),
+    8: (1000.0, 1.0 / _G0),
+}
+# (length, mass) -> UFF units code, force factor, description, temperature factor and offset
+_STANDARD_UNITS: dict[tuple[str, str], tuple[int, float, str, float, float]] = {
+    ("m", "kg"): (1, 1.0, "SI: meter (newton)", 1.0, 273.15),
+    ("ft", "lb"): (2, _LBF_PER_N, "BG: foot (pound f)", 1.8, 459.67),
+    ("mm", "kg"): (5, 1000.0, "MM: mm (milli newton)", 1.0, 273.15),
+    ("cm", "kg"): (6, 100.0, "CM: cm (centi newton)", 1.0, 273.15),
+    ("in", "lb"): (7, _LBF_PER_N, "IN: inch (pound f)", 1.8, 459.67),
+}
+
+
+class UffRecord(NamedTuple):
+    """The time records of one impact.
+
+    Attributes
+    ----------
+    time : ndarray, shape (samples,)
+        Uniform time axis (s).
+    data : ndarray, shape (samples, k)
+        Column ``j``: what sensor ``sensor_ids[j]`` reads (any consistent unit).
+    sensor_ids : tuple of str
+        The layout sensor of each column.
+    """
+
+    time: Array
+    data: Array
+    sensor_ids: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class UffContents:
+    """What a UFF file says about a test, in rigidid's terms.
+
+    Attributes
+    ----------
+    layout : dict
+        ``layout.json`` content: ``{"name", "units": {"length", "mass"},
+        "sensors": [{"id", "position", "direction"}]}`` (no ``mass``: UFF
+        does not carry it).
+    mode_rows : list of tuple
+        ``modes.csv`` rows ``(mode, frequency_hz, damping_ratio, sensor_id,
+        real, imag)``, mode by mode, sensors in layout order; empty without
+        dataset 55.
+    records : list of UffRecord
+        One per impact, in file order; empty without time records.
+    record_labels : list of str
+        Per impact: ``"load case 1"`` or ``"load case 1, reference 3+z"``.
+    nodes : dict of int to tuple of float
+        Every node's coordinates (length unit).
+    """
+
+    layout: dict[str, Any]
+    mode_rows: list[ModeRow] = field(default_factory=list)
+    records: list[UffRecord] = field(default_factory=list)
+    record_labels: list[str] = field(default_factory=list)
+    nodes: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _pyuff() -> Any:
+    try:
+        import pyuff
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise RigididError("UFF files need the optional package pyuff (pip install pyuff)") from None
+    return pyuff
+
+
+def _dir_name(code: int) -> str:
+    return ("+" if code > 0 else "-") + _AXES[abs(code) - 1]
+
+
+def _dir_code(direction: str) -> int:
+    return (_AXES.index(direction[1]) + 1) * (1 if direction[0] == "+" else -1)
+
+
+def _axis_direction(value: Any, where: str, source: str | None) -> str:
+    """Signed axis name (``"+x"``...) of a layout direction (string or axis-aligned vector)."""
+    if isinstance(value, str):
+        key = value.strip().lower()
+        key = key if key[:1] in "+-" else "+" + key
+        if len(key) == 2 and key[1] in _AXES:
+            return key
+        raise InputError(f"unknown direction {value!r}", source=source, location=where)
+    v = np.asarray(value, dtype=float).reshape(-1)
+    nonzero = np.flatnonzero(v)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or nonzero.size != 1:
+        raise InputError(
+            f"direction {list(np.atleast_1d(v))} is not along an axis; UFF records only +-x, +-y, +-z",
+            source=source,
+            location=where,
+        )
+    i = int(nonzero[0])
+    return ("+" if v[i] > 0 else "-") + _AXES[i]
+
+
+def _sensor_ids(sensors: Sequence[tuple[int, int]]) -> list[str]:
+    per_node: dict[int, int] = {}
+    for node, _ in sensors:
+        per_node[node] = per_node.get(node, 0) + 1
+    return [str(node) if per_node[node] == 1 else f"{node}{_dir_name(code)}" for node, code in sensors]
+
+
+def _assign_nodes(positions: Array, sensor_ids: Sequence[str]) -> list[int]:
+    """Node number of every sensor: from ids ``"12"``/``"12+z"`` when consistent, else by position."""
+    scale = max(1.0, float(np.max(np.abs(positions)))) if positions.size else 1.0
+    parsed = [_ID_PATTERN.match(sid) for sid in sensor_ids]
+    if all(parsed):
+        nodes = [int(m.group(1)) for m in parsed if m]
+        where: dict[int, Array] = {}
+        consistent = all(n > 0 for n in nodes)
+        for n, p in zip(nodes, positions, strict=True):
+            if n in where and not np.allclose(where[n], p, rtol=0.0, atol=1e-9 * scale):
+                consistent = False
+            where.setdefault(n, p)
+        if consistent:
+            return nodes
+    numbering: list[tuple[Array, int]] = []
+    result = []
+    for p in positions:
+        for q, n in numbering:
+            if np.allclose(q, p, rtol=0.0, atol=1e-9 * scale):
+                result.append(n)
+                break
+        else:
+            numbering.append((p, len(numbering) + 1))
+            result.append(len(numbering))
+    return result
+
+
+def _units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, str]:
+    length_f = float(dset.get("length", 0.0))
+    force_f = float(dset.get("force", 0.0))
+    code = dset.get("units_code")
+    if not (length_f > 0.0 and force_f > 0.0) and code in _CODE_FACTORS:
+        length_f, force_f = _CODE_FACTORS[code]
+
+    def match(value: float, table: dict[str, float]) -> str | None:
+        for name, ref in table.items():
+            if value > 0.0 and math.isclose(value, ref, rel_tol=1e-4):
+                return name
+        return None
+
+    length = match(length_f, _LENGTH_PER_M)
+    mass = None
+    if length is not None and force_f > 0.0:
+        mass = match(force_f / length_f, _MASS_PER_KG) or match(force_f * _G0, _MASS_PER_KG)
+    if length is None or mass is None:
+        raise InputError(
+            f"units code {code} (length factor {length_f:.6g}, force factor {force_f:.6g} per SI unit) "
+            "is not one of the layout units m/cm/mm/in/ft with kg/g/lb",
+            source=source,
+            location=where,
+        )
+    return {"length": length, "mass": mass}
+
+
+def _write_164(units: dict[str, str]) -> dict[str, Any]:
+    try:
+        length, mass = units["length"], units["mass"]
+        length_f, mass_f = _LENGTH_PER_M[length], _MASS_PER_KG[mass]
+    except KeyError as exc:
+        raise InputError(f"unknown unit {exc.args[0]!r}; length m/cm/mm/in/ft, mass kg/g/lb", source="units") from None
+    if (length, mass) in _STANDARD_UNITS:
+        code, force_f, text, temp, offset = _STANDARD_UNITS[(length, mass)]
+    else:  # a coherent user system whose mass unit is the layout's
+        code, force_f, text, temp, offset = 9, mass_f * length_f, f"US: {length} {mass} s", 1.0, 273.15
+    return {
+        "type": 164,
+        "units_code": code,
+        "units_description": text[:20],
+        "temp_mode": 1,
+        "length": length_f,
+        "force": force_f,
+        "temp": temp,
+        "temp_offset": offset,
+    }
+
+
+def _write_sets(path: str | os.PathLike[str], datasets: list[dict[str, Any]]) -> None:
+    """Write datasets through pyuff to a temporary file beside `path`, then rename it."""
+    pyuff = _pyuff()
+    p = Path(path)
+    with atomic_path(p) as tmp:
+        try:
+            with warnings.catch_warnings():
+                # pyuff's binary 58 writer reopens the file and leaves that handle to the garbage
+                # collector (CPython closes it, flushed, when the writer returns): not ours to report
+                warnings.simplefilter("ignore", ResourceWarning)
+                pyuff.UFF(str(tmp)).write_sets(datasets, mode="overwrite")
+        except Exception as exc:  # pyuff raises bare Exception
+            raise RigididError(f"{p}: pyuff could not write the file: {exc}") from exc
+
+
+def _nodes_dataset(nodes: Sequence[int], coords: Array) -> dict[str, Any]:
+    n = len(nodes)
+    return {
+        "type": 15,
+        "node_nums": np.asarray(nodes, dtype=int),  # ints: pyuff's 15 writer fails on floats
+        "def_cs": np.zeros(n, dtype=int),
+        "disp_cs": np.zeros(n, dtype=int),
+        "color": np.ones(n, dtype=int),
+        "x": coords[:, 0].astype(float),
+        "y": coords[:, 1].astype(float),
+        "z": coords[:, 2].astype(float),
+    }
+
+
+def _pole_text(pole: complex) -> str:
+    f = abs(pole) / (2.0 * math.pi)
+    z = -pole.real / abs(pole)
+    return f"f = {f:.6g} Hz, damping ratio = {z:.6g}"
+
+
+def _modes_dataset(
+    mode: int, pole: complex, node_nums: Sequence[int], vectors: CArray, title: str, units: str
+) -> dict[str, Any]:
+    """Complex 55 (analysis type 3): 3D translations ``vectors`` (nodes, 3) of one mode."""
+    return {
+        "type": 55,
+        "id1": title[:80],
+        "id2": _pole_text(pole)[:80],
+        "id3": f"pole {pole.real:.6g} {pole.imag:+.6g}j rad/s"[:80],
+        "id4": f"units {units}"[:80],
+        "id5": "NONE",
+        "model_type": 1,
+        "analysis_type": 3,
+        "data_ch": 2,
+        "spec_data_type": 8,
+        "load_case": 1,
+        "mode_n": int(mode),
+        "eig": complex(pole),
+        "modal_a": 0j,
+        "modal_b": 0j,
+        "node_nums": np.asarray(node_nums, dtype=int),
+        "r1": np.ascontiguousarray(vectors[:, 0], dtype=complex),
+        "r2": np.ascontiguousarray(vectors[:, 1], dtype=complex),
+        "r3": np.ascontiguousarray(vectors[:, 2], dtype=complex),
+    }
+
+
+# --------------------------------------------------------------------------- reading
+
+
+@dataclass
+class _Reader:
+    source: str
+    units: dict[str, str] | None = None
+    name: str | None = None
+    node_defs: dict[int, list[tuple[tuple[float, float, float], str]]] = field(default_factory=dict)
+    records: list[tuple[dict[str, Any], str]] = field(default_factory=list)
+    modes: list[tuple[dict[str, Any], str]] = field(default_factory=list)
+    units_where: str = ""
+
+    def error(self, message: str, where: str | None = None) -> InputError:
+        return InputError(message, source=self.source, location=where)
+
+    def add_nodes(self, dset: dict[str, Any], where: str) -> None:
+        nums = np.asarray(dset.get("node_nums", []), dtype=float).reshape(-1)
+        xyz = np.column_stack([np.asarray(dset.get(k, []), dtype=float).reshape(-1) for k in "xyz"])
+        if xyz.shape[0] != nums.shape[0] or not np.all(np.isfinite(xyz)):
+            raise self.error("node coordinates are incomplete or not finite", where)
+        for num, p in zip(nums, xyz, strict=True):
+            if num != round(num) or num <= 0:
+                raise self.error(f"node label {num:g} is not a positive integer", where)
+            self.node_defs.setdefault(int(num), []).append(((float(p[0]), float(p[1]), float(p[2])), where))
+
+    def set_units(self, dset: dict[str, Any], where: str) -> None:
+        units = _units_from_164(dset, self.source, where)
+        if self.units is not None and units != self.units:
+            raise self.error(
+                f"units {units['length']}/{units['mass']} contradict {self.units['length']}/{self.units['mass']} "
+                f"of {self.units_where}",
+                where,
+            )
+        self.units, self.units_where = units, where
+
+    def nodes(self) -> dict[int, tuple[float, float, float]]:
+        all_coords = [c for defs in self.node_defs.values() for c, _ in defs]
+        scale = max([1.0, *(abs(v) for c in all_coords for v in c)])
+        out: dict[int, tuple[float, float, float]] = {}
+        for node, defs in self.node_defs.items():
+            first, first_where = defs[0]
+            for coords, where in defs[1:]:
+                if not np.allclose(coords, first, rtol=1e-5, atol=1e-9 * scale):
+                    raise self.error(
+                        f"node {node} has two coordinates: {list(first)} ({first_where}) and {list(coords)}",
+                        f"{where}, node {node}",
+                    )
+            out[node] = first
+        return out
+
+
+def _read_all(path: Path) -> list[dict[str, Any]]:
+    pyuff = _pyuff()
+    src = str(path)
+    if not path.exists():
+        raise InputError("file not found", source=src)
+    if path.is_dir():
+        raise InputError("is a directory, not a file", source=src)
+    try:
+        uff = pyuff.UFF(src)
+        n = uff.get_n_sets()
+        types = [int(t) for t in uff.get_set_types()]
+    except Exception as exc:
+        raise InputError(f"not a readable UFF file: {exc}", source=src) from None
+    if n == 0:
+        raise InputError("no UFF datasets found (is it a universal file?)", source=src)
+    wanted = {15, 55, 58, 151, 164, 2411}
+    out: list[dict[str, Any]] = []
+    for i, kind in enumerate(types):
+        if kind not in wanted:
+            out.append({"type": kind})
+            continue
+        try:
+            dset = uff.read_sets(i)
+        except Exception as exc:
+            count = types[: i + 1].count(kind)
+            raise InputError(f"pyuff cannot read it: {exc}", source=src, location=f"dataset {kind} #{count}") from None
+        out.append(dset)
+    return out
+
+
+def _time_record(reader: _Reader, dset: dict[str, Any], where: str) -> tuple[Array, Array]:
+    data = np.asarray(dset.get("data"))
+    x = np.asarray(dset.get("x"), dtype=float).reshape(-1)
+    if np.iscomplexobj(data):
+        raise reader.error("a time record must be real, this one is complex", where)
+    data = data.astype(float).reshape(-1)
+    if data.size < 2 or x.shape != data.shape or data.size != int(dset.get("num_pts", data.size)):
+        raise reader.error(f"{data.size} samples where the header says {dset.get('num_pts')}", where)
+    if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
+        raise reader.error("the record holds NaN or infinite values", where)
+    if int(dset.get("abscissa_spacing", 1)) != 1:
+        step = np.diff(x)
+        if np.any(step <= 0.0) or np.ptp(step) > 1e-6 * float(np.mean(step)):
+            raise reader.error("the time axis is not uniformly sampled", where)
+        x = x[0] + np.mean(step) * np.arange(x.size)
+    elif not float(dset.get("abscissa_inc", 0.0)) > 0.0:
+        raise reader.error("the time step is not positive", where)
+    return x, data
+
+
+def read_uff(path: str | os.PathLike[str], *, units: dict[str, str] | None = None) -> UffContents:
+    """Read a test from a universal file: sensors, units, time records and modes.
+
+    Parameters
+    ----------
+    path : path-like
+        The UFF file (ASCII or binary 58).
+    units : dict, optional
+        ``{"length": ..., "mass": ...}`` to use when the file has no dataset
+        164 (ignored when it has one).
+
+    Returns
+    -------
+    UffContents
+        ``layout`` (``layout.json`` dictionary), ``mode_rows``, ``records``
+        (one :class:`UffRecord` per impact), ``record_labels`` and ``nodes``.
+        Conventions (sensor ids, grouping into impacts, units) in the module
+        documentation.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the data set (``"dataset 58 #3, node 12"``, the
+        count of that type from 1) for: a file pyuff cannot read; a node with
+        two different coordinates; a 58 whose response node has no
+        coordinates, whose direction is a rotation or scalar, that repeats a
+        sensor of its impact, or whose time axis differs from the rest of its
+        impact; a 55 without a positive frequency, that is not 3D
+        translations, that repeats a mode number, or that lacks a sensor's
+        node; no dataset 164 and no `units`; unknown units; no sensors at all.
+
+    Warns
+    -----
+    RigididWarning
+        For a 58 that is not a time response (ignored, its sensor kept), a
+        55 that is not a mode (ignored), and sensors on nodes with a local
+        displacement coordinate system (directions taken as global).
+    """
+    p = Path(path)
+    reader = _Reader(str(p))
+    counts: dict[int, int] = {}
+    disp_cs: dict[int, int] = {}
+    for dset in _read_all(p):
+        kind = int(dset["type"])
+        counts[kind] = counts.get(kind, 0) + 1
+        where = f"dataset {kind} #{counts[kind]}"
+        if kind in (15, 2411):
+            reader.add_nodes(dset, where)
+            for num, cs in zip(dset.get("node_nums", []), dset.get("disp_cs", []), strict=False):
+                disp_cs[int(num)] = int(cs)
+        elif kind == 58:
+            reader.records.append((dset, where))
+        elif kind == 55:
+            reader.modes.append((dset, where))
+        elif kind == 164:
+            reader.set_units(dset, where)
+        elif kind == 151 and reader.name is None:
+            reader.name = str(dset.get("model_name", "")).strip() or None
+    nodes = reader.nodes()
+    if reader.units is None:
+        if units is None:
+            raise reader.error("no units: the file has no dataset 164; give the units")
+        given = {"length": str(units.get("length")), "mass": str(units.get("mass"))}
+        if given["length"] not in _LENGTH_PER_M or given["mass"] not in _MASS_PER_KG:
+            raise InputError(
+                f"unknown units {given['length']}/{given['mass']}; length m/cm/mm/in/ft, mass kg/g/lb", source="units"
+            )
+        reader.units = given
+
+    # sensors from the 58s
+    sensors: list[tuple[int, int]] = []
+    time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]] = []
+    for dset, where in reader.records:
+        node, code = int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0))
+        if not 1 <= abs(code) <= 3:
+            what = "a rotation" if 4 <= abs(code) <= 6 else "not a direction"
+            raise reader.error(
+                f"response direction {code} is {what}; accelerometers read along +-x, +-y, +-z (1..3, -1..-3)",
+                f"{where}, node {node}",
+            )
+        if node not in nodes:
+            raise reader.error(
+                f"response node {node} has no coordinates (no dataset 15 or 2411 defines it)", f"{where}, node {node}"
+            )
+        if (node, code) not in sensors:
+            sensors.append((node, code))
+        if int(dset.get("func_type", 0)) == 1:
+            time_sets.append((dset, where, (node, code)))
+        else:
+            warnings.warn(
+                f"{reader.source}: {where}: function type {dset.get('func_type')} is not a time response; ignored",
+                RigididWarning,
+                stacklevel=2,
+            )
+    if not reader.records:
+        sensors = _sensors_from_modes(reader, nodes)
+    if not sensors:
+        raise reader.error("no sensors: the file has no dataset 58 (time records) or 55 (modes)")
+    for node, _ in sensors:
+        if disp_cs.get(node, 0) not in (0, 1):
+            warnings.warn(
+                f"{reader.source}: node {node} has displacement coordinate system {disp_cs[node]}; "
+                "its directions are taken in the global axes",
+                RigididWarning,
+                stacklevel=2,
+            )
+    ids = _sensor_ids(sensors)
+    id_of = dict(zip(sensors, ids, strict=True))
+    layout: dict[str, Any] = {
+        "name": reader.name or p.stem,
+        "units": dict(reader.units),
+        "sensors": [
+            {"id": sid, "position": list(nodes[node]), "direction": _dir_name(code)}
+            for (node, code), sid in zip(sensors, ids, strict=True)
+        ],
+    }
+    records, labels = _group_records(reader, time_sets, id_of)
+    rows = _mode_rows(reader, sensors, ids)
+    return UffContents(layout, rows, records, labels, nodes)
+
+
+def _sensors_from_modes(reader: _Reader, nodes: dict[int, tuple[float, float, float]]) -> list[tuple[int, int]]:
+    sensors: list[tuple[int, int]] = []
+    for dset, where in reader.modes:
+        if int(dset.get("analysis_type", 0)) not in (2, 3, 7):
+            continue
+        vectors = np.column_stack([np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)])
+        for node, vec in zip(np.asarray(dset.get("node_nums", []), dtype=int), vectors, strict=True):
+            for axis in range(3):
+                key = (int(node), axis + 1)
+                if vec[axis] != 0 and key not in sensors:
+                    if key[0] not in nodes:
+                        raise reader.error(f"node {key[0]} has no coordinates", f"{where}, node {key[0]}")
+                    sensors.append(key)
+    # order: node of first appearance, then x, y, z
+    first = {node: i for i, (node, _) in reversed(list(enumerate(sensors)))}
+    return sorted(sensors, key=lambda s: (first[s[0]], s[1]))
+
+
+def _group_records(
+    reader: _Reader,
+    time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]],
+    id_of: dict[tuple[int, int], str],
+) -> tuple[list[UffRecord], list[str]]:
+    groups: dict[tuple[int, int, int], list[tuple[Array, Array, str, str]]] = {}
+    for dset, where, sensor in time_sets:
+        key = (int(dset.get("load_case_id", 0)), int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)))
+        here = f"{where}, node {sensor[0]}"
+        x, data = _time_record(reader, dset, here)
+        groups.setdefault(key, []).append((x, data, id_of[sensor], here))
+    records: list[UffRecord] = []
+    labels: list[str] = []
+    for (case, ref_node, ref_dir), items in groups.items():
+        label = f"load case {case}"
+        if ref_node:
+            ref = f"{ref_node}{_dir_name(ref_dir)}" if 1 <= abs(ref_dir) <= 3 else f"{ref_node} dir {ref_dir}"
+            label += f", reference {ref}"
+        time0, _, _, where0 = items[0]
+        seen: dict[str, str] = {}
+        for x, _, sid, where in items:
+            if sid in seen:
+                raise reader.error(f"sensor {sid} appears twice in {label} (also {seen[sid]})", where)
+            seen[sid] = where
+            step = float(time0[1] - time0[0])
+            if x.shape != time0.shape or np.max(np.abs(x - time0)) > 1e-6 * step:
+                raise reader.error(
+                    f"time axis ({x.size} samples from {x[0]:.6g} s, step {x[1] - x[0]:.6g} s) differs from "
+                    f"{where0} ({time0.size} samples from {time0[0]:.6g} s, step {step:.6g} s) of {label}",
+                    where,
+                )
+        data = np.column_stack([item[1] for item in items])
+        records.append(UffRecord(time0, data, tuple(item[2] for item in items)))
+        labels.append(label)
+    return records, labels
+
+
+def _mode_rows(reader: _Reader, sensors: list[tuple[int, int]], ids: list[str]) -> list[ModeRow]:
+    rows: list[ModeRow] = []
+    seen: dict[int, str] = {}
+    for dset, where in reader.modes:
+        analysis = int(dset.get("analysis_type", 0))
+        if analysis not in (2, 3, 7):
+            warnings.warn(
+                f"{reader.source}: {where}: analysis type {analysis} is not a mode; ignored",
+                RigididWarning,
+                stacklevel=3,
+            )
+            continue
+        mode = int(dset.get("mode_n", 0))
+        here = f"{where}, mode {mode}"
+        if mode in seen:
+            raise reader.error(f"mode {mode} appears twice (also {seen[mode]})", here)
+        seen[mode] = where
+        if int(dset.get("data_ch", 0)) not in (2, 3):
+            raise reader.error(f"data characteristic {dset.get('data_ch')} is not a vector of translations", here)
+        if analysis == 2:
+            f = float(dset.get("freq", 0.0))
+            z = float(dset.get("modal_damp_vis", 0.0))
+        else:
+            pole = complex(dset.get("eig", 0.0))
+            pole = pole.conjugate() if pole.imag < 0 else pole
+            f = abs(pole) / (2.0 * math.pi)
+            z = -pole.real / abs(pole) if abs(pole) > 0.0 else 0.0
+        if not (math.isfinite(f) and f > 0.0):
+            raise reader.error("the mode has no frequency (zero or missing eigenvalue/frequency)", here)
+        if not (math.isfinite(z) and 0.0 <= z < 1.0):
+            raise reader.error(f"damping ratio {z:.6g} is outside [0, 1)", here)
+        node_nums = [int(n) for n in np.asarray(dset.get("node_nums", []), dtype=int)]
+        vectors = np.column_stack([np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)])
+        if not np.all(np.isfinite(vectors)):
+            raise reader.error("the shape holds NaN or infinite values", here)
+        index = {n: i for i, n in enumerate(node_nums)}
+        for (node, code), sid in zip(sensors, ids, strict=True):
+            if node not in index:
+                raise reader.error(f"no value at node {node} (sensor {sid})", f"{here}, node {node}")
+            value = complex(vectors[index[node], abs(code) - 1]) * (1 if code > 0 else -1)
+            rows.append((mode, f, z, sid, value.real, value.imag))
+    return rows
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _layout_sensors(layout: dict[str, Any]) -> tuple[list[str], Array, list[str]]:
+    try:
+        sensors = list(layout["sensors"])
+        ids = [str(s["id"]) for s in sensors]
+        positions = np.array([s["position"] for s in sensors], dtype=float).reshape(-1, 3)
+        directions = [
+            _axis_direction(s["direction"], f"sensors.{i}.direction", "layout") for i, s in enumerate(sensors)
+        ]
+    except (KeyError, TypeError, ValueError) as exc:
+        if isinstance(exc, InputError):
+            raise
+        raise InputError(f"not a layout dictionary: {exc}", source="layout") from None
+    if len(set(ids)) != len(ids):
+        raise InputError("sensor ids are not unique", source="layout", location="sensors")
+    if not np.all(np.isfinite(positions)):
+        raise InputError("positions must be finite", source="layout", location="sensors")
+    return ids, positions, directions
+
+
+def write_uff_test(
+    path: str | os.PathLike[str],
+    layout: dict[str, Any],
+    records: Sequence[tuple[ArrayLike, ArrayLike, Sequence[str]]],
+    *,
+    mode_rows: Sequence[ModeRow] | None = None,
+    binary: bool = True,
+) -> dict[str, int]:
+    """Write a test as a universal file: 151, 164, 15, 58 per sensor and impact, 55 per mode.
+
+    Parameters
+    ----------
+    path : path-like
+        The file to write (atomically: a temporary file, then renamed).
+    layout : dict
+        ``layout.json`` content; directions must lie along an axis (``"+x"``
+        ... or an axis vector): UFF has no other measuring directions.
+    records : sequence of (time, data, sensor_ids)
+        Per impact: ``time`` (samples,) uniform in s, ``data`` (samples, k)
+        and the k layout sensor ids of its columns. Impact ``i`` is written
+        as load case ``i + 1`` with reference node 0.
+    mode_rows : sequence of tuple, optional
+        ``(mode, frequency_hz, damping_ratio, sensor_id, real, imag)`` rows
+        (as ``modes.csv``); written as complex 55 datasets (pole from
+        frequency and damping), a sensor's value placed in its node's axis
+        component with the sensor's sign.
+    binary : bool
+        Binary 58 (exact, fast) or ASCII (12 significant digits).
+
+    Returns
+    -------
+    dict of str to int
+        The node number of each sensor id.
+
+    Raises
+    ------
+    InputError
+        A direction off the axes, two sensors on one node and axis, an
+        unknown sensor id, a non-uniform or non-finite record, or modes that
+        do not give every sensor once.
+    """
+    ids, positions, directions = _layout_sensors(layout)
+    node_list = _assign_nodes(positions, ids)
+    node_of = dict(zip(ids, node_list, strict=True))
+    codes = {sid: _dir_code(d) for sid, d in zip(ids, directions, strict=True)}
+    axis_owner: dict[tuple[int, int], str] = {}
+    for sid in ids:
+        key = (node_of[sid], abs(codes[sid]))
+        if key in axis_owner:
+            raise InputError(
+                f"sensors {axis_owner[key]} and {sid} share node {key[0]} and axis {_AXES[key[1] - 1]}",
+                source="layout",
+            )
+        axis_owner[key] = sid
+    units = dict(layout.get("units", {}))
+    datasets: list[dict[str, Any]] = [
+        {
+            "type": 151,
+            "model_name": str(layout.get("name") or "rigidid test")[:80],
+            "description": "rigidid test data",
+            "db_app": "rigidid",
+            "program": "rigidid",
+        },
+        _write_164(units),
+    ]
+    unique: dict[int, Array] = {}
+    for sid, p in zip(ids, positions, strict=True):
+        unique.setdefault(node_of[sid], p)
+    datasets.append(_nodes_dataset(list(unique), np.array(list(unique.values()))))
+    for i, (time, data, sensor_ids) in enumerate(records):
+        where = f"records[{i}]"
+        t = np.asarray(time, dtype=float).reshape(-1)
+        d = np.asarray(data, dtype=float)
+        d = d.reshape(-1, 1) if d.ndim == 1 else d
+        sids = [str(s) for s in sensor_ids]
+        if d.shape != (t.size, len(sids)) or t.size < 2:
+            raise InputError(
+                f"data shape {d.shape} does not match {t.size} samples x {len(sids)} sensors", source=where
+            )
+        step = np.diff(t)
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(d))):
+            raise InputError("time and data must be finite", source=where)
+        if np.any(step <= 0.0) or np.ptp(step) > 1e-9 * abs(float(np.mean(step))):
+            raise InputError("the time axis is not uniformly sampled", source=where)
+        for j, sid in enumerate(sids):
+            if sid not in node_of:
+                raise InputError(f"sensor {sid!r} is not in the layout", source=where)
+            datasets.append(
+                {
+                    "type": 58,
+                    "binary": int(binary),
+                    "id1": f"impact {i + 1}, sensor {sid}"[:80],
+                    "id2": "rigidid",
+                    "func_type": 1,
+                    "load_case_id": i + 1,
+                    "rsp_node": node_of[sid],
+                    "rsp_dir": codes[sid],
+                    "ref_node": 0,
+                    "ref_dir": 0,
+                    "abscissa_spacing": 1,
+                    "abscissa_spec_data_type": 17,
+                    "abscissa_axis_lab": "Time",
+                    "abscissa_axis_units_lab": "s",
+                    "ordinate_spec_data_type": 12,
+                    "orddenom_spec_data_type": 0,
+                    "ordinate_axis_lab": "Acceleration",
+                    "x": t.copy(),
+                    "data": np.ascontiguousarray(d[:, j]),
+                }
+            )
+    if mode_rows:
+        datasets.extend(_measured_modes(mode_rows, ids, node_of, codes, list(unique), units))
+    _write_sets(path, datasets)
+    return node_of
+
+
+def _measured_modes(
+    mode_rows: Sequence[ModeRow],
+    ids: list[str],
+    node_of: dict[str, int],
+    codes: dict[str, int],
+    nodes: list[int],
+    units: dict[str, str],
+) -> list[dict[str, Any]]:
+    from rigidid.core.statespace import poles_from_modal
+
+    per_mode: dict[int, tuple[float, float, dict[str, complex]]] = {}
+    for k, row in enumerate(mode_rows):
+        mode, f, z, sid, re_, im_ = row
+        if sid not in node_of:
+            raise InputError(f"sensor {sid!r} is not in the layout", source="mode_rows", location=f"row {k}")
+        entry = per_mode.setdefault(int(mode), (float(f), float(z), {}))
+        entry[2][sid] = complex(re_, im_)
+    out = []
+    row_of = {n: i for i, n in enumerate(nodes)}
+    for mode, (f, z, values) in per_mode.items():
+        missing = [sid for sid in ids if sid not in values]
+        if missing:
+            raise InputError(f"mode {mode} has no value for sensor {missing[0]!r}", source="mode_rows")
+        vectors = np.zeros((len(nodes), 3), dtype=complex)
+        for sid, value in values.items():
+            code = codes[sid]
+            vectors[row_of[node_of[sid]], abs(code) - 1] = value * (1 if code > 0 else -1)
+        pole = complex(poles_from_modal([f], [z])[0])
+        out.append(_modes_dataset(mode, pole, nodes, vectors, f"measured mode {mode}", _units_text(units)))
+    return out
+
+
+def _units_text(units: dict[str, str]) -> str:
+    return f"{units.get('length', '?')}, {units.get('mass', '?')}, s"
+
+
+def write_uff(
+    path: str | os.PathLike[str],
+    layout_positions: ArrayLike,
+    directions: ArrayLike,
+    sensor_ids: Sequence[str],
+    identification: Identification,
+    units: dict[str, str],
+) -> dict[str, int]:
+    """Write the identified rigid-body modes as a universal file other tools can animate.
+
+    Parameters
+    ----------
+    path : path-like
+        The file (written atomically).
+    layout_positions : array_like, shape (p, 3)
+        Sensor positions (length unit).
+    directions : array_like, shape (p, 3)
+        Measuring axes (checked for shape only: the modes are written as the
+        full 3D motion of each node, whatever its sensors read).
+    sensor_ids : sequence of str
+        Layout ids, numbered into nodes as :func:`write_uff_test` does.
+    identification : Identification
+        The result; its model modes
+        (:meth:`~rigidid.core.identify.Identification.model_modes`) are
+        written.
+    units : dict
+        ``{"length": ..., "mass": ...}`` of the layout (dataset 164).
+
+    Returns
+    -------
+    dict of str to int
+        Node numbers: every sensor id, and ``"CG"``, ``"axis 1"``,
+        ``"axis 2"``, ``"axis 3"`` for the marker nodes.
+
+    Notes
+    -----
+    Datasets written: 151 (header), 164 (units), 15 (one node per distinct
+    sensor position, a node at the CG and one at the tip of each principal
+    axis, numbered from the next multiple of 1000 above the sensor nodes;
+    axis length half the largest sensor distance from the CG), 82 (a closed
+    outline through the sensor nodes, :func:`rigidid.reporting.sensor_outline`,
+    and a line from the CG along each principal axis), and 55 (the six model
+    modes, complex, analysis type 3: 3D translation of every node; pole in
+    rad/s; frequency and damping ratio in ID line 2), each mode scaled so
+    that its largest sensor-node translation is ``1 + 0j``.
+    """
+    from rigidid.reporting import sensor_outline
+
+    pos = np.asarray(layout_positions, dtype=float).reshape(-1, 3)
+    dirs = np.asarray(directions, dtype=float)
+    sids = [str(s) for s in sensor_ids]
+    if dirs.shape != pos.shape or len(sids) != pos.shape[0] or len(set(sids)) != len(sids):
+        raise InputError(
+            f"positions {pos.shape}, directions {dirs.shape} and {len(sids)} unique sensor ids do not match"
+        )
+    node_list = _assign_nodes(pos, sids)
+    unique: dict[int, Array] = {}
+    for n, p in zip(node_list, pos, strict=True):
+        unique.setdefault(n, p)
+    sensor_nodes = list(unique)
+    sensor_xyz = np.array(list(unique.values()))
+    g = np.asarray(identification.center_of_gravity, dtype=float)
+    axes = identification.principal_axes
+    length = 0.5 * float(np.max(np.linalg.norm(sensor_xyz - g, axis=1)))
+    length = length if length > 0.0 else 1.0
+    base = (max(sensor_nodes) // 1000 + 1) * 1000
+    marker_nodes = [base, base + 1, base + 2, base + 3]
+    marker_xyz = np.vstack([g, g + length * axes.T])
+    all_nodes = sensor_nodes + marker_nodes
+    all_xyz = np.vstack([sensor_xyz, marker_xyz])
+
+    datasets: list[dict[str, Any]] = [
+        {
+            "type": 151,
+            "model_name": "rigidid identified rigid body",
+            "description": f"rigid-body modes of the identified model; nodes >= {base}: CG and principal axes",
+            "db_app": "rigidid",
+            "program": "rigidid",
+        },
+        _write_164(units),
+        _nodes_dataset(all_nodes, all_xyz),
+    ]
+    outline = [sensor_nodes[i] for i in sensor_outline(sensor_xyz)]
+    if len(outline) > 1:
+        datasets.append(
+            {"type": 82, "trace_num": 1, "color": 8, "id": "sensor frame", "nodes": np.array(outline, dtype=int)}
+        )
+    for k in range(3):
+        datasets.append(
+            {
+                "type": 82,
+                "trace_num": 2 + k,
+                "color": 2 + k,
+                "id": f"principal axis {k + 1}",
+                "nodes": np.array([base, base + 1 + k], dtype=int),
+            }
+        )
+    poles, shapes = identification.model_modes()
+    from rigidid.core.geometry import skew
+
+    for k in range(poles.shape[0]):
+        phi = shapes[:, k]
+        # translation of a point r: x + theta x (r - g) = x - S(r - g) theta
+        vectors = np.array([phi[:3] - skew(r - g) @ phi[3:] for r in all_xyz])
+        sensor_part = vectors[: len(sensor_nodes)]
+        peak = sensor_part.reshape(-1)[np.argmax(np.abs(sensor_part).reshape(-1))]
+        vectors = vectors / peak if abs(peak) > 0.0 else vectors
+        datasets.append(
+            _modes_dataset(
+                k + 1, complex(poles[k]), all_nodes, vectors, f"rigidid rigid-body mode {k + 1}", _units_text(units)
+            )
+        )
+    _write_sets(path, datasets)
+    node_of = {sid: n for sid, n in zip(sids, node_list, strict=True)}
+    node_of.update({"CG": base, "axis 1": base + 1, "axis 2": base + 2, "axis 3": base + 3})
+    return node_of
