@@ -15,25 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-_API = (
-    "IdentifyResult",
-    "PlanResult",
-    "TestData",
-    "convert",
-    "estimate_modes",
-    "identify",
-    "load_arrays",
-    "load_layout",
-    "load_modes",
-    "load_records",
-    "load_uff",
-    "plan",
-    "report",
-    "simulate",
-    "simulate_records",
-)
-_EXPORTS = {
-    **dict.fromkeys(_API, "rigidid.api"),
+# Names of __all__ that do not live in rigidid.api (the rest do).
+_ELSEWHERE = {
     "result_to_dict": "rigidid.render",
     "result_tables": "rigidid.render",
     "RigididError": "rigidid.errors",
@@ -90,8 +73,8 @@ if TYPE_CHECKING:
 
 
 def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+    if name in __all__:
+        value = getattr(importlib.import_module(_ELSEWHERE.get(name, "rigidid.api")), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'rigidid' has no attribute {name!r}")

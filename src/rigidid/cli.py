@@ -235,8 +235,11 @@ def _estimate(
 
 
 def _identify(
-    data: TestData,
-    estimate: ModalEstimate | None,
+    layout: Path,
+    inputs: list[Path] | None,
+    records: bool,
+    units: str | None,
+    modal: dict[str, Any],
     *,
     mass: float | None,
     modes_used: str | None,
@@ -244,7 +247,8 @@ def _identify(
     draws: int,
     noise: dict[str, float],
     seed: int,
-) -> IdentifyResult:
+) -> tuple[IdentifyResult, ModalEstimate | None]:
+    """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
     from rigidid.core.identify import METHODS
     from rigidid.files import ModeTable
@@ -253,13 +257,15 @@ def _identify(
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
+    data = _test_data(layout, inputs or [], records, units)
+    estimate = _estimate(data, **modal) if records else None
     modes = data.modes
     if estimate is not None:
         ids = tuple(s.id for s in data.layout.sensors)
         labels = tuple(range(1, len(estimate.frequency_hz) + 1))
         modes = ModeTable(labels, estimate.frequency_hz, estimate.damping_ratio, ids, estimate.shapes)
     assert modes is not None
-    return api.identify(
+    result = api.identify(
         data.layout,
         modes,
         mass=mass,
@@ -269,6 +275,7 @@ def _identify(
         noise=noise,
         seed=seed,
     )
+    return result, estimate
 
 
 def _stabilisation_tables(estimate: ModalEstimate) -> Any:
@@ -325,15 +332,15 @@ def identify(
     with _reported():
         from rigidid.render import result_to_dict
 
-        data = _test_data(layout, inputs or [], records, units)
-        estimate = _estimate(data, modal_method, n_modes, band, max_order, decimate) if records else None
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
-        result = _identify(
-            data, estimate, mass=mass, modes_used=modes_used, method=method, draws=uncertainty, noise=noise, seed=seed
-        )
+        modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        result, estimate = _identify(
+            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
+            noise=noise, seed=seed,
+        )  # fmt: skip
         if json_path is not None:
             out = result_to_dict(result)
             if estimate is not None:
@@ -548,15 +555,15 @@ def report(
         from rigidid import api
         from rigidid.files import load_body, write_text_atomic
 
-        data = _test_data(layout, inputs or [], records, units)
-        estimate = _estimate(data, modal_method, n_modes, band, max_order, decimate) if records else None
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
-        result = _identify(
-            data, estimate, mass=mass, modes_used=modes_used, method=method, draws=uncertainty, noise=noise, seed=seed
-        )
+        modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        result, estimate = _identify(
+            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
+            noise=noise, seed=seed,
+        )  # fmt: skip
         mounts = None
         if body is not None:
             mounts = [m.position for m in load_body(body).mounts]

@@ -17,7 +17,6 @@ from __future__ import annotations
 import itertools
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -25,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
+from rigidid.files import atomic_path
 
 __all__ = [
     "DECAY_RATIO",
@@ -351,21 +351,10 @@ def write_record(
     for sid in ids:
         if not sid or sid.lower() == "time" or any(c in sid for c in ",\"'\r\n") or sid != sid.strip():
             raise InputError(f"sensor id {sid!r} cannot be a column name")
-    p = Path(path)
-    folder = p.parent if str(p.parent) else Path(".")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
-    except OSError as exc:
-        raise InputError(f"cannot write: {exc.strerror}", source=str(p)) from None
     row_format = ",".join(["%.15g"] + [f"%.{digits}g"] * len(ids)) + "\n"
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(",".join(["time", *ids]) + "\n")
-            step = 4096
-            for start in range(0, t.shape[0], step):
-                block = np.column_stack([t[start : start + step], x[start : start + step]])
-                fh.write((row_format * block.shape[0]) % tuple(block.ravel().tolist()))
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as fh:
+        fh.write(",".join(["time", *ids]) + "\n")
+        step = 4096
+        for start in range(0, t.shape[0], step):
+            block = np.column_stack([t[start : start + step], x[start : start + step]])
+            fh.write((row_format * block.shape[0]) % tuple(block.ravel().tolist()))
