@@ -207,7 +207,7 @@ def _test_data(layout: Path, inputs: list[Path], records: bool, units: str | Non
     lay = api.load_layout(layout)
     if records:
         if not inputs:
-            raise InputError("give one records.csv per impact", source="--records")
+            raise InputError("no records: give one records.csv per impact", source="RECORDS")
         return api.TestData(lay, None, api.load_records(inputs, lay), [str(p) for p in inputs])
     if len(inputs) != 1:
         message = "give one modes.csv" if not inputs else "give one modes.csv (several files: records? pass --records)"
