@@ -182,3 +182,17 @@ def test_uff_test_set_identifies_like_csv(tmp_path: Path) -> None:
                 "--mass", "136", "--json", "-")  # fmt: skip
     assert again.returncode == 0, again.stderr
     np.testing.assert_allclose(json.loads(again.stdout)["center_of_gravity"], b["center_of_gravity"], atol=1e-6)
+
+
+def test_record_spread_through_the_cli(engine_records: list[Path]) -> None:
+    out = run("identify", ENGINE / "layout.json", "--records", *engine_records, "--resample", "4", "--json", "-")
+    assert out.returncode == 0, out.stderr
+    spread = json.loads(out.stdout)["uncertainty_records"]
+    assert spread["segments"] == 4 and spread["used"] == 4
+    assert all(lo < hi for lo, hi in spread["center_of_gravity"]["ci95"])
+
+
+def test_resample_needs_records() -> None:
+    out = run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--resample", "4")
+    assert out.returncode == 2
+    assert "--resample: data-driven intervals need impact records" in out.stderr

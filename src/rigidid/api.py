@@ -30,6 +30,7 @@ from rigidid.models import BodyFile, LayoutFile
 
 if TYPE_CHECKING:
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
+    from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.uncertainty import NoiseLevels, Uncertainty
 
@@ -51,6 +52,7 @@ __all__ = [
     "report",
     "simulate",
     "simulate_records",
+    "with_record_spread",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -82,6 +84,9 @@ class IdentifyResult:
         Their shapes at the sensors.
     uncertainty : Uncertainty or None
         Monte Carlo intervals, when asked for.
+    record_spread : RecordSpread or None
+        Data-driven intervals from interleaved segments of the records
+        (:func:`with_record_spread`).
     """
 
     identification: Identification
@@ -95,6 +100,7 @@ class IdentifyResult:
     poles: NDArray[np.complex128] | None = None
     shapes: NDArray[np.complex128] | None = None
     uncertainty: Uncertainty | None = None
+    record_spread: RecordSpread | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -661,7 +667,6 @@ def report(
     str
         One HTML document; it needs no network to open.
     """
-    from rigidid.core.uncertainty import uncertainty_to_dict
     from rigidid.reporting import render_report
 
     return render_report(
@@ -672,9 +677,21 @@ def report(
         result.units,
         mounts=None if mounts is None else [np.asarray(m, dtype=float) for m in mounts],
         stabilisation=stabilisation,
-        uncertainty=None if result.uncertainty is None else uncertainty_to_dict(result.uncertainty),
+        uncertainty=_intervals_for_report(result),
         title=title,
     )
+
+
+def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
+    """The Monte Carlo intervals, else the data-driven ones, as the report takes them."""
+    from rigidid.core.record_spread import record_spread_to_dict
+    from rigidid.core.uncertainty import uncertainty_to_dict
+
+    if result.uncertainty is not None:
+        return uncertainty_to_dict(result.uncertainty)
+    if result.record_spread is not None:
+        return record_spread_to_dict(result.record_spread)
+    return None
 
 
 def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None) -> list[Path]:
@@ -782,3 +799,49 @@ def simulate_records(
         written.append(folder / f"record-{k}.csv")
         write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
     return written
+
+
+def with_record_spread(
+    result: IdentifyResult,
+    records: Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    segments: int = 8,
+    n_modes: int = 6,
+    estimate_options: Mapping[str, Any] | None = None,
+) -> IdentifyResult:
+    """Add data-driven intervals: re-identify on interleaved segments of the records.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The identification from all the records.
+    records : sequence of (ndarray, float)
+        The records it came from (samples x sensors in layout order, sample interval).
+    segments : int
+        Number of interleaved segments ``K`` (the sample rate over ``K`` must
+        stay above twice the highest mode; 8 when the records allow it).
+    n_modes : int
+        Modes estimated per segment.
+    estimate_options : mapping, optional
+        ``method``, ``band``, ``max_order`` for the estimator.
+
+    Returns
+    -------
+    IdentifyResult
+        `result` with ``record_spread`` set (see
+        :func:`rigidid.core.record_spread.record_spread`).
+    """
+    from rigidid.core.record_spread import record_spread
+
+    spread = record_spread(
+        [data for data, _ in records],
+        records[0][1],
+        result.positions,
+        result.directions,
+        result.identification,
+        segments=segments,
+        mass=result.identification.mass,
+        n_modes=n_modes,
+        estimate_options=dict(estimate_options or {}),
+    )
+    return replace(result, record_spread=spread)

@@ -85,6 +85,15 @@ AngleNoise = Annotated[
     float | None, typer.Option(help="Std of sensor directions (degrees) [default: 0].", rich_help_panel=_UNC)
 ]
 Seed = Annotated[int, typer.Option(help="Seed of the random draws.")]
+Resample = Annotated[
+    int,
+    typer.Option(
+        help="With --records: also re-identify on K interleaved segments of the records for a data-driven interval "
+        "(sample rate / K must stay above twice the highest mode; 8 is a good choice).",
+        metavar="K",
+        rich_help_panel=_UNC,
+    ),
+]
 Inputs = Annotated[
     list[Path] | None,
     typer.Argument(
@@ -247,6 +256,7 @@ def _identify(
     draws: int,
     noise: dict[str, float],
     seed: int,
+    resample: int = 0,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
@@ -275,6 +285,13 @@ def _identify(
         noise=noise,
         seed=seed,
     )
+    if resample:
+        if not records:
+            raise InputError("data-driven intervals need impact records (--records)", source="--resample")
+        options = {key: modal[key] for key in ("method", "band", "max_order") if modal[key] is not None}
+        result = api.with_record_spread(
+            result, data.records, segments=resample, n_modes=modal["n_modes"], estimate_options=options
+        )
     return result, estimate
 
 
@@ -321,6 +338,7 @@ def identify(
     position_noise: PositionNoise = None,
     angle_noise: AngleNoise = None,
     seed: Seed = 0,
+    resample: Resample = 0,
     modal_method: ModalMethod = None,
     n_modes: NModes = 6,
     band: Band = None,
@@ -339,7 +357,7 @@ def identify(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed,
+            noise=noise, seed=seed, resample=resample,
         )  # fmt: skip
         if json_path is not None:
             out = result_to_dict(result)
@@ -543,6 +561,7 @@ def report(
     position_noise: PositionNoise = None,
     angle_noise: AngleNoise = None,
     seed: Seed = 0,
+    resample: Resample = 0,
     modal_method: ModalMethod = None,
     n_modes: NModes = 6,
     band: Band = None,
@@ -562,7 +581,7 @@ def report(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed,
+            noise=noise, seed=seed, resample=resample,
         )  # fmt: skip
         mounts = None
         if body is not None:

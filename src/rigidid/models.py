@@ -252,6 +252,17 @@ class UncertaintyResult(BaseModel):
     noise: dict[str, float]
 
 
+class RecordSpreadResult(BaseModel):
+    """Data-driven intervals from interleaved segments of the records (``--resample K``)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, defer_build=True)
+
+    method: str
+    segments: int
+    used: int
+    center_of_gravity: Interval
+
+
 class ResultFile(_Strict):
     """The result JSON of ``rigidid identify`` (FORMATS.md); matrices are lists of rows, DOF x, y, z, rx, ry, rz."""
 
@@ -276,6 +287,10 @@ class ResultFile(_Strict):
     energy_distribution: EnergyDistribution
     diagnostics: Diagnostics
     uncertainty: UncertaintyResult | None = None
+    uncertainty_records: RecordSpreadResult | None = None
+    modal_estimation: dict[str, Any] | None = Field(
+        default=None, description="with --records: estimator, impacts found, modes and stabilisation diagram"
+    )
 
 
 class ModeRow(_Strict):

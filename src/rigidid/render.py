@@ -100,6 +100,10 @@ def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
         from rigidid.core.uncertainty import uncertainty_to_dict
 
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
+    if result.record_spread is not None:
+        from rigidid.core.record_spread import record_spread_to_dict
+
+        out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
     return out
 
 
@@ -192,7 +196,19 @@ def result_tables(result: IdentifyResult) -> Group:
     parts.append(energy)
 
     if result.uncertainty is not None:
-        parts.append(_uncertainty_table(result))
+        unc = result.uncertainty
+        caption = _noise_caption(unc.noise.as_dict(), length)
+        caption += f"; {unc.failed} draws failed" if unc.failed else ""
+        caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
+        title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
+        parts.append(_interval_table(result, unc, title, caption))
+    if result.record_spread is not None:
+        spread = result.record_spread
+        title = (
+            f"Uncertainty from the records ({spread.used} of {spread.segments} interleaved segments, 95 % intervals)"
+        )
+        caption = "spread of the segment estimates scaled to all the data; noise only, not sensor placement errors"
+        parts.append(_interval_table(result, spread, title, caption))
 
     diag = ident.diagnostics
     modes = Table(title="Modes used", title_justify="left")
@@ -230,22 +246,13 @@ def result_tables(result: IdentifyResult) -> Group:
     return Group(*parts)
 
 
-def _uncertainty_table(result: IdentifyResult) -> Table:
+def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str) -> Table:
     """Estimate, standard deviation and 95 % interval of the main results."""
     from rich.table import Table
 
-    unc = result.uncertainty
-    assert unc is not None
     length, mass = result.units["length"], result.units["mass"]
     per = f" / {mass}" if unc.per_mass else ""
-    table = Table(
-        title=f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)",
-        caption=_noise_caption(unc.noise.as_dict(), length)
-        + (f"; {unc.failed} draws failed" if unc.failed else "")
-        + (f"; {unc.implausible} draws physically implausible" if unc.implausible else ""),
-        title_justify="left",
-        caption_justify="left",
-    )
+    table = Table(title=title, caption=caption, title_justify="left", caption_justify="left")
     for name in ("quantity", "estimate", "std", "95 % interval"):
         table.add_column(name, justify="left" if name == "quantity" else "right")
 

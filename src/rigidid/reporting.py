@@ -630,7 +630,7 @@ def _uncertainty_html(uncertainty: Mapping[str, Any], length: str, mass: str) ->
             )
             first = False
     extra = []
-    for key in ("draws", "failed", "implausible", "seed"):
+    for key in ("method", "segments", "used", "draws", "failed", "implausible", "seed"):
         if key in uncertainty and not isinstance(uncertainty[key], Mapping):
             extra.append(f"{key}: {uncertainty[key]}")
     noise = uncertainty.get("noise")
