@@ -162,8 +162,23 @@ def test_uff_test_set_identifies_like_csv(tmp_path: Path) -> None:
     for path in paths:
         table = np.loadtxt(path, delimiter=",", skiprows=1)
         records.append((table[:, 0], table[:, 1:], ids))
+    exact = api.simulate(body, PAPER / "layout.json")
+    mode_rows = [
+        (label, float(exact.frequency_hz[k]), float(exact.damping_ratio[k]), sid, v.real, v.imag)
+        for k, label in enumerate(exact.labels)
+        for sid, v in zip(exact.sensor_ids, exact.shapes[:, k], strict=True)
+    ]
     uff = tmp_path / "test.uff"
-    write_uff_test(uff, layout, records)
+    write_uff_test(uff, layout, records, mode_rows=mode_rows)
+
+    from_modes = run("identify", uff, "--mass", "136", "--json", "-")  # dataset 55
+    assert from_modes.returncode == 0, from_modes.stderr
+    np.testing.assert_allclose(
+        json.loads(from_modes.stdout)["center_of_gravity"], PAPER_BODY["center_of_gravity"], atol=1e-3
+    )
+    planned = run("plan", uff, "--json", "-")
+    assert planned.returncode == 0, planned.stderr
+    assert json.loads(planned.stdout)["layout"]["sensors"] == 6
 
     from_csv = run("identify", PAPER / "layout.json", "--records", *paths, "--mass", "136", "--json", "-")
     from_uff = run("identify", uff, "--records", "--mass", "136", "--json", "-")
@@ -177,7 +192,7 @@ def test_uff_test_set_identifies_like_csv(tmp_path: Path) -> None:
     converted = tmp_path / "converted"
     out = run("convert", uff, "-o", converted)
     assert out.returncode == 0, out.stderr
-    assert sorted(p.name for p in converted.iterdir()) == ["layout.json", "record-1.csv", "record-2.csv"]
+    assert sorted(p.name for p in converted.iterdir()) == ["layout.json", "modes.csv", "record-1.csv", "record-2.csv"]
     again = run("identify", converted / "layout.json", "--records", *sorted(converted.glob("record-*.csv")),
                 "--mass", "136", "--json", "-")  # fmt: skip
     assert again.returncode == 0, again.stderr

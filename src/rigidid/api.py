@@ -367,7 +367,8 @@ def plan(
     Parameters
     ----------
     layout : LayoutFile or path-like
-        The planned sensors (any number, rank not required).
+        The planned sensors (any number, rank not required): ``layout.json``
+        or a UFF file (its nodes and records give the sensors).
     body : BodyFile or path-like, optional
         An estimate of the body and its mounts (e.g. from CAD), in the layout's units.
     candidates : LayoutFile or path-like, optional
@@ -396,7 +397,12 @@ def plan(
     from rigidid.core.plan import check_layout, predict_uncertainty, suggest_sensors
     from rigidid.core.uncertainty import DEFAULT_NOISE
 
-    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
+    if isinstance(layout, LayoutFile):
+        lay = layout
+    elif Path(layout).suffix.lower() in (".uff", ".unv"):
+        lay = load_uff(layout).layout
+    else:
+        lay = files.load_layout(layout, require_rank=False)
     _, positions, directions = files.layout_arrays(lay)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length)

@@ -502,7 +502,7 @@ def _parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
 @app.command()
 def plan(
-    layout: Annotated[Path, typer.Argument(help="Planned sensor layout (layout.json).", show_default=False)],
+    layout: Annotated[Path, typer.Argument(help="Planned sensor layout (layout.json or UFF).", show_default=False)],
     body: Annotated[
         Path | None, typer.Option(help="Estimate of the body and mounts (body.json) to predict the uncertainty.")
     ] = None,
