@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from rigidid import files
 from rigidid.core.identify import Identification, Method
 from rigidid.core.identify import identify as identify_core
-from rigidid.core.selection import rigid_fit_residuals
+from rigidid.core.selection import rigid_fit_residuals, select_rigid_modes
 from rigidid.core.simulate import Body, Mount, add_noise, body_modes
 from rigidid.core.statespace import modal_from_poles, poles_from_modal
 from rigidid.errors import InputError
@@ -172,9 +172,8 @@ def _choose_modes(
             "rigid-body motion, so the rigid modes cannot be chosen; pass --modes",
             source=source,
         )
+    chosen = tuple(modes.labels[i] for i in select_rigid_modes(transformation, modes.shapes))
     residual = rigid_fit_residuals(transformation, modes.shapes)
-    order = np.sort(np.argsort(residual, kind="stable")[:6])
-    chosen = tuple(modes.labels[i] for i in order)
     return chosen, "automatic", {label: float(r) for label, r in zip(modes.labels, residual, strict=True)}
 
 

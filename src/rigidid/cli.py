@@ -295,12 +295,6 @@ def _identify(
     return result, estimate
 
 
-def _stabilisation_tables(estimate: ModalEstimate) -> Any:
-    from rigidid.render import estimate_tables
-
-    return estimate_tables(estimate)
-
-
 def _version(value: bool) -> None:
     if value:
         sys.stdout.write(f"rigidid {__version__}\n")
@@ -375,7 +369,9 @@ def identify(
 
             console = _console()
             if estimate is not None:
-                console.print(_stabilisation_tables(estimate))
+                from rigidid.render import estimate_tables
+
+                console.print(estimate_tables(estimate))
             console.print(result_tables(result))
 
 
@@ -416,7 +412,9 @@ def modes(
         else:
             write_text_atomic(output, text)
             if json_path != "-":
-                _console().print(_stabilisation_tables(estimate))
+                from rigidid.render import estimate_tables
+
+                _console().print(estimate_tables(estimate))
             sys.stderr.write(f"rigidid: wrote {len(labels)} modes x {len(ids)} sensors to {output}\n")
 
 

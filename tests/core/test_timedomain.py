@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rigidid.api import body_from_file
 from rigidid.core.identify import identify
-from rigidid.core.simulate import Body, Mount, body_modes, system_matrices
+from rigidid.core.simulate import body_modes, system_matrices
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain import (
     Criteria,
@@ -27,6 +29,7 @@ from rigidid.core.timedomain.gram import lagged_gram
 from rigidid.core.timedomain.preprocess import content_range, decimate, fir_taps
 from rigidid.core.timedomain.stabilisation import OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
+from rigidid.files import layout_arrays, load_body, load_layout
 
 from ..tolerances import (
     MODAL_DAMPING_REL,
@@ -37,39 +40,14 @@ from ..tolerances import (
     TIMEDOMAIN_EXACT_REL,
 )
 
-# A 40 kg body on four mounts, designed (least squares on the mount values) so that its
-# six modes are 8.0, 10.3, 14.95, 15.27 (2.1 % above the previous), 21.6 and 26.1 Hz
-# with damping ratios from 0.31 % to 6.9 %; the mount damping is not proportional to
-# the stiffness, so the modes are complex.
-MASS = 40.0
-CG = np.array([0.05, -0.03, 0.12])
-INERTIA = np.array([[1.6, 0.08, -0.05], [0.08, 2.1, 0.04], [-0.05, 0.04, 2.9]])
-MOUNTS = (
-    Mount.from_values([0.35, 0.25, -0.1], [29000.0, 5000.0, 73100.0], [2.0, 2.0, 2.0]),
-    Mount.from_values(
-        [-0.3, 0.22, -0.12], [5800.0, 30000.0, 101300.0], [[2.0, 0.0, 0.0], [0.0, 2.7, -0.5], [0.0, -0.5, 2.4]]
-    ),
-    Mount.from_values(
-        [-0.32, -0.24, -0.1],
-        [6900.0, 23100.0, 67300.0],
-        [[56.9, -44.4, -87.5], [-44.4, 37.8, 70.7], [-87.5, 70.7, 141.4]],
-    ),
-    Mount.from_values(
-        [0.33, -0.2, -0.08],
-        [250700.0, 109900.0, 127100.0],
-        [[14.9, -17.1, -20.1], [-17.1, 24.6, 26.6], [-20.1, 26.6, 33.3]],
-    ),
-)
-BODY = Body(MASS, CG, INERTIA, MOUNTS)
-POSITIONS = np.array(
-    [
-        [0.3, 0.2, 0.15], [-0.3, 0.2, 0.15], [-0.3, -0.2, 0.15], [0.3, -0.2, 0.15],
-        [0.3, 0.2, -0.15], [-0.3, 0.2, -0.15], [-0.3, -0.2, -0.15], [0.3, -0.2, -0.15],
-    ]
-)  # fmt: skip
-DIRECTIONS = np.array(
-    [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.6, 0.8, 0]], dtype=float
-)
+# samples/four-mounts: a 40 kg body on four mounts, designed (least squares on the mount
+# values) so that its six modes are 8.0, 10.3, 14.95, 15.27 (2.1 % above the previous),
+# 21.6 and 26.1 Hz with damping ratios from 0.31 % to 6.9 %; the mount damping is not
+# proportional to the stiffness, so the modes are complex.
+SAMPLE = Path(__file__).resolve().parent.parent.parent / "samples" / "four-mounts"
+BODY = body_from_file(load_body(SAMPLE / "body.json"))
+MASS, CG, INERTIA = BODY.mass, BODY.center_of_gravity, BODY.inertia_tensor
+_, POSITIONS, DIRECTIONS = layout_arrays(load_layout(SAMPLE / "layout.json"))
 IMPACTS = [((0.3, 0.2, 0.15), (0.3, -0.5, -1.0)), ((-0.3, -0.1, 0.0), (1.0, 0.6, 0.2))]
 SAMPLE_RATE = 200.0
 DURATION = 10.0

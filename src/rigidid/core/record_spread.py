@@ -131,7 +131,7 @@ def record_spread(
     from scipy.special import stdtrit
 
     from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
-    from rigidid.core.selection import rigid_fit_residuals
+    from rigidid.core.selection import select_rigid_modes
     from rigidid.core.timedomain import estimate_modes
 
     if segments < 2:
@@ -148,7 +148,7 @@ def record_spread(
                 est = estimate_modes(
                     [a[j::segments] for a in arrays], dt * segments, n_modes=n_modes, **(estimate_options or {})
                 )
-                keep = np.sort(np.argsort(rigid_fit_residuals(t, est.shapes), kind="stable")[:6])
+                keep = select_rigid_modes(t, est.shapes) if est.shapes.shape[1] > 6 else np.arange(6)
                 result = identify(pos, dirs, est.poles[keep], est.shapes[:, keep], mass=mass, method=full.method)  # type: ignore[arg-type]
         except IdentificationError:
             continue
