@@ -69,7 +69,7 @@ def _true_frequencies(channels: int) -> np.ndarray:
 def _child(kind: str, path: str, channels: int, method: str) -> None:
     """Run one measurement and print a JSON line (in a subprocess)."""
     from rigidid.core.timedomain import estimate_modes
-    from rigidid.records import read_record
+    from rigidid.io.records import read_record
 
     ids = [f"s{i + 1}" for i in range(channels)]
     _reset_peak()
@@ -110,7 +110,7 @@ def _textbook_era(data: np.ndarray, dt: float, order: int = 12) -> np.ndarray:
 def _write_case(folder: Path, channels: int, samples: int) -> Path:
     from records_scenario import BODY, IMPACTS, layout
     from rigidid.core.timedomain import impulse_records, record_time
-    from rigidid.records import write_record
+    from rigidid.io.records import write_record
 
     pos, dirs = layout(channels)
     rate = samples / DURATION

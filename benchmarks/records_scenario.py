@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from rigidid.api import body_from_file
-from rigidid.files import layout_arrays, load_body, load_layout
+from rigidid.io.files import layout_arrays, load_body, load_layout
 
 SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "four-mounts"
 BODY = body_from_file(load_body(SAMPLE / "body.json"))

@@ -23,7 +23,7 @@ def paper_arrays() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Positions, unit directions, poles and raw shapes of the paper sample."""
     from rigidid import api
     from rigidid.core.statespace import poles_from_modal
-    from rigidid.files import layout_arrays
+    from rigidid.io.files import layout_arrays
 
     layout = api.load_layout(PAPER / "layout.json")
     modes = api.load_modes(PAPER / "modes.csv", layout)

@@ -7,7 +7,7 @@ import pytest
 
 from rigidid import api
 from rigidid.errors import InputError
-from rigidid.files import ModeTable
+from rigidid.io.files import ModeTable
 
 from .conftest import DATA, PAPER
 

@@ -130,7 +130,7 @@ def test_identify_writes_uff_modes(tmp_path: Path) -> None:
     uff = tmp_path / "result.uff"
     out = run("identify", ENGINE / "layout.json", ENGINE / "modes.csv", "--uff", uff, "--json", "-")
     assert out.returncode == 0, out.stderr
-    from rigidid.uff import read_uff
+    from rigidid.io.uff import read_uff
 
     contents = read_uff(uff)
     assert {row[0] for row in contents.mode_rows} == {1, 2, 3, 4, 5, 6}
@@ -151,7 +151,7 @@ PAPER_BODY = {
 def test_uff_test_set_identifies_like_csv(tmp_path: Path) -> None:
     """Nodes, signed-direction time records and lb/in units through pyuff give the CSV result."""
     from rigidid import api
-    from rigidid.uff import write_uff_test
+    from rigidid.io.uff import write_uff_test
 
     body = tmp_path / "body.json"
     body.write_text(json.dumps(PAPER_BODY))

@@ -1,4 +1,4 @@
-"""Reading and writing impact records (rigidid.records)."""
+"""Reading and writing impact records (rigidid.io.records)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigidid import records
 from rigidid.errors import InputError
-from rigidid.records import read_record, write_record
+from rigidid.io import records
+from rigidid.io.records import read_record, write_record
 
 from .conftest import DATA
 

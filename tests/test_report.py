@@ -11,9 +11,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from rigidid.core.geometry import sensor_outline
 from rigidid.core.identify import Identification, identify
 from rigidid.errors import InputError, PhysicalPlausibilityWarning
-from rigidid.reporting import render_report, save_pngs, sensor_outline
+from rigidid.reporting import render_report, save_pngs
 
 from .paper_sample import UNITS, paper_identification, paper_modes
 

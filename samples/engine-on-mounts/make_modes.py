@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from rigidid import api
-from rigidid.files import ModeTable, modes_csv_text, write_text_atomic
+from rigidid.io.atomic import write_text_atomic
+from rigidid.io.files import ModeTable, modes_csv_text
 
 HERE = Path(__file__).resolve().parent
 

@@ -18,14 +18,15 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid import files
 from rigidid.core.identify import Identification, Method
 from rigidid.core.identify import identify as identify_core
 from rigidid.core.selection import rigid_fit_residuals, select_rigid_modes
 from rigidid.core.simulate import Body, Mount, add_noise, body_modes
 from rigidid.core.statespace import modal_from_poles, poles_from_modal
 from rigidid.errors import InputError
-from rigidid.files import ModeTable
+from rigidid.io import files
+from rigidid.io.atomic import write_text_atomic
+from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
 
 if TYPE_CHECKING:
@@ -104,12 +105,12 @@ class IdentifyResult:
 
 
 def load_layout(path: PathLike) -> LayoutFile:
-    """Read and validate ``layout.json`` (see :func:`rigidid.files.load_layout`)."""
+    """Read and validate ``layout.json`` (see :func:`rigidid.io.files.load_layout`)."""
     return files.load_layout(path)
 
 
 def load_modes(path: PathLike, layout: LayoutFile) -> ModeTable:
-    """Read and validate ``modes.csv`` against a layout (see :func:`rigidid.files.load_modes`)."""
+    """Read and validate ``modes.csv`` against a layout (see :func:`rigidid.io.files.load_modes`)."""
     return files.load_modes(path, [s.id for s in layout.sensors])
 
 
@@ -492,9 +493,9 @@ def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[ND
     Raises
     ------
     InputError
-        See :func:`rigidid.records.read_record`.
+        See :func:`rigidid.io.records.read_record`.
     """
-    from rigidid.records import read_record
+    from rigidid.io.records import read_record
 
     ids = [s.id for s in layout.sensors]
     return [read_record(p, ids) for p in paths]
@@ -523,7 +524,7 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
     """
     from pydantic import ValidationError
 
-    from rigidid.uff import read_uff
+    from rigidid.io.uff import read_uff
 
     src = str(path)
     contents = read_uff(path, units=units)
@@ -718,16 +719,16 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
     """
     import json
 
-    from rigidid.records import write_record
+    from rigidid.io.records import write_record
 
     data = load_uff(path, units=units)
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
     written = [folder / "layout.json"]
-    files.write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
+    write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
     if data.modes is not None:
         written.append(folder / "modes.csv")
-        files.write_text_atomic(written[-1], files.modes_csv_text(data.modes))
+        write_text_atomic(written[-1], files.modes_csv_text(data.modes))
     ids = [s.id for s in data.layout.sensors]
     for k, (values, dt) in enumerate(data.records, start=1):
         written.append(folder / f"record-{k}.csv")
@@ -772,7 +773,7 @@ def simulate_records(
         The files written.
     """
     from rigidid.core.timedomain import impulse_records, record_time
-    from rigidid.records import write_record
+    from rigidid.io.records import write_record
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)

@@ -191,7 +191,7 @@ def _noise_overrides(**given: float | None) -> dict[str, float]:
 
 
 def _write_json(target: str, data: dict[str, Any]) -> None:
-    from rigidid.files import write_text_atomic
+    from rigidid.io.atomic import write_text_atomic
 
     text = json.dumps(data, indent=2) + "\n"
     if target == "-":
@@ -261,7 +261,7 @@ def _identify(
     """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
     from rigidid.core.identify import METHODS
-    from rigidid.files import ModeTable
+    from rigidid.io.files import ModeTable
 
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
@@ -361,7 +361,7 @@ def identify(
                 out["modal_estimation"] = estimate_to_dict(estimate)
             _write_json(json_path, out)
         if uff is not None:
-            from rigidid.uff import write_uff
+            from rigidid.io.uff import write_uff
 
             write_uff(uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units)
         if json_path != "-":
@@ -395,7 +395,8 @@ def modes(
 ) -> None:
     """Estimate modal parameters from impact records (free decays) and write modes.csv."""
     with _reported():
-        from rigidid.files import ModeTable, modes_csv_text, write_text_atomic
+        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.files import ModeTable, modes_csv_text
         from rigidid.render import estimate_to_dict
 
         data = _test_data(layout, records or [], True, units)
@@ -449,7 +450,8 @@ def simulate(
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
         from rigidid import api
-        from rigidid.files import modes_csv_text, write_text_atomic
+        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.files import modes_csv_text
 
         for name, value in (
             ("--frequency-noise", frequency_noise),
@@ -570,7 +572,8 @@ def report(
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
         from rigidid import api
-        from rigidid.files import load_body, write_text_atomic
+        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.files import load_body
 
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,

@@ -1,6 +1,6 @@
 """pydantic models of rigidid's files: the validation boundary.
 
-Only :mod:`rigidid.files`, :mod:`rigidid.render` and the schema generator use
+Only :mod:`rigidid.io.files`, :mod:`rigidid.render` and the schema generator use
 these models; the numerical core never sees them. The JSON Schemas in
 ``schemas/`` are generated from them (``python -m rigidid.schemas``).
 """

@@ -47,8 +47,9 @@ from rigidid.core.energy import (
     kinetic_energy_distribution,
     kinetic_energy_distribution_principal,
 )
+from rigidid.core.geometry import sensor_outline
 from rigidid.errors import InputError, RigididError
-from rigidid.files import write_bytes_atomic
+from rigidid.io.atomic import write_bytes_atomic
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -56,7 +57,7 @@ if TYPE_CHECKING:
     from rigidid.core.identify import Identification
     from rigidid.core.timedomain.stabilisation import OrderPoles
 
-__all__ = ["FIGURE_NAMES", "render_report", "save_pngs", "sensor_outline"]
+__all__ = ["FIGURE_NAMES", "render_report", "save_pngs"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -73,40 +74,6 @@ _MODE_COLOUR = "#c0392b"
 
 Stabilisation = Sequence["tuple[int, ArrayLike, ArrayLike] | OrderPoles"]
 """``[(order, frequency_hz (n,), stable (n,) bool), ...]`` or ``OrderPoles``: one entry per model order."""
-
-
-# --------------------------------------------------------------------------- geometry helpers
-
-
-def sensor_outline(positions: ArrayLike) -> list[int]:
-    """A closed outline through distinct points, for drawing a sensor layout as a frame.
-
-    Parameters
-    ----------
-    positions : array_like, shape (p, 3)
-        Points (length unit); repeated points count once.
-
-    Returns
-    -------
-    list of int
-        Indices into `positions`, ordered by angle around the centroid in the
-        points' best-fitting plane, the first index repeated at the end (no
-        repetition for fewer than three distinct points).
-    """
-    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
-    distinct: list[int] = []
-    for i, p in enumerate(pos):
-        if not any(np.allclose(p, pos[j], rtol=0.0, atol=1e-12 * (1.0 + np.abs(p).max())) for j in distinct):
-            distinct.append(i)
-    if len(distinct) < 3:
-        return distinct
-    pts = pos[distinct]
-    centred = pts - pts.mean(axis=0)
-    _, _, vt = np.linalg.svd(centred, full_matrices=False)
-    u, v = centred @ vt[0], centred @ vt[1]
-    order = np.argsort(np.arctan2(v, u), kind="stable")
-    ring = [distinct[int(k)] for k in order]
-    return [*ring, ring[0]]
 
 
 def _point_motion(phi: CArray, points: Array, cg: Array) -> CArray:

@@ -39,7 +39,7 @@ def schema_texts() -> dict[str, str]:
 
 def write_schemas(directory: str | Path) -> list[Path]:
     """Write every schema into `directory`; return the paths written."""
-    from rigidid.files import write_text_atomic
+    from rigidid.io.atomic import write_text_atomic
 
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)

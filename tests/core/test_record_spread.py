@@ -13,7 +13,7 @@ from rigidid.core.record_spread import record_spread, record_spread_to_dict
 from rigidid.core.simulate import Body
 from rigidid.core.timedomain import estimate_modes, impulse_records
 from rigidid.errors import InputError, RigididWarning
-from rigidid.files import layout_arrays, load_body, load_layout
+from rigidid.io.files import layout_arrays, load_body, load_layout
 
 from ..conftest import SAMPLES
 

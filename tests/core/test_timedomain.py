@@ -29,7 +29,7 @@ from rigidid.core.timedomain.gram import lagged_gram
 from rigidid.core.timedomain.preprocess import content_range, decimate, fir_taps
 from rigidid.core.timedomain.stabilisation import OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
-from rigidid.files import layout_arrays, load_body, load_layout
+from rigidid.io.files import layout_arrays, load_body, load_layout
 
 from ..tolerances import (
     MODAL_DAMPING_REL,
@@ -371,7 +371,7 @@ def test_a_dead_channel_is_an_input_error(noisy_records: list[np.ndarray]) -> No
 def test_importing_the_package_does_not_import_scipy() -> None:
     code = "; ".join(
         [
-            "import sys, rigidid.core.timedomain, rigidid.records",
+            "import sys, rigidid.core.timedomain, rigidid.io.records",
             "print(any(m.startswith('scipy') for m in sys.modules))",
         ]
     )

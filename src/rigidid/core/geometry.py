@@ -22,6 +22,7 @@ __all__ = [
     "layout_frame",
     "normalise_directions",
     "sensor_matrix",
+    "sensor_outline",
     "skew",
     "transfer_matrix",
 ]
@@ -192,3 +193,34 @@ def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float
     rank = int(np.sum(s > tol))
     cond = float(s[0] / s[-1]) if rank == 6 and s.size == 6 else float("inf")
     return cond, rank
+
+
+def sensor_outline(positions: ArrayLike) -> list[int]:
+    """A closed outline through distinct points, for drawing a sensor layout as a frame.
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Points (length unit); repeated points count once.
+
+    Returns
+    -------
+    list of int
+        Indices into `positions`, ordered by angle around the centroid in the
+        points' best-fitting plane, the first index repeated at the end (no
+        repetition for fewer than three distinct points).
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    distinct: list[int] = []
+    for i, p in enumerate(pos):
+        if not any(np.allclose(p, pos[j], rtol=0.0, atol=1e-12 * (1.0 + np.abs(p).max())) for j in distinct):
+            distinct.append(i)
+    if len(distinct) < 3:
+        return distinct
+    pts = pos[distinct]
+    centred = pts - pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    u, v = centred @ vt[0], centred @ vt[1]
+    order = np.argsort(np.arctan2(v, u), kind="stable")
+    ring = [distinct[int(k)] for k in order]
+    return [*ring, ring[0]]

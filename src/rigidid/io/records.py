@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
-from rigidid.files import atomic_path
+from rigidid.io.atomic import atomic_path
 
 __all__ = [
     "DECAY_RATIO",

@@ -1,8 +1,7 @@
-"""Reading and writing rigidid's files: layout.json, modes.csv, body.json, results.
+"""Reading rigidid's own files: layout.json, modes.csv, body.json.
 
 Every reader validates once, here, and raises :class:`~rigidid.errors.InputError`
-naming the file and the row or field. Writers are atomic: the file appears
-whole or not at all.
+naming the file and the row or field. Writers live in :mod:`rigidid.io.atomic`.
 """
 
 from __future__ import annotations
@@ -11,8 +10,7 @@ import csv
 import io
 import json
 import os
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -27,14 +25,11 @@ from rigidid.models import BodyFile, LayoutFile, ModeRow
 __all__ = [
     "MODES_COLUMNS",
     "ModeTable",
-    "atomic_path",
     "layout_arrays",
     "load_body",
     "load_layout",
     "load_modes",
     "modes_csv_text",
-    "write_bytes_atomic",
-    "write_text_atomic",
 ]
 
 MODES_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "sensor", "real", "imag")
@@ -284,47 +279,3 @@ def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
             v = table.shapes[i, k]
             writer.writerow([label, f, z, sid, fmt.format(v.real), fmt.format(v.imag)])
     return out.getvalue()
-
-
-@contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside `path`; on success rename it to `path`, on failure remove it.
-
-    The file gets the usual permissions (0666 less the umask), not ``mkstemp``'s 0600.
-
-    Raises
-    ------
-    InputError
-        If the folder does not exist or is not writable.
-    """
-    import tempfile
-
-    p = Path(path)
-    folder = p.parent if str(p.parent) else Path(".")
-    try:
-        fd, name = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
-    except OSError as exc:
-        raise InputError(f"cannot write: {exc.strerror}", source=str(p)) from None
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        mask = os.umask(0o022)
-        os.umask(mask)
-        tmp.chmod(0o666 & ~mask)
-        yield tmp
-        os.replace(tmp, p)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
-    """Write `text` (UTF-8) to `path` atomically (see :func:`atomic_path`)."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8", newline="")
-
-
-def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> None:
-    """Write `data` to `path` atomically (see :func:`atomic_path`)."""
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(data)

@@ -81,7 +81,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError, RigididError, RigididWarning
-from rigidid.files import atomic_path
+from rigidid.io.atomic import atomic_path
 
 if TYPE_CHECKING:
     from rigidid.core.identify import Identification
@@ -896,13 +896,13 @@ def write_uff(
     sensor position, a node at the CG and one at the tip of each principal
     axis, numbered from the next multiple of 1000 above the sensor nodes;
     axis length half the largest sensor distance from the CG), 82 (a closed
-    outline through the sensor nodes, :func:`rigidid.reporting.sensor_outline`,
+    outline through the sensor nodes, :func:`rigidid.core.geometry.sensor_outline`,
     and a line from the CG along each principal axis), and 55 (the six model
     modes, complex, analysis type 3: 3D translation of every node; pole in
     rad/s; frequency and damping ratio in ID line 2), each mode scaled so
     that its largest sensor-node translation is ``1 + 0j``.
     """
-    from rigidid.reporting import sensor_outline
+    from rigidid.core.geometry import sensor_outline
 
     pos = np.asarray(layout_positions, dtype=float).reshape(-1, 3)
     dirs = np.asarray(directions, dtype=float)
