@@ -19,7 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from rigidid.api import load_arrays
-from rigidid.core.uncertainty import NoiseLevels, propagate
+from rigidid.core.noise import NoiseLevels
+from rigidid.core.uncertainty import propagate
+from rigidid.jsonout import noise_to_dict
 
 PAPER = Path(__file__).resolve().parent.parent / "samples" / "paper-1994"
 NOISE = NoiseLevels(frequency=0.001, damping=0.05, shape=0.01, position=0.02, angle_deg=1.0)
@@ -48,7 +50,7 @@ def main() -> None:
             result = propagate(pos, dirs, poles, shapes, mass=mass, noise=NOISE, draws=args.draws, seed=args.seed)
         times.append(time.perf_counter() - start)
     assert result is not None
-    print(f"paper sample, {args.draws} draws, noise {NOISE.as_dict()}")
+    print(f"paper sample, {args.draws} draws, noise {noise_to_dict(NOISE)}")
     print(f"time: best {min(times):.2f} s, all {', '.join(f'{t:.2f}' for t in times)} s "
           f"({1e6 * min(times) / args.draws:.0f} us per draw); failed draws {result.failed}, "
           f"implausible {result.implausible}")  # fmt: skip

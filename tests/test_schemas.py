@@ -8,7 +8,7 @@ import jsonschema
 import pytest
 
 from rigidid import api
-from rigidid.render import result_to_dict
+from rigidid.jsonout import result_to_dict
 from rigidid.schemas import schema_texts
 
 from .conftest import PAPER, ROOT, SAMPLES

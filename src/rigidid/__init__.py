@@ -17,7 +17,7 @@ __version__ = "0.1.0"
 
 # Names of __all__ that do not live in rigidid.api (the rest do).
 _ELSEWHERE = {
-    "result_to_dict": "rigidid.render",
+    "result_to_dict": "rigidid.jsonout",
     "result_tables": "rigidid.render",
     "RigididError": "rigidid.errors",
     "InputError": "rigidid.errors",
@@ -69,7 +69,8 @@ if TYPE_CHECKING:
         simulate_records,
     )
     from rigidid.errors import IdentificationError, InputError, RigididError, RigididWarning
-    from rigidid.render import result_tables, result_to_dict
+    from rigidid.jsonout import result_to_dict
+    from rigidid.render import result_tables
 
 
 def __getattr__(name: str) -> Any:

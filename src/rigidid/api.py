@@ -30,10 +30,11 @@ from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
 
 if TYPE_CHECKING:
+    from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
-    from rigidid.core.uncertainty import NoiseLevels, Uncertainty
+    from rigidid.core.uncertainty import Uncertainty
 
 __all__ = [
     "Arrays",
@@ -210,9 +211,9 @@ def identify(
         Number of Monte Carlo draws for uncertainty intervals (0: none).
     noise : NoiseLevels or mapping, optional
         Measurement uncertainty to propagate. By default
-        :data:`~rigidid.core.uncertainty.DEFAULT_NOISE` with the shape noise
+        :data:`~rigidid.core.noise.DEFAULT_NOISE` with the shape noise
         estimated from the rigid-body fit residuals when there are more than
-        six sensors (:func:`~rigidid.core.uncertainty.estimate_noise`); a
+        six sensors (:func:`~rigidid.core.noise.estimate_noise`); a
         mapping (e.g. ``{"shape": 0.02, "angle_deg": 1.0}``) overrides those
         defaults field by field.
     seed : int, optional
@@ -246,7 +247,8 @@ def identify(
     result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
     intervals = None
     if uncertainty:
-        from rigidid.core.uncertainty import estimate_noise, propagate
+        from rigidid.core.noise import estimate_noise
+        from rigidid.core.uncertainty import propagate
 
         if uncertainty < 2:
             raise InputError(f"need at least 2 draws, got {uncertainty}", source="--uncertainty")
@@ -378,7 +380,7 @@ def plan(
     add : int
         How many sensors to suggest, one at a time (greedy).
     noise : mapping, optional
-        Overrides of :data:`~rigidid.core.uncertainty.DEFAULT_NOISE`
+        Overrides of :data:`~rigidid.core.noise.DEFAULT_NOISE`
         (``frequency``, ``damping``, ``shape``, ``position``, ``angle_deg``).
     draws : int
         Monte Carlo draws of each prediction.
@@ -394,8 +396,8 @@ def plan(
     InputError
         Bad files, units that differ between files, ``add`` > 0 without a body.
     """
+    from rigidid.core.noise import DEFAULT_NOISE
     from rigidid.core.plan import check_layout, predict_uncertainty, suggest_sensors
-    from rigidid.core.uncertainty import DEFAULT_NOISE
 
     if isinstance(layout, LayoutFile):
         lay = layout
@@ -690,8 +692,7 @@ def report(
 
 def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
     """The Monte Carlo intervals, else the data-driven ones, as the report takes them."""
-    from rigidid.core.record_spread import record_spread_to_dict
-    from rigidid.core.uncertainty import uncertainty_to_dict
+    from rigidid.jsonout import record_spread_to_dict, uncertainty_to_dict
 
     if result.uncertainty is not None:
         return uncertainty_to_dict(result.uncertainty)

@@ -342,7 +342,7 @@ def identify(
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
-        from rigidid.render import result_to_dict
+        from rigidid.jsonout import result_to_dict
 
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
@@ -356,7 +356,7 @@ def identify(
         if json_path is not None:
             out = result_to_dict(result)
             if estimate is not None:
-                from rigidid.render import estimate_to_dict
+                from rigidid.jsonout import estimate_to_dict
 
                 out["modal_estimation"] = estimate_to_dict(estimate)
             _write_json(json_path, out)
@@ -397,7 +397,7 @@ def modes(
     with _reported():
         from rigidid.io.atomic import write_text_atomic
         from rigidid.io.files import ModeTable, modes_csv_text
-        from rigidid.render import estimate_to_dict
+        from rigidid.jsonout import estimate_to_dict
 
         data = _test_data(layout, records or [], True, units)
         estimate = _estimate(data, method, n_modes, band, max_order, decimate)
@@ -523,7 +523,7 @@ def plan(
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
         from rigidid import api
-        from rigidid.render import plan_to_dict
+        from rigidid.jsonout import plan_to_dict
 
         if draws < 2:
             raise InputError(f"need at least 2 draws, got {draws}", source="--draws")

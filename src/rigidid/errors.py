@@ -8,13 +8,19 @@ only at its top level and turns it into one line on standard error.
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterable
+from dataclasses import dataclass
+
 __all__ = [
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
+    "Notice",
     "PhysicalPlausibilityWarning",
     "RigididError",
     "RigididWarning",
+    "emit",
 ]
 
 
@@ -60,3 +66,25 @@ class PhysicalPlausibilityWarning(RigididWarning):
 
 class IllConditionedWarning(RigididWarning):
     """A step of the computation is badly conditioned; results may be inaccurate."""
+
+
+@dataclass(frozen=True)
+class Notice:
+    """A warning collected while computing, emitted once the result (or the error) is known.
+
+    Attributes
+    ----------
+    category : type of RigididWarning
+        Its category.
+    message : str
+        The text.
+    """
+
+    category: type[RigididWarning]
+    message: str
+
+
+def emit(notices: Iterable[Notice], stacklevel: int = 3) -> None:
+    """Issue collected notices as warnings (the caller's caller is named as their origin by default)."""
+    for notice in notices:
+        warnings.warn(notice.message, notice.category, stacklevel=stacklevel)

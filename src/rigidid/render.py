@@ -1,4 +1,4 @@
-"""Formatting results: JSON-ready dicts and rich tables. Nothing here prints."""
+"""Rich tables of results. Nothing here prints; the JSON forms are in :mod:`rigidid.jsonout`."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid import __version__
 from rigidid.api import IdentifyResult, PlanResult
+from rigidid.jsonout import noise_to_dict
 
 if TYPE_CHECKING:
     from rich.console import Group
@@ -17,94 +17,9 @@ if TYPE_CHECKING:
 
     from rigidid.core.timedomain import ModalEstimate
 
-__all__ = ["result_tables", "result_to_dict"]
+__all__ = ["estimate_tables", "plan_tables", "result_tables"]
 
 DOF = ("x", "y", "z", "rx", "ry", "rz")
-
-
-def _rows(a: NDArray[np.float64] | None) -> list[list[float]] | None:
-    return None if a is None else [[float(v) for v in row] for row in a]
-
-
-def _vec(a: NDArray[np.float64] | None) -> list[float] | None:
-    return None if a is None else [float(v) for v in a]
-
-
-def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
-    """The result JSON of FORMATS.md (validated by :class:`rigidid.models.ResultFile`).
-
-    Parameters
-    ----------
-    result : IdentifyResult
-
-    Returns
-    -------
-    dict
-        Plain lists and floats, ready for :func:`json.dumps`.
-    """
-    ident = result.identification
-    diag = ident.diagnostics
-    modes = [
-        {
-            "mode": label,
-            "frequency_hz": float(ident.frequency_hz[k]),
-            "damping_ratio": float(ident.damping_ratio[k]),
-            "rigid_fit_residual": float(diag.rigid_fit_residual[k]),
-            "model_frequency_hz": float(diag.model_frequency_hz[k]),
-            "model_damping_ratio": float(diag.model_damping_ratio[k]),
-            "model_mac": float(diag.model_mac[k]),
-        }
-        for k, label in enumerate(result.modes_used)
-    ]
-    candidates = None
-    if result.candidate_residuals is not None:
-        candidates = [{"mode": label, "rigid_fit_residual": r} for label, r in result.candidate_residuals.items()]
-    from rigidid.core.energy import kinetic_energy_distribution, kinetic_energy_distribution_principal
-
-    energy = {
-        "dof": ["x", "y", "z", "rx", "ry", "rz"],
-        "principal_dof": ["x", "y", "z", "r1", "r2", "r3"],
-        "modes": list(result.modes_used),
-        "cg_axes": _rows(kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)),
-        "principal_axes": _rows(kinetic_energy_distribution_principal(ident.inertia_per_mass, ident.mode_shapes_cg)),
-    }
-    out: dict[str, Any] = {
-        "rigidid_version": __version__,
-        "method": ident.method,
-        "units": {"length": result.units["length"], "mass": result.units["mass"], "time": "s"},
-        "mass": ident.mass,
-        "center_of_gravity": _vec(ident.center_of_gravity),
-        "inertia_per_mass": _rows(ident.inertia_per_mass),
-        "inertia_tensor": _rows(ident.inertia_tensor),
-        "principal_moments": _vec(ident.principal_moments),
-        "principal_moments_per_mass": _vec(ident.principal_moments_per_mass),
-        "principal_axes": _rows(ident.principal_axes),
-        "stiffness_per_mass": _rows(ident.stiffness_per_mass),
-        "stiffness_matrix": _rows(ident.stiffness_matrix),
-        "damping_per_mass": _rows(ident.damping_per_mass),
-        "damping_matrix": _rows(ident.damping_matrix),
-        "modes_used": list(result.modes_used),
-        "modes_selected": result.selection,
-        "energy_distribution": energy,
-        "diagnostics": {
-            "layout_condition": diag.layout_condition,
-            "layout_rank": diag.layout_rank,
-            "structure_residual": diag.structure_residual,
-            "inertia_observability": diag.inertia_observability,
-            "modes": modes,
-            "candidate_modes": candidates,
-            "warnings": list(diag.warnings),
-        },
-    }
-    if result.uncertainty is not None:
-        from rigidid.core.uncertainty import uncertainty_to_dict
-
-        out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
-    if result.record_spread is not None:
-        from rigidid.core.record_spread import record_spread_to_dict
-
-        out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
-    return out
 
 
 def _fmt(v: float) -> str:
@@ -197,7 +112,7 @@ def result_tables(result: IdentifyResult) -> Group:
 
     if result.uncertainty is not None:
         unc = result.uncertainty
-        caption = _noise_caption(unc.noise.as_dict(), length)
+        caption = _noise_caption(noise_to_dict(unc.noise), length)
         caption += f"; {unc.failed} draws failed" if unc.failed else ""
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
@@ -284,19 +199,6 @@ def _noise_caption(noise: dict[str, float], length: str) -> str:
     return "standard deviations assumed: " + ", ".join(parts)
 
 
-def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
-    """JSON form of ``rigidid plan``: units, layout findings, prediction and suggestions (null when absent)."""
-    from rigidid.core.plan import layout_report_to_dict, prediction_to_dict, sensor_plan_to_dict
-
-    return {
-        "rigidid_version": __version__,
-        "units": {**plan.units, "time": "s"},
-        "layout": layout_report_to_dict(plan.report),
-        "prediction": None if plan.prediction is None else prediction_to_dict(plan.prediction),
-        "suggestions": None if plan.suggestions is None else sensor_plan_to_dict(plan.suggestions),
-    }
-
-
 _SEVERITY_STYLE = {"error": "bold red", "warning": "yellow", "info": "cyan"}
 
 
@@ -334,7 +236,7 @@ def plan_tables(plan: PlanResult) -> Group:
         fig = plan.prediction.figures
         pred = Table(
             title="Predicted uncertainty (standard deviation)",
-            caption=_noise_caption(plan.prediction.uncertainty.noise.as_dict(), length),
+            caption=_noise_caption(noise_to_dict(plan.prediction.uncertainty.noise), length),
             title_justify="left",
             caption_justify="left",
         )
@@ -373,48 +275,6 @@ def plan_tables(plan: PlanResult) -> Group:
             )
         parts.append(sug)
     return Group(*parts)
-
-
-def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
-    """JSON form of a modal estimation from records, with its stabilisation diagram.
-
-    Returns
-    -------
-    dict
-        ``{"method", "sample_interval", "decimation", "band", "channels_fitted",
-        "adequate_order", "impacts": [{"onset", "peak", "start"}], "modes":
-        [{"mode", "frequency_hz", "damping_ratio", "stable_count",
-        "model_order"}], "stabilisation": [{"order", "frequency_hz",
-        "damping_ratio", "stable"}]}``.
-    """
-    return {
-        "method": estimate.method,
-        "sample_interval": estimate.sample_interval,
-        "decimation": estimate.decimation,
-        "band": list(estimate.band),
-        "channels_fitted": estimate.channels_fitted,
-        "adequate_order": estimate.adequate_order,
-        "impacts": [{"onset": i.onset, "peak": i.peak, "start": i.start} for i in estimate.impacts],
-        "modes": [
-            {
-                "mode": k + 1,
-                "frequency_hz": float(estimate.frequency_hz[k]),
-                "damping_ratio": float(estimate.damping_ratio[k]),
-                "stable_count": int(estimate.stable_count[k]),
-                "model_order": int(estimate.model_order[k]),
-            }
-            for k in range(len(estimate.frequency_hz))
-        ],
-        "stabilisation": [
-            {
-                "order": entry.order,
-                "frequency_hz": _vec(entry.frequency_hz),
-                "damping_ratio": _vec(entry.damping_ratio),
-                "stable": [bool(v) for v in entry.stable],
-            }
-            for entry in estimate.diagram
-        ],
-    }
 
 
 def estimate_tables(estimate: ModalEstimate) -> Group:

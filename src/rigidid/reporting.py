@@ -667,7 +667,7 @@ def render_report(
     uncertainty : mapping, optional
         ``{quantity: {"estimate": [...], "std": [...], "ci95": [[low,
         high], ...]}}`` (the form of
-        :func:`rigidid.core.uncertainty.uncertainty_to_dict`: arrays of any
+        :func:`rigidid.jsonout.uncertainty_to_dict`: arrays of any
         shape, ``ci95`` with a last axis of 2, None for NaN); other keys
         (``draws``, ``failed``, ``noise`` ...) are shown as a caption.
     title : str

@@ -7,19 +7,17 @@ import json
 import numpy as np
 import pytest
 
+from rigidid.core.noise import NoiseLevels
 from rigidid.core.plan import (
     Finding,
     candidate_grid,
     check_layout,
-    layout_report_to_dict,
     predict_uncertainty,
-    prediction_to_dict,
-    sensor_plan_to_dict,
     suggest_sensors,
 )
 from rigidid.core.simulate import Body, Mount
-from rigidid.core.uncertainty import NoiseLevels
 from rigidid.errors import IdentificationError, InputError
+from rigidid.jsonout import layout_report_to_dict, prediction_to_dict, sensor_plan_to_dict
 
 from ..tolerances import ZERO_SPREAD_REL
 

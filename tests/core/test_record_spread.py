@@ -9,11 +9,12 @@ import pytest
 
 from rigidid import api
 from rigidid.core.identify import Identification, identify
-from rigidid.core.record_spread import record_spread, record_spread_to_dict
+from rigidid.core.record_spread import record_spread
 from rigidid.core.simulate import Body
 from rigidid.core.timedomain import estimate_modes, impulse_records
 from rigidid.errors import InputError, RigididWarning
 from rigidid.io.files import layout_arrays, load_body, load_layout
+from rigidid.jsonout import record_spread_to_dict
 
 from ..conftest import SAMPLES
 

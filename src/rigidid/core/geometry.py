@@ -18,9 +18,11 @@ from rigidid.errors import InputError
 
 __all__ = [
     "LayoutFrame",
+    "frame_arrays",
     "layout_condition",
     "layout_frame",
     "normalise_directions",
+    "numerical_rank",
     "sensor_matrix",
     "sensor_outline",
     "skew",
@@ -100,16 +102,16 @@ def sensor_matrix(positions: ArrayLike, directions: ArrayLike, reference: ArrayL
 
     Parameters
     ----------
-    positions : array_like, shape (p, 3)
-        Sensor locations (length).
-    directions : array_like, shape (p, 3)
+    positions : array_like, shape (..., p, 3)
+        Sensor locations (length); leading axes stack several layouts.
+    directions : array_like, shape (..., p, 3)
         Unit measuring axes of the sensors.
     reference : array_like, shape (3,)
         The reference point of the rigid-body coordinates (length).
 
     Returns
     -------
-    ndarray, shape (p, 6)
+    ndarray, shape (..., p, 6)
         Row ``i`` is ``[n_i, (r_i - reference) x n_i]``, so that the reading of
         sensor ``i`` is ``T[i] @ x`` for rigid motion ``x`` of the reference
         point. For ``n_i = +x`` the row is ``[1, 0, 0, 0, w_i, -v_i]``, eq. (3).
@@ -118,10 +120,21 @@ def sensor_matrix(positions: ArrayLike, directions: ArrayLike, reference: ArrayL
     -----
     Directions are used as given; normalise them first
     (:func:`normalise_directions`) unless they are already unit vectors.
+
+    Examples
+    --------
+    A sensor on the x axis at ``(0, 1, 0)`` reads ``x - rz``:
+
+    >>> sensor_matrix([[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]]).tolist()
+    [[1.0, 0.0, 0.0, 0.0, 0.0, -1.0]]
     """
-    r = np.asarray(positions, dtype=float).reshape(-1, 3) - np.asarray(reference, dtype=float)
-    n = np.asarray(directions, dtype=float).reshape(-1, 3)
-    return np.hstack([n, np.cross(r, n)])
+    pos = np.asarray(positions, dtype=float)
+    n = np.asarray(directions, dtype=float)
+    if pos.ndim < 2:
+        pos, n = pos.reshape(-1, 3), n.reshape(-1, 3)
+    r = pos - np.asarray(reference, dtype=float)
+    result: Array = np.concatenate([n, np.cross(r, n)], axis=-1)
+    return result
 
 
 class LayoutFrame:
@@ -147,6 +160,28 @@ class LayoutFrame:
         return result
 
 
+def frame_arrays(positions: ArrayLike) -> tuple[Array, Array]:
+    """Centroid and RMS radius of one or several sensor layouts.
+
+    Parameters
+    ----------
+    positions : array_like, shape (..., p, 3)
+        Sensor locations (length); leading axes stack layouts.
+
+    Returns
+    -------
+    centre : ndarray, shape (..., 3)
+        Centroid of the positions (length).
+    scale : ndarray, shape (...)
+        RMS distance of the sensors from the centroid (length); 1 where they
+        all coincide.
+    """
+    r = np.asarray(positions, dtype=float)
+    centre = r.mean(axis=-2)
+    scale = np.sqrt(np.mean(np.sum((r - centre[..., None, :]) ** 2, axis=-1), axis=-1))
+    return centre, np.where(scale > 0.0, scale, 1.0)
+
+
 def layout_frame(positions: ArrayLike) -> LayoutFrame:
     """Centroid and RMS radius of a sensor layout.
 
@@ -159,11 +194,40 @@ def layout_frame(positions: ArrayLike) -> LayoutFrame:
     -------
     LayoutFrame
         Used to make the identification independent of origin and units.
+
+    Examples
+    --------
+    >>> frame = layout_frame([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    >>> frame.centre.tolist(), frame.scale
+    ([0.0, 0.0, 0.0], 1.0)
     """
-    r = np.asarray(positions, dtype=float).reshape(-1, 3)
-    centre = r.mean(axis=0)
-    scale = float(np.sqrt(np.mean(np.sum((r - centre) ** 2, axis=1))))
-    return LayoutFrame(centre, scale if scale > 0.0 else 1.0)
+    centre, scale = frame_arrays(np.asarray(positions, dtype=float).reshape(-1, 3))
+    return LayoutFrame(centre, float(scale))
+
+
+def numerical_rank(singular_values: ArrayLike, rows: int) -> NDArray[np.intp]:
+    """Numerical rank of sensor transformations from their singular values.
+
+    Parameters
+    ----------
+    singular_values : array_like, shape (..., k)
+        Singular values of ``(..., rows, 6)`` matrices, descending.
+    rows : int
+        Number of rows (sensors) of each matrix.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+        How many singular values exceed ``1000 max(rows, 6) eps s_max``: the
+        one rank tolerance of rigidid (a thousand times LAPACK's usual one, so
+        that layouts singular in exact arithmetic count as singular after
+        rounding of their coordinates).
+    """
+    s = np.asarray(singular_values, dtype=float)
+    top = s[..., :1] if s.shape[-1] else np.zeros((*s.shape[:-1], 1))
+    tol = 1e3 * max(rows, 6) * np.finfo(float).eps * top
+    rank: NDArray[np.intp] = np.sum(s > tol, axis=-1)
+    return rank
 
 
 def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float, int]:
@@ -189,8 +253,7 @@ def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float
     frame = layout_frame(positions)
     t = sensor_matrix(frame.to_local(positions), directions)
     s = np.linalg.svd(t, compute_uv=False)
-    tol = max(t.shape) * np.finfo(float).eps * (s[0] if s.size else 0.0) * 1e3
-    rank = int(np.sum(s > tol))
+    rank = int(numerical_rank(s, t.shape[0]))
     cond = float(s[0] / s[-1]) if rank == 6 and s.size == 6 else float("inf")
     return cond, rank
 

@@ -16,18 +16,24 @@ References
 
 from __future__ import annotations
 
-import warnings
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, sensor_matrix, transfer_matrix
-from rigidid.core.selection import project_rigid
-from rigidid.core.statespace import modal_from_poles, state_matrices, state_matrices_paper
-from rigidid.errors import IdentificationError, IllConditionedWarning, InputError, PhysicalPlausibilityWarning
+from rigidid.core import estimator
+from rigidid.core.estimator import DAMPING_WEIGHT
+from rigidid.core.geometry import layout_condition, normalise_directions, sensor_matrix, transfer_matrix
+from rigidid.core.statespace import mac_matrix, modal_from_poles, state_matrices_paper, state_matrix
+from rigidid.errors import (
+    IdentificationError,
+    IllConditionedWarning,
+    InputError,
+    Notice,
+    PhysicalPlausibilityWarning,
+    emit,
+)
 
 __all__ = [
     "DAMPING_WEIGHT",
@@ -36,6 +42,7 @@ __all__ = [
     "Identification",
     "identify",
     "inertia_observability",
+    "physical_checks",
     "principal_axes",
     "solve_paper",
     "solve_structured",
@@ -45,125 +52,17 @@ Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
 Method = Literal["structured", "paper"]
 METHODS: tuple[str, ...] = ("structured", "paper")
-DAMPING_WEIGHT = 0.3
-"""Default weight of the damping equations against the stiffness equations."""
 UNOBSERVABLE = 1e-6
 """Inertia observability below which the inertia is not determined at all (an error)."""
 WEAKLY_OBSERVABLE = 0.03
 """Inertia observability below which the inertia is poorly determined (a warning)."""
-
-_UPPER = np.triu_indices(6, 1)
-_SYM_BASIS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
-
-
-def _inertia_from_params(j: Array) -> Array:
-    out = np.zeros((3, 3))
-    for value, (a, b) in zip(j, _SYM_BASIS, strict=True):
-        out[a, b] = out[b, a] = value
-    return out
-
-
-def _at_point(x: Array, g: Array) -> Array:
-    """``G_go X G_og``: a matrix of origin coordinates moved to the point ``g``."""
-    result: Array = transfer_matrix(g) @ x @ transfer_matrix(-g)
-    return result
+ILL_CONDITIONED = 1e6
+"""Layout condition number above which a warning is issued."""
 
 
 def _sym(a: Array) -> Array:
     result: Array = 0.5 * (a + a.T)
     return result
-
-
-def _scaled_inertia(j: Array) -> Array:
-    d = np.eye(6)
-    d[3:, 3:] = j
-    return d
-
-
-def _inertia_basis() -> Array:
-    basis = np.zeros((6, 6, 6))
-    for k, (a, b) in enumerate(_SYM_BASIS):
-        basis[k, 3 + a, 3 + b] = basis[k, 3 + b, 3 + a] = 1.0
-    return basis
-
-
-_BASIS = _inertia_basis()
-_TRANSLATION = np.diag([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-
-
-def _asym_system(g: Array, mats: list[tuple[Array, float]]) -> tuple[Array, Array]:
-    """Linear system ``A j + r0`` of the antisymmetric part of ``D X_g`` for fixed ``g``.
-
-    Returns ``A`` (15 n, 6) and ``r0`` (15 n,) for the n matrices in `mats`.
-    """
-    go, og = transfer_matrix(g), transfer_matrix(-g)
-    rows_a = []
-    rows_r = []
-    for x, weight in mats:
-        xg = go @ x @ og
-        y0 = _TRANSLATION @ xg
-        rows_r.append(weight * (y0 - y0.T)[_UPPER])
-        y = _BASIS @ xg
-        rows_a.append(weight * (y - y.transpose(0, 2, 1))[:, _UPPER[0], _UPPER[1]].T)
-    return np.vstack(rows_a), np.concatenate(rows_r)
-
-
-def _best_inertia(g: Array, mats: list[tuple[Array, float]]) -> tuple[Array, Array]:
-    a, r0 = _asym_system(g, mats)
-    j = np.asarray(np.linalg.lstsq(a, -r0, rcond=None)[0], dtype=np.float64)
-    return j, a @ j + r0
-
-
-def _levenberg_marquardt(fun: Callable[[Array], Array], x0: Array, max_iter: int = 200) -> tuple[Array, float]:
-    """Minimise ``|fun(x)|^2`` from `x0` (small problems; central-difference Jacobian)."""
-    x = x0.astype(float).copy()
-    r = fun(x)
-    cost = float(r @ r)
-    damping = 1e-3
-    for _ in range(max_iter):
-        if cost == 0.0:
-            break
-        jac = np.empty((r.size, x.size))
-        for i in range(x.size):
-            h = 1e-6 * (1.0 + abs(x[i]))
-            e = np.zeros_like(x)
-            e[i] = h
-            jac[:, i] = (fun(x + e) - fun(x - e)) / (2.0 * h)
-        scale = np.sqrt(np.maximum(np.sum(jac * jac, axis=0), 1e-30))
-        improved = False
-        while damping < 1e12:
-            lhs = np.vstack([jac, np.sqrt(damping) * np.diag(scale)])
-            rhs = np.concatenate([-r, np.zeros(x.size)])
-            step, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
-            r_new = fun(x + step)
-            cost_new = float(r_new @ r_new)
-            if cost_new < cost:
-                improved = True
-                x, r = x + step, r_new
-                small = np.linalg.norm(step) <= 1e-13 * (1.0 + np.linalg.norm(x))
-                flat = cost - cost_new <= 1e-15 * cost
-                cost = cost_new
-                damping = max(damping / 5.0, 1e-12)
-                if small or flat:
-                    return x, cost
-                break
-            damping *= 4.0
-        if not improved:
-            break
-    return x, cost
-
-
-def _eq36_cg(q: Array) -> tuple[Array, Array]:
-    """Linear system of eq. (36) of [1]: symmetry of ``Q11 - S(g) Q21``."""
-    a = np.empty((3, 3))
-    upper3 = np.triu_indices(3, 1)
-    for i in range(3):
-        e = np.zeros(3)
-        e[i] = 1.0
-        y = _at_point(q, e)[:3, :3] - q[:3, :3]
-        a[:, i] = (y - y.T)[upper3]
-    b = -(q[:3, :3] - q[:3, :3].T)[upper3]
-    return a, b
 
 
 def solve_structured(
@@ -190,35 +89,12 @@ def solve_structured(
 
     Notes
     -----
-    Unknowns: the CG (3) and the symmetric ``J / m`` (6); equations: the 15
-    entries of the antisymmetric part of ``D Q_g`` (and of ``D P_g``), which
-    hold eqs. (32)-(35) once the symmetric ``K / m = sym(D Q_g)`` is
-    eliminated. ``J / m`` enters linearly and is solved by least squares for
-    each trial CG (variable projection); the CG is found by Levenberg-Marquardt
-    from two starts, eq. (36) and the origin. Unlike the sequential route
-    (eqs. (36)-(40)), this needs neither eq. (36) nor ``Q21`` to be regular, so
-    identical mounts at one height are fine.
+    A batch of one of :func:`rigidid.core.estimator.solve_cg`, which says how.
     """
-    mats: list[tuple[Array, float]] = [(np.asarray(stiffness, dtype=float), 1.0)]
-    if damping is not None and damping_weight > 0.0:
-        mats.append((np.asarray(damping, dtype=float), damping_weight))
-
-    def residual(g: Array) -> Array:
-        return _best_inertia(g, mats)[1]
-
-    a36, b36 = _eq36_cg(mats[0][0])
-    g36 = np.asarray(np.linalg.lstsq(a36, b36, rcond=1e-6)[0], dtype=np.float64)
-    best: tuple[Array, float] | None = None
-    for start in (g36, np.zeros(3)):
-        if not np.all(np.isfinite(start)):
-            continue
-        g, cost = _levenberg_marquardt(residual, start)
-        if best is None or cost < best[1]:
-            best = (g, cost)
-    assert best is not None
-    g = best[0]
-    j, _ = _best_inertia(g, mats)
-    return g, _inertia_from_params(j)
+    q = np.asarray(stiffness, dtype=float)[None]
+    p = None if damping is None else np.asarray(damping, dtype=float)[None]
+    g, j, _ = estimator.solve_cg(q, p, damping_weight)
+    return g[0], j[0]
 
 
 def inertia_observability(stiffness: Array, cg: Array) -> float:
@@ -244,11 +120,10 @@ def inertia_observability(stiffness: Array, cg: Array) -> float:
     Notes
     -----
     Only the stiffness equations are used: damping is too uncertain to carry
-    the inertia.
+    the inertia (:func:`rigidid.core.estimator.observability_batch`).
     """
-    a, _ = _asym_system(np.asarray(cg, dtype=float), [(np.asarray(stiffness, dtype=float), 1.0)])
-    s = np.linalg.svd(a, compute_uv=False)
-    return float(s[-1] / s[0]) if s[0] > 0 else 0.0
+    q = np.asarray(stiffness, dtype=float)[None]
+    return float(estimator.observability_batch(q, np.asarray(cg, dtype=float)[None])[0])
 
 
 def solve_paper(stiffness: Array) -> tuple[Array, Array]:
@@ -272,6 +147,11 @@ def solve_paper(stiffness: Array) -> tuple[Array, Array]:
         If eq. (36) or ``Q21`` is singular (for example identical mounts at one
         height, where ``K21`` is singular in exact arithmetic).
 
+    Warns
+    -----
+    IllConditionedWarning
+        If either is ill-conditioned (condition above 1e6).
+
     Notes
     -----
     Fragile: 0.1 % noise on mode shapes can move the CG by a large fraction of
@@ -279,20 +159,27 @@ def solve_paper(stiffness: Array) -> tuple[Array, Array]:
     corrected form ``K22 / m = (J / m) Q22 - (K21 / m) H_go`` by the caller
     (:func:`identify` forms ``sym(D Q_g)``, which is the same matrix).
     """
-    q = np.asarray(stiffness, dtype=float)
-    a36, b36 = _eq36_cg(q)
+    notices: list[Notice] = []
+    try:
+        return _solve_paper(np.asarray(stiffness, dtype=float), notices)
+    finally:
+        emit(notices)
+
+
+def _solve_paper(q: Array, notices: list[Notice]) -> tuple[Array, Array]:
+    a36, b36 = (x[0] for x in estimator.eq36_system(q[None]))
     q21 = q[3:, :3]
     for name, mat in (("eq. (36)", a36), ("Q21", q21)):
         c = np.linalg.cond(mat)
         if not np.isfinite(c) or c > 1e12:
-            raise IdentificationError(f"paper method: {name} is singular (condition {c:.3g}); use --method structured")
-        if c > 1e6:
-            warnings.warn(
-                f"paper method: {name} is ill-conditioned (condition {c:.3g})", IllConditionedWarning, stacklevel=3
+            raise IdentificationError(
+                f"paper method: {name} is singular (condition {c:.3g}); use the structured method"
             )
+        if c > ILL_CONDITIONED:
+            message = f"paper method: {name} is ill-conditioned (condition {c:.3g})"
+            notices.append(Notice(IllConditionedWarning, message))
     g = np.asarray(np.linalg.solve(a36, b36), dtype=np.float64)
-    qg = _at_point(q, g)
-    k12 = qg[:3, 3:]
+    k12 = estimator.at_cg(q[None], g[None])[0, :3, 3:]
     j = np.asarray(np.linalg.solve(q21.T, k12).T, dtype=np.float64)
     return g, _sym(j)
 
@@ -447,8 +334,31 @@ class Identification:
         return poles[order], shapes / np.linalg.norm(shapes, axis=0)
 
 
-def _physical_checks(j: Array, k: Array, c: Array) -> list[str]:
+def physical_checks(inertia_per_mass: Array, stiffness: Array, damping: Array) -> list[str]:
+    """Physically impossible features of an identified body, in words.
+
+    Parameters
+    ----------
+    inertia_per_mass : ndarray, shape (3, 3)
+        ``J / m`` (or ``J``).
+    stiffness, damping : ndarray, shape (6, 6)
+        ``K`` and ``C`` at the CG (or per mass).
+
+    Returns
+    -------
+    list of str
+        Empty for a plausible body; else: an inertia that is not positive
+        definite, principal moments that break the triangle inequality
+        (``I_3 <= I_1 + I_2`` holds for every real body), a stiffness or damping
+        matrix that is not positive semi-definite.
+
+    Examples
+    --------
+    >>> physical_checks(np.diag([1.0, 1.0, 3.0]), np.eye(6), np.eye(6))
+    ['principal moments break the triangle inequality (largest exceeds the sum of the other two)']
+    """
     found = []
+    j, k, c = (np.asarray(x, dtype=float) for x in (inertia_per_mass, stiffness, damping))
     moments = np.linalg.eigvalsh(_sym(j))
     if moments[0] <= 0.0:
         found.append(
@@ -467,18 +377,16 @@ def _physical_checks(j: Array, k: Array, c: Array) -> list[str]:
 
 
 def _model_modes(j: Array, k: Array, c: Array) -> tuple[CArray, CArray]:
-    d = _scaled_inertia(j)
-    a = np.block([[-np.linalg.solve(d, c), -np.linalg.solve(d, k)], [np.eye(6), np.zeros((6, 6))]])
-    mu, vec = np.linalg.eig(a)
+    d = np.eye(6)
+    d[3:, 3:] = j
+    mu, vec = np.linalg.eig(state_matrix(d, k, c))
     upper = np.argsort(-mu.imag)[:6]
     return mu[upper], vec[6:, upper]
 
 
 def _match_modes(measured: CArray, model_poles: CArray, model_shapes: CArray) -> tuple[CArray, Array]:
     """Pair each measured mode with the model mode of best MAC; return model poles and MACs."""
-    num = np.abs(measured.conj().T @ model_shapes) ** 2
-    den = np.outer(np.sum(np.abs(measured) ** 2, axis=0), np.sum(np.abs(model_shapes) ** 2, axis=0))
-    mac = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+    mac = mac_matrix(measured, model_shapes)
     chosen = np.argmax(mac, axis=1)
     return model_poles[chosen], mac[np.arange(mac.shape[0]), chosen]
 
@@ -492,6 +400,7 @@ def identify(
     mass: float | None = None,
     method: Method = "structured",
     damping_weight: float = DAMPING_WEIGHT,
+    warn: bool = True,
 ) -> Identification:
     """Identify CG, inertia, stiffness and damping from six rigid-body modes.
 
@@ -517,6 +426,10 @@ def identify(
         CG and inertia fit, in the dimensionless frame (0: stiffness only).
         The default was chosen on ``benchmarks/noise_accuracy.py``; results
         there change by under 0.1 % of span between 0 and 0.3.
+    warn : bool
+        Issue the conditioning and plausibility findings as warnings (they are
+        in ``diagnostics.warnings`` either way). They are issued once the
+        result or the error is known, so none is lost when an error follows.
 
     Returns
     -------
@@ -537,8 +450,38 @@ def identify(
     by the mean natural frequency, so results are invariant to origin and
     units. Physically impossible results raise
     :class:`~rigidid.errors.PhysicalPlausibilityWarning` and are listed in the
-    diagnostics.
+    diagnostics. The structured method is a batch of one of
+    :func:`rigidid.core.estimator.estimate`, the kernel every route shares.
+
+    Examples
+    --------
+    Simulate a body on four mounts, read it with eight sensors, identify it:
+
+    >>> from rigidid.core.simulate import Body, Mount, body_modes
+    >>> mounts = [Mount.from_values(p, (8e4, 9e4, 2e5), (40.0, 50.0, 90.0))
+    ...           for p in ([0.3, 0.2, -0.3], [-0.3, 0.2, 0.2], [0.3, -0.25, 0.1], [-0.3, -0.2, -0.2])]
+    >>> body = Body(mass=60.0, center_of_gravity=np.array([0.02, -0.01, 0.1]),
+    ...             inertia_tensor=np.array([[2.0, 0.1, 0.0], [0.1, 3.0, 0.2], [0.0, 0.2, 4.0]]), mounts=mounts)
+    >>> pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    >>> dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
+    >>> modes = body_modes(body, pos, dirs)
+    >>> result = identify(pos, dirs, modes.poles, modes.shapes, mass=60.0)
+    >>> result.center_of_gravity.round(9).tolist()
+    [0.02, -0.01, 0.1]
+    >>> np.diag(result.inertia_tensor).round(6).tolist()
+    [2.0, 3.0, 4.0]
     """
+    notices: list[Notice] = []
+    try:
+        return _identify(positions, directions, poles, shapes, mass, method, damping_weight, notices)
+    finally:
+        if warn:
+            emit(notices)
+
+
+def _checked(
+    positions: ArrayLike, directions: ArrayLike, poles: ArrayLike, shapes: ArrayLike, mass: float | None, method: str
+) -> tuple[Array, Array, CArray, CArray]:
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lam = np.asarray(poles, dtype=complex).ravel()
@@ -558,66 +501,69 @@ def identify(
         raise InputError(f"mass must be positive, got {mass}")
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    return pos, dirs, lam, psi
 
+
+def _identify(
+    positions: ArrayLike,
+    directions: ArrayLike,
+    poles: ArrayLike,
+    shapes: ArrayLike,
+    mass: float | None,
+    method: str,
+    damping_weight: float,
+    notices: list[Notice],
+) -> Identification:
+    pos, dirs, lam, psi = _checked(positions, directions, poles, shapes, mass, method)
     cond, rank = layout_condition(pos, dirs)
     if rank < 6:
         raise IdentificationError(f"the sensor layout has rank {rank}; rigid-body motion needs rank 6")
-    frame = layout_frame(pos)
-    t = sensor_matrix(frame.to_local(pos), dirs)
-    phi, fit = project_rigid(t, psi)
-    omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
-    lam_s = lam / omega
-
-    caught: list[str] = []
-    with warnings.catch_warnings(record=True) as record:
-        warnings.simplefilter("always")
-        if cond > 1e6:
-            warnings.warn(
-                f"sensor layout is ill-conditioned (condition {cond:.3g})", IllConditionedWarning, stacklevel=2
-            )
-        if method == "paper":
-            q, p = state_matrices_paper(lam_s, phi)
-            g, j = solve_paper(q)
-        else:
-            q, p = state_matrices(lam_s, phi)
-            g, j = solve_structured(q, p, damping_weight)
-        observability = inertia_observability(q, g)
-        if observability < UNOBSERVABLE:
-            raise IdentificationError(
-                "the inertia is not observable: the supports do not couple rotations to translations "
-                "(e.g. mounts symmetric about the CG), so inertia and stiffness cannot be separated "
-                f"(inertia observability {observability:.1e})"
-            )
-        if observability < WEAKLY_OBSERVABLE:
-            warnings.warn(
+    if cond > ILL_CONDITIONED:
+        notices.append(Notice(IllConditionedWarning, f"sensor layout is ill-conditioned (condition {cond:.3g})"))
+    prep = estimator.prepare(pos[None], dirs[None], lam[None], psi[None])
+    if not prep.ok[0]:
+        raise IdentificationError(estimator.STATUS_MESSAGES[int(prep.status[0])])
+    if method == "paper":
+        q, p = state_matrices_paper(lam / prep.omega[0], prep.coordinates[0])
+        g, j = _solve_paper(q, notices)
+    else:
+        q, p = prep.stiffness[0], prep.damping[0]
+        g_b, j_b, _ = estimator.solve_cg(prep.stiffness, prep.damping, damping_weight)
+        g, j = g_b[0], j_b[0]
+    omega, phi = float(prep.omega[0]), prep.coordinates[0]
+    observability = inertia_observability(q, g)
+    if observability < UNOBSERVABLE:
+        raise IdentificationError(
+            "the inertia is not observable: the supports do not couple rotations to translations "
+            "(e.g. mounts symmetric about the CG), so inertia and stiffness cannot be separated "
+            f"(inertia observability {observability:.1e})"
+        )
+    if observability < WEAKLY_OBSERVABLE:
+        notices.append(
+            Notice(
+                IllConditionedWarning,
                 f"the inertia is poorly determined (inertia observability {observability:.2g}, typically "
                 "0.1-0.3): the supports couple rotations to translations only weakly",
-                IllConditionedWarning,
-                stacklevel=2,
             )
-        qg, pg = _at_point(q, g), _at_point(p, g)
-        d = _scaled_inertia(j)
-        dq, dp = d @ qg, d @ pg
-        structure = float(np.linalg.norm(dq - dq.T)) / max(float(np.linalg.norm(dq)), 1e-300)
-        k, c = _sym(dq), _sym(dp)
-        for message in _physical_checks(j, k, c):
-            warnings.warn(message, PhysicalPlausibilityWarning, stacklevel=2)
-    for w in record:
-        caught.append(str(w.message))
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        )
+    dq = estimator.at_cg(q[None], g[None], j[None])[0]
+    dp = estimator.at_cg(p[None], g[None], j[None])[0]
+    structure = float(np.linalg.norm(dq - dq.T)) / max(float(np.linalg.norm(dq)), 1e-300)
+    k, c = _sym(dq), _sym(dp)
+    notices.extend(Notice(PhysicalPlausibilityWarning, message) for message in physical_checks(j, k, c))
 
+    centre, length = prep.centre[0], float(prep.scale[0])
     model_poles, model_phi = _model_modes(j, k, c)
-    model_psi = sensor_matrix(frame.to_local(pos), dirs, g) @ model_phi
+    model_psi = sensor_matrix((pos - centre) / length, dirs, g) @ model_phi
     matched, mac = _match_modes(psi, model_poles, model_psi)
     model_f, model_z = modal_from_poles(matched * omega)
     f, z = modal_from_poles(lam)
 
-    length, length2 = frame.scale, frame.scale**2
     dof = np.array([1.0, 1.0, 1.0, length, length, length])
     shapes_cg = (transfer_matrix(g) @ phi) * np.array([length, length, length, 1.0, 1.0, 1.0])[:, None]
     return Identification(
-        center_of_gravity=frame.centre + length * g,
-        inertia_per_mass=length2 * j,
+        center_of_gravity=centre + length * g,
+        inertia_per_mass=length**2 * j,
         stiffness_per_mass=omega**2 * k * np.outer(dof, dof),
         damping_per_mass=omega * c * np.outer(dof, dof),
         mass=None if mass is None else float(mass),
@@ -628,12 +574,12 @@ def identify(
         diagnostics=Diagnostics(
             layout_condition=cond,
             layout_rank=rank,
-            rigid_fit_residual=fit,
+            rigid_fit_residual=prep.fit_residual[0],
             structure_residual=structure,
             inertia_observability=observability,
             model_frequency_hz=model_f,
             model_damping_ratio=model_z,
             model_mac=mac,
-            warnings=tuple(caught),
+            warnings=tuple(n.message for n in notices),
         ),
     )

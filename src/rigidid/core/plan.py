@@ -1,11 +1,13 @@
-"""Test planning: is a sensor layout good enough, and where to add sensors.
+"""Test planning: how precise will the result be, and where to add sensors.
 
 Before an impact test, three questions: can this layout see all six
-rigid-body motions at all (the paper's step (3): a transformation ``T_mo`` of
-rank 6, eq. (3) of [1]); how precisely will the CG and the inertia come out
-for the noise to expect (Monte Carlo on simulated modes of a CAD estimate of
-the body, :func:`predict_uncertainty`); and which extra sensor helps most
-(:func:`suggest_sensors`).
+rigid-body motions at all (:func:`rigidid.core.layout_check.check_layout`);
+how precisely will the CG and the inertia come out for the noise to expect
+(Monte Carlo on simulated modes of a CAD estimate of the body,
+:func:`predict_uncertainty`); and which extra sensor helps most
+(:func:`suggest_sensors`). Both predictions run the identification kernel
+(:func:`rigidid.core.estimator.estimate`) on perturbed copies of the simulated
+test (:mod:`rigidid.core.noise`).
 
 References
 ----------
@@ -16,29 +18,19 @@ References
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
-from itertools import combinations
-from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, sensor_matrix
-from rigidid.core.identify import DAMPING_WEIGHT
+from rigidid.core import estimator
+from rigidid.core.estimator import DAMPING_WEIGHT
+from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, numerical_rank, sensor_matrix
+from rigidid.core.layout_check import AXIS_COS, Finding, LayoutReport, check_layout
+from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels, StandardNormals, apply_noise, draw_normals
 from rigidid.core.simulate import Body, body_modes
-from rigidid.core.uncertainty import (
-    DEFAULT_NOISE,
-    NoiseLevels,
-    Uncertainty,
-    _apply_noise,
-    _draw_normals,
-    _Normals,
-    identify_batch,
-    propagate,
-    uncertainty_to_dict,
-)
-from rigidid.errors import IllConditionedWarning, InputError
+from rigidid.core.uncertainty import Uncertainty, propagate
+from rigidid.errors import IllConditionedWarning, InputError, Notice, emit
 
 __all__ = [
     "AXIS_COS",
@@ -50,469 +42,12 @@ __all__ = [
     "SuggestedSensor",
     "candidate_grid",
     "check_layout",
-    "layout_report_to_dict",
     "predict_uncertainty",
-    "prediction_to_dict",
-    "sensor_plan_to_dict",
     "suggest_sensors",
 ]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
-Severity = Literal["error", "warning", "info"]
-_SEVERITY_ORDER: dict[str, int] = {"error": 0, "warning": 1, "info": 2}
-
-AXIS_COS = math.cos(math.radians(30.0))
-"""A sensor counts for axis x, y or z when its direction is within 30 degrees of it."""
-
-_COND_GOOD = 10.0
-_COND_POOR = 100.0
-_PARALLEL_COS = math.cos(math.radians(10.0))
-
-
-# --------------------------------------------------------------------------- layout check
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One observation about a sensor layout.
-
-    Attributes
-    ----------
-    severity : {"error", "warning", "info"}
-        ``"error"``: the identification cannot work; ``"warning"``: it will
-        work poorly; ``"info"``: worth knowing.
-    message : str
-        One or two sentences for the test engineer, with what to do.
-    code : str
-        Stable identifier of the kind of finding (``"too-few-sensors"``,
-        ``"rank"``, ``"condition"``, ``"axis-missing"``, ``"axis-counts"``,
-        ``"redundant-pair"``, ``"shared-position"``, ``"collinear"``,
-        ``"minimum-sensors"``).
-    sensors : tuple of int
-        The sensors concerned, numbered from 1 in the layout's order.
-    """
-
-    severity: Severity
-    message: str
-    code: str
-    sensors: tuple[int, ...] = ()
-
-
-@dataclass(frozen=True)
-class LayoutReport:
-    """Result of :func:`check_layout`.
-
-    Attributes
-    ----------
-    sensors : int
-        Number of sensors.
-    rank : int
-        Rank of the dimensionless transformation ``T_mo`` (6 needed).
-    condition : float
-        Its condition number (``inf`` below rank 6); about 2-10 is good.
-    axis_counts : tuple of int
-        Sensors mostly along x, y, z (within 30 degrees) and the oblique rest.
-    weakest_motion : str
-        The rigid motion the layout sees least, in words.
-    findings : tuple of Finding
-        Sorted: errors first, then warnings, then information.
-    """
-
-    sensors: int
-    rank: int
-    condition: float
-    axis_counts: tuple[int, int, int, int]
-    weakest_motion: str
-    findings: tuple[Finding, ...]
-
-    @property
-    def ok(self) -> bool:
-        """True when no finding is an error."""
-        return all(f.severity != "error" for f in self.findings)
-
-    @property
-    def worst(self) -> str:
-        """Most severe finding: ``"error"``, ``"warning"``, ``"info"`` or ``"none"``."""
-        for level in ("error", "warning", "info"):
-            if any(f.severity == level for f in self.findings):
-                return level
-        return "none"
-
-    @property
-    def severity_key(self) -> tuple[int, int, float]:
-        """Sort key, better layouts first: (errors, warnings, condition number).
-
-        Use ``sorted(reports, key=lambda r: r.severity_key)``.
-        """
-        errors = sum(f.severity == "error" for f in self.findings)
-        warns = sum(f.severity == "warning" for f in self.findings)
-        return errors, warns, self.condition
-
-
-def _fmt(x: float) -> str:
-    return f"{x:.3g}"
-
-
-def _vec(v: ArrayLike) -> str:
-    a = np.asarray(v, dtype=float)
-    return "(" + ", ".join(f"{x:.3g}" if abs(x) >= 5e-4 else "0" for x in a) + ")"
-
-
-def _names(indices: ArrayLike) -> str:
-    items = [str(int(i) + 1) for i in np.asarray(indices).ravel()]
-    if len(items) == 1:
-        return f"sensor {items[0]}"
-    return "sensors " + ", ".join(items[:-1]) + " and " + items[-1]
-
-
-def _with_unit(x: float, unit: str) -> str:
-    return f"{_fmt(x)} {unit}".rstrip() if unit else f"{_fmt(x)} (layout units)"
-
-
-def _describe_motion(x: Array, centre: Array, scale: float, unit: str) -> str:
-    """A rigid motion ``(t, w)`` of the dimensionless frame in words (a translation or a rotation axis)."""
-    t, w = x[:3], x[3:]
-    nw = float(np.linalg.norm(w))
-    nt = float(np.linalg.norm(t))
-    if nw < 0.2 * max(nt, 1e-300):
-        return f"a translation along {_vec(t / nt)}"
-    axis = w / nw
-    point = np.cross(w, t) / nw**2  # closest point of the screw axis to the centroid
-    if np.linalg.norm(point) > 5.0:
-        return f"a translation along {_vec(t / max(nt, 1e-300))} (with a little rotation)"
-    where = centre + scale * point
-    return f"a rotation about the axis along {_vec(axis)} through {_vec(where)}" + (f" {unit}" if unit else "")
-
-
-def _line_groups(local: Array, tol: float) -> list[tuple[NDArray[np.intp], Array, Array, float]]:
-    """Maximal groups of at least 3 points within `tol` of one line: (members, point, direction, worst distance)."""
-    p = local.shape[0]
-    found: list[tuple[NDArray[np.intp], Array, Array, float]] = []
-    seen: set[tuple[int, ...]] = set()
-    for i, j in combinations(range(p), 2):
-        d = local[j] - local[i]
-        length = float(np.linalg.norm(d))
-        if length <= 2.0 * tol:
-            continue
-        u = d / length
-        rel = local - local[i]
-        dist = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
-        members = np.flatnonzero(dist <= tol)
-        if members.size < 3:
-            continue
-        # refit the line through the members and check again
-        pts = local[members]
-        c = pts.mean(axis=0)
-        _, _, vt = np.linalg.svd(pts - c)
-        u = vt[0]
-        rel = local - c
-        dist = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
-        members = np.flatnonzero(dist <= tol)
-        key = tuple(int(m) for m in members)
-        if members.size < 3 or key in seen:
-            continue
-        seen.add(key)
-        found.append((members, c, u, float(dist[members].max())))
-    # keep the maximal groups only
-    sets = [set(g[0].tolist()) for g in found]
-    return [g for g, s in zip(found, sets, strict=True) if not any(s < other for other in sets)]
-
-
-def check_layout(
-    positions: ArrayLike,
-    directions: ArrayLike,
-    *,
-    unit: str = "",
-    line_tolerance: float = 0.1,
-    close_tolerance: float = 0.1,
-    same_tolerance: float = 0.02,
-) -> LayoutReport:
-    """Check a sensor layout before a test.
-
-    Parameters
-    ----------
-    positions : array_like, shape (p, 3)
-        Planned sensor locations (length).
-    directions : array_like, shape (p, 3)
-        Planned measuring axes (any length; normalised here).
-    unit : str
-        Length unit for the messages (``"mm"``, ``"in"``...); empty for none.
-    line_tolerance : float
-        Sensors within this distance of one line, as a fraction of the
-        layout's RMS radius about its centroid, count as "almost on one line".
-    close_tolerance : float
-        Two sensors this close (same fraction) with directions within 10
-        degrees of each other (or of opposite) count as redundant.
-    same_tolerance : float
-        Two sensors this close (same fraction) share one position.
-
-    Returns
-    -------
-    LayoutReport
-
-    Raises
-    ------
-    InputError
-        For arrays of the wrong shape, non-finite positions or a zero direction.
-
-    Notes
-    -----
-    Checks, each reported as a :class:`Finding`:
-
-    * at least six sensors (error below, info at exactly six: every shape then
-      fits rigid motion exactly and noise or flexible motion go unseen);
-    * rank 6 of ``T_mo`` (eq. (3) of [1], the paper's step (3)); otherwise the
-      motion no sensor sees is described;
-    * condition number of the dimensionless ``T_mo``
-      (:func:`rigidid.core.geometry.layout_condition`): up to 10 good, 10-100
-      a warning (noise on the least visible motion amplified that much), above
-      100 a stronger warning; the least visible motion (smallest singular
-      vector) is described;
-    * per axis, the sensors whose direction is within 30 degrees of x, y or z
-      (``|n_axis| > cos 30``); an axis without one is a warning (the paper's
-      layouts have at least one per axis);
-    * redundant pairs (close together, parallel or anti-parallel) and shared
-      positions (triaxial mounts: info);
-    * groups of three or more sensors almost on one line (within
-      `line_tolerance`): rotation about that line is seen only by the other
-      sensors. A warning when all sensors are on the line, or when the
-      rotation about the line is seen more than 10 times worse than the best
-      seen motion (``s_max / |T x_line| > 10`` with ``x_line`` the unit
-      rotation about the line, the condition number restricted to that
-      motion), or when the layout is not well conditioned (condition above
-      10) mostly because of it (``s_max / |T x_line|`` above half the
-      condition number); info
-      for harmless groups of four or more distinct positions; harmless triples
-      are not reported.
-
-    Tolerances are relative to the layout's size, so the check does not
-    depend on units. Thresholds are rules of thumb, not guarantees; use
-    :func:`predict_uncertainty` for figures.
-    """
-    pos = np.asarray(positions, dtype=float)
-    if pos.ndim != 2 or pos.shape[1] != 3 or pos.shape[0] == 0:
-        raise InputError(f"positions must be (sensors, 3), got {pos.shape}")
-    if not np.all(np.isfinite(pos)):
-        raise InputError("sensor positions must be finite")
-    dirs = normalise_directions(directions)
-    if dirs.shape != pos.shape:
-        raise InputError(f"directions must match positions {pos.shape}, got {dirs.shape}")
-    p = pos.shape[0]
-    frame = layout_frame(pos)
-    local = frame.to_local(pos)
-    size = frame.scale
-    findings: list[Finding] = []
-
-    # --- count
-    if p < 6:
-        findings.append(
-            Finding(
-                "error",
-                f"only {p} sensors: the six rigid-body motions need at least six (the paper's step 3); "
-                f"add {6 - p} more, pointing along axes the others do not cover",
-                "too-few-sensors",
-            )
-        )
-    elif p == 6:
-        findings.append(
-            Finding(
-                "info",
-                "six sensors, the minimum: every mode shape fits rigid motion exactly, so noise and flexible "
-                "motion cannot be detected; two to six more sensors make the result checkable",
-                "minimum-sensors",
-            )
-        )
-
-    # --- rank, condition, least visible motion
-    cond, rank = layout_condition(pos, dirs)
-    t = sensor_matrix(local, dirs)
-    vt = np.linalg.svd(t)[2]
-    weakest = _describe_motion(vt[-1], frame.centre, size, unit)
-    if p >= 6 and rank < 6:
-        blind = [_describe_motion(v, frame.centre, size, unit) for v in vt[rank:]]
-        what = blind[0] if len(blind) == 1 else f"{len(blind)} independent motions, e.g. " + "; ".join(blind)
-        findings.append(
-            Finding(
-                "error",
-                f"the layout has rank {rank}, not 6: no sensor sees {what}; "
-                "add or re-point sensors so that each such motion moves at least one of them along its axis",
-                "rank",
-            )
-        )
-    elif rank == 6 and cond > _COND_POOR:
-        findings.append(
-            Finding(
-                "warning",
-                f"the layout is poorly conditioned (condition number {_fmt(cond)}; up to 10 is good): "
-                f"measurement noise on {weakest} is amplified about {_fmt(cond)} times; "
-                "spread the sensors out and point them along different axes",
-                "condition",
-            )
-        )
-    elif rank == 6 and cond > _COND_GOOD:
-        findings.append(
-            Finding(
-                "warning",
-                f"the layout is only fairly conditioned (condition number {_fmt(cond)}; up to 10 is good): "
-                f"the least visible motion is {weakest}",
-                "condition",
-            )
-        )
-    elif rank == 6:
-        findings.append(Finding("info", f"the layout is well conditioned (condition number {_fmt(cond)})", "condition"))
-
-    # --- axes
-    comp = np.abs(dirs)
-    along = comp > AXIS_COS
-    counts = along.sum(axis=0)
-    oblique = int(p - along.any(axis=1).sum())
-    for a, name in enumerate("xyz"):
-        if counts[a] > 0:
-            continue
-        best = int(np.argmax(comp[:, a]))
-        if comp[best, a] < 0.05:
-            findings.append(
-                Finding(
-                    "error",
-                    f"no sensor has any component along {name}: translation along {name} cannot be seen; "
-                    f"point at least one sensor along {name}",
-                    "axis-missing",
-                )
-            )
-        else:
-            findings.append(
-                Finding(
-                    "warning",
-                    f"no sensor measures along {name} (within 30 degrees; the closest is sensor {best + 1}, "
-                    f"{_fmt(comp[best, a])} of its axis along {name}): translation along {name} is seen only "
-                    f"indirectly and less precisely; point at least one sensor along {name}",
-                    "axis-missing",
-                    (best + 1,),
-                )
-            )
-    findings.append(
-        Finding(
-            "info",
-            f"sensors along x: {counts[0]}, y: {counts[1]}, z: {counts[2]}, oblique: {oblique}",
-            "axis-counts",
-        )
-    )
-
-    # --- pairs: redundant and shared positions
-    dist = np.linalg.norm(local[:, None] - local[None], axis=2)
-    cosang = np.abs(dirs @ dirs.T)
-    shared_done: set[int] = set()
-    for i, j in combinations(range(p), 2):
-        if dist[i, j] <= close_tolerance and cosang[i, j] >= _PARALLEL_COS:
-            angle = math.degrees(math.acos(min(1.0, float(cosang[i, j]))))
-            findings.append(
-                Finding(
-                    "warning",
-                    f"{_names([i, j])} are {_with_unit(dist[i, j] * size, unit)} apart and measure almost the same "
-                    f"direction ({_fmt(angle)} degrees apart): the second adds little; "
-                    "point one along another axis or move it elsewhere on the body",
-                    "redundant-pair",
-                    (i + 1, j + 1),
-                )
-            )
-    for i in range(p):
-        if i in shared_done:
-            continue
-        group = [j for j in range(p) if dist[i, j] <= same_tolerance]
-        if len(group) > 1:
-            shared_done.update(group)
-            findings.append(
-                Finding(
-                    "info",
-                    f"{_names(group)} share one position (a triaxial mount?): fine, but together they see only "
-                    "the motion of that one point",
-                    "shared-position",
-                    tuple(g + 1 for g in group),
-                )
-            )
-
-    # --- nearly collinear groups
-    s_max = float(np.linalg.norm(t, 2)) if t.size else 0.0
-    label = np.arange(p)
-    for i, j in combinations(range(p), 2):
-        if dist[i, j] <= same_tolerance:
-            label[label == label[j]] = label[i]
-    for members, c, u, worst in _line_groups(local, line_tolerance):
-        distinct = np.unique(label[members]).size
-        if distinct < 3:
-            continue  # fewer than three distinct points: a cluster, reported as shared position
-        off = p - members.size
-        # how well the whole layout sees a rotation about that line (unit rotation, dimensionless frame)
-        x_line = np.concatenate([-np.cross(u, c), u])
-        seen = float(np.linalg.norm(t @ x_line) / np.linalg.norm(x_line))
-        line_cond = s_max / seen if seen > 0.0 else math.inf
-        move = _with_unit(max(0.25, 2.5 * line_tolerance) * size, unit)
-        point = frame.centre + size * c
-        where = f"(the line along {_vec(u)} through {_vec(point)}{' ' + unit if unit else ''}; "
-        where += f"the furthest is {_with_unit(worst * size, unit)} from it)"
-        if off == 0:
-            text = (
-                f"all sensors lie almost on one line {where}: rotation about that line is nearly invisible; "
-                f"move at least two of them off the line by at least {move}, on different sides"
-            )
-            severity: Severity = "warning"
-        elif line_cond > _COND_GOOD or (cond > _COND_GOOD and line_cond > 0.5 * cond):
-            text = (
-                f"{_names(members)} lie almost on one line {where}: rotations about that line are hard to see "
-                f"(only the other {off} sensor{'s see' if off > 1 else ' sees'} them); "
-                f"move {'one' if off >= 2 else 'two'} of them off the line by at least {move}"
-            )
-            severity = "warning"
-        elif distinct >= 4:
-            text = (
-                f"{_names(members)} lie almost on one line {where}: they do not see rotation about that line, "
-                f"which the other {off} sensors see well enough"
-            )
-            severity = "info"
-        else:
-            continue  # three points near a line, harmless: not worth a line of the report
-        findings.append(Finding(severity, text, "collinear", tuple(int(m) + 1 for m in members)))
-
-    findings.sort(key=lambda f: _SEVERITY_ORDER[f.severity])
-    return LayoutReport(
-        sensors=p,
-        rank=rank,
-        condition=cond,
-        axis_counts=(int(counts[0]), int(counts[1]), int(counts[2]), oblique),
-        weakest_motion=weakest,
-        findings=tuple(findings),
-    )
-
-
-def _none_if_inf(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
-
-
-def layout_report_to_dict(report: LayoutReport) -> dict[str, Any]:
-    """JSON-ready form of a :class:`LayoutReport`.
-
-    Returns
-    -------
-    dict
-        ``{"sensors", "rank", "condition" (None when infinite), "ok", "worst",
-        "axis_counts": {"x", "y", "z", "oblique"}, "weakest_motion",
-        "findings": [{"severity", "message", "code", "sensors"}]}``.
-    """
-    x, y, z, o = report.axis_counts
-    return {
-        "sensors": report.sensors,
-        "rank": report.rank,
-        "condition": _none_if_inf(report.condition),
-        "ok": report.ok,
-        "worst": report.worst,
-        "axis_counts": {"x": x, "y": y, "z": z, "oblique": o},
-        "weakest_motion": report.weakest_motion,
-        "findings": [
-            {"severity": f.severity, "message": f.message, "code": f.code, "sensors": list(f.sensors)}
-            for f in report.findings
-        ],
-    }
 
 
 # --------------------------------------------------------------------------- predicted uncertainty
@@ -559,17 +94,6 @@ class PredictedFigures:
     principal_moments_rel_std: Array
     condition: float
     failed: int
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form (lists and floats; infinite and NaN values as None)."""
-        return {
-            "score": _none_if_inf(self.score),
-            "center_of_gravity_std": [_none_if_inf(v) for v in self.center_of_gravity_std.tolist()],
-            "principal_moments_std": [_none_if_inf(v) for v in self.principal_moments_std.tolist()],
-            "principal_moments_rel_std": [_none_if_inf(v) for v in self.principal_moments_rel_std.tolist()],
-            "condition": _none_if_inf(self.condition),
-            "failed": self.failed,
-        }
 
 
 @dataclass(frozen=True)
@@ -683,14 +207,6 @@ def predict_uncertainty(
     return Prediction(figures, result.inertia.std, result)
 
 
-def prediction_to_dict(prediction: Prediction) -> dict[str, Any]:
-    """JSON-ready form of a :class:`Prediction`: the figures, ``inertia_std`` and the full uncertainty."""
-    out = prediction.figures.to_dict()
-    out["inertia_std"] = [[_none_if_inf(v) for v in row] for row in prediction.inertia_std.tolist()]
-    out["uncertainty"] = uncertainty_to_dict(prediction.uncertainty)
-    return out
-
-
 # --------------------------------------------------------------------------- sensor suggestions
 
 
@@ -793,15 +309,15 @@ def _figures_batch(
     layouts_dir: Array,
     shapes: CArray,
     poles: CArray,
-    normals: _Normals,
+    normals: StandardNormals,
     noise: NoiseLevels,
     damping_weight: float,
 ) -> list[PredictedFigures]:
     """Predicted figures of several layouts of the same size at once (common random numbers)."""
     n_lay, p = layouts_pos.shape[:2]
     draws = normals.mass.shape[0]
-    data = _apply_noise(normals, noise, layouts_pos, layouts_dir, poles, shapes, body.mass)
-    batch = identify_batch(
+    data = apply_noise(normals, noise, layouts_pos, layouts_dir, poles, shapes, body.mass)
+    batch = estimator.estimate(
         data.positions.reshape(-1, p, 3),
         data.directions.reshape(-1, p, 3),
         data.poles.reshape(-1, 6),
@@ -891,7 +407,7 @@ def suggest_sensors(
     -----
     The criterion is :attr:`PredictedFigures.score`. Each step evaluates every
     remaining candidate with the Monte Carlo of
-    :func:`~rigidid.core.uncertainty.identify_batch` (``k * draws``
+    :func:`~rigidid.core.estimator.estimate` (``k * draws``
     identifications per step, a few seconds for 80 candidates and 300 draws).
     While the layout cannot identify the body (rank below 6) the candidate
     that gives the best-conditioned layout is taken. Greedy choice is not
@@ -918,7 +434,7 @@ def suggest_sensors(
     p = pos.shape[0]
     everything = body_modes(body, np.vstack([pos, c_pos]), np.vstack([dirs, c_dir]))
     base_shapes, cand_shapes = everything.shapes[:p], everything.shapes[p:]
-    normals_all = _draw_normals(np.random.default_rng(seed), draws, p + add)
+    normals_all = draw_normals(np.random.default_rng(seed), draws, p + add)
 
     def figures_of(chosen: list[int], extra: NDArray[np.intp]) -> list[PredictedFigures]:
         n_extra = len(chosen) + (1 if extra.size else 0)
@@ -941,6 +457,7 @@ def suggest_sensors(
         return _figures_batch(body, lay_pos, lay_dir, lay_shp, everything.poles, normals, noise, damping_weight)
 
     baseline = figures_of([], np.zeros(0, dtype=np.intp))[0]
+    notices: list[Notice] = []
     chosen: list[int] = []
     steps: list[SuggestedSensor] = []
     for step in range(1, add + 1):
@@ -954,16 +471,17 @@ def suggest_sensors(
                 lay_p = np.vstack([pos, c_pos[chosen], c_pos[c]])
                 lay_d = np.vstack([dirs, c_dir[chosen], c_dir[c]])
                 s = np.linalg.svd(sensor_matrix(layout_frame(lay_p).to_local(lay_p), lay_d), compute_uv=False)
-                r = int(np.sum(s > 1e3 * max(lay_p.shape[0], 6) * np.finfo(float).eps * s[0]))
+                r = int(numerical_rank(s, lay_p.shape[0]))
                 ranks.append(r)
                 ratios.append(s[r - 1] / s[0] if r else 0.0)
             # most independent motions first, then the best conditioned
             order = np.lexsort((-np.array(ratios), -np.array(ranks)))
             if p + step >= 6:
-                warnings.warn(
-                    f"step {step}: no candidate gives a layout that identifies the body; chose by conditioning",
-                    IllConditionedWarning,
-                    stacklevel=2,
+                notices.append(
+                    Notice(
+                        IllConditionedWarning,
+                        f"step {step}: no candidate gives a layout that identifies the body; chose by conditioning",
+                    )
                 )
         else:
             order = np.argsort(scores, kind="stable")
@@ -972,47 +490,5 @@ def suggest_sensors(
         chosen.append(c_best)
         ranking = tuple((int(remaining[i]), float(scores[i])) for i in order)
         steps.append(SuggestedSensor(step, c_best, c_pos[c_best].copy(), c_dir[c_best].copy(), figs[best], ranking))
+    emit(notices)
     return SensorPlan(baseline, tuple(steps), c_pos, c_dir, noise, draws)
-
-
-def sensor_plan_to_dict(plan: SensorPlan, *, ranking: int = 5) -> dict[str, Any]:
-    """JSON-ready form of a :class:`SensorPlan`.
-
-    Parameters
-    ----------
-    plan : SensorPlan
-    ranking : int
-        How many of the best candidates of each step to list.
-
-    Returns
-    -------
-    dict
-        ``{"baseline": {figures}, "steps": [{"step", "candidate", "position",
-        "direction", "figures", "ranking": [{"candidate", "position",
-        "direction", "score"}]}], "noise", "draws"}``.
-    """
-
-    def entry(c: int, score: float) -> dict[str, Any]:
-        return {
-            "candidate": c,
-            "position": plan.candidate_positions[c].tolist(),
-            "direction": plan.candidate_directions[c].tolist(),
-            "score": _none_if_inf(score),
-        }
-
-    return {
-        "baseline": plan.baseline.to_dict(),
-        "steps": [
-            {
-                "step": s.step,
-                "candidate": s.candidate,
-                "position": s.position.tolist(),
-                "direction": s.direction.tolist(),
-                "figures": s.figures.to_dict(),
-                "ranking": [entry(c, v) for c, v in s.ranking[:ranking]],
-            }
-            for s in plan.steps
-        ],
-        "noise": plan.noise.as_dict(),
-        "draws": plan.draws,
-    }

@@ -16,7 +16,6 @@ References
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -25,10 +24,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.identify import Identification, identify
-from rigidid.core.uncertainty import Interval
-from rigidid.errors import IdentificationError, InputError, RigididWarning
+from rigidid.core.uncertainty import IntervalEstimate
+from rigidid.errors import IdentificationError, InputError
 
-__all__ = ["RecordSpread", "record_spread", "record_spread_to_dict"]
+__all__ = ["RecordSpread", "record_spread"]
 
 Array = NDArray[np.float64]
 
@@ -43,7 +42,7 @@ class RecordSpread:
         ``K``, the number of interleaved segments.
     used : int
         Segments whose modes and body could be identified.
-    center_of_gravity, inertia, principal_moments, stiffness_diagonal : Interval
+    center_of_gravity, inertia, principal_moments, stiffness_diagonal : IntervalEstimateEstimate
         Estimate from all the data; ``std`` = standard deviation of the segment
         estimates divided by ``sqrt(K)``; ``low, high`` = estimate -/+
         Student's ``t(used - 1)`` 97.5 % quantile times ``std``. Inertia,
@@ -54,10 +53,10 @@ class RecordSpread:
 
     segments: int
     used: int
-    center_of_gravity: Interval
-    inertia: Interval
-    principal_moments: Interval
-    stiffness_diagonal: Interval
+    center_of_gravity: IntervalEstimate
+    inertia: IntervalEstimate
+    principal_moments: IntervalEstimate
+    stiffness_diagonal: IntervalEstimate
     per_mass: bool
 
 
@@ -135,7 +134,7 @@ def record_spread(
     from rigidid.core.timedomain import estimate_modes
 
     if segments < 2:
-        raise InputError(f"need at least 2 segments, got {segments}", source="--resample")
+        raise InputError(f"need at least 2 segments, got {segments}", source="segments")
     pos = np.asarray(positions, dtype=float)
     dirs = normalise_directions(directions)
     t = sensor_matrix(layout_frame(pos).to_local(pos), dirs)
@@ -143,13 +142,14 @@ def record_spread(
     samples: dict[str, list[Array]] = {key: [] for key in _quantities(full)}
     for j in range(segments):
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RigididWarning)
-                est = estimate_modes(
-                    [a[j::segments] for a in arrays], dt * segments, n_modes=n_modes, **(estimate_options or {})
-                )
-                keep = select_rigid_modes(t, est.shapes) if est.shapes.shape[1] > 6 else np.arange(6)
-                result = identify(pos, dirs, est.poles[keep], est.shapes[:, keep], mass=mass, method=full.method)  # type: ignore[arg-type]
+            est = estimate_modes(
+                [a[j::segments] for a in arrays], dt * segments, n_modes=n_modes, **(estimate_options or {})
+            )
+            keep = select_rigid_modes(t, est.shapes) if est.shapes.shape[1] > 6 else np.arange(6)
+            result = identify(
+                pos, dirs, est.poles[keep], est.shapes[:, keep], mass=mass,
+                method=full.method, warn=False,  # type: ignore[arg-type]
+            )  # fmt: skip
         except IdentificationError:
             continue
         for key, value in _quantities(result).items():
@@ -157,26 +157,12 @@ def record_spread(
     used = len(samples["center_of_gravity"])
     if used < 2:
         raise IdentificationError(
-            f"only {used} of {segments} record segments could be identified; use fewer segments (--resample) "
+            f"only {used} of {segments} record segments could be identified; use fewer segments (`segments`) "
             "or records sampled faster"
         )
     factor = float(stdtrit(used - 1, 0.975))
     intervals = {}
     for key, estimate in _quantities(full).items():
         std = np.std(np.stack(samples[key]), axis=0, ddof=1) / math.sqrt(segments)
-        intervals[key] = Interval(estimate, std, estimate - factor * std, estimate + factor * std)
+        intervals[key] = IntervalEstimate(estimate, std, estimate - factor * std, estimate + factor * std)
     return RecordSpread(segments=segments, used=used, per_mass=full.mass is None, **intervals)
-
-
-def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:
-    """JSON-ready form: per quantity ``{"estimate", "std", "ci95"}``, and ``method``, ``segments``, ``used``."""
-    suffix = "_per_mass" if spread.per_mass else ""
-    return {
-        "method": "interleaved record segments",
-        "segments": spread.segments,
-        "used": spread.used,
-        "center_of_gravity": spread.center_of_gravity.to_dict(),
-        ("inertia_per_mass" if spread.per_mass else "inertia_tensor"): spread.inertia.to_dict(),
-        "principal_moments" + suffix: spread.principal_moments.to_dict(),
-        "stiffness_diagonal" + suffix: spread.stiffness_diagonal.to_dict(),
-    }

@@ -11,9 +11,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.linalg import solve_rows
 from rigidid.errors import IdentificationError
 
-__all__ = ["project_rigid", "rigid_fit_residuals", "select_rigid_modes"]
+__all__ = ["project_rigid", "project_rigid_batch", "rigid_fit_residuals", "select_rigid_modes"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -25,7 +26,8 @@ def project_rigid(transformation: ArrayLike, shapes: ArrayLike) -> tuple[CArray,
     Parameters
     ----------
     transformation : array_like, shape (p, 6)
-        Sensor transformation ``T_mo`` (see :func:`rigidid.core.geometry.sensor_matrix`).
+        Sensor transformation ``T_mo`` of rank 6 (see
+        :func:`rigidid.core.geometry.sensor_matrix`).
     shapes : array_like of complex, shape (p, n)
         Measured mode shapes, one column per mode.
 
@@ -37,18 +39,63 @@ def project_rigid(transformation: ArrayLike, shapes: ArrayLike) -> tuple[CArray,
         ``|psi - T T^+ psi| / |psi|`` per mode: 0 for exact rigid-body motion,
         near 1 for a shape rigid motion cannot explain.
 
+    Raises
+    ------
+    IdentificationError
+        If `transformation` has rank below 6.
+
     Notes
     -----
     With ``p = 6`` every shape fits exactly and the residual carries no
-    information; it needs ``p > 6``.
+    information; it needs ``p > 6``. Computed by :func:`project_rigid_batch`.
+
+    Examples
+    --------
+    Six sensors reading a pure x translation:
+
+    >>> from rigidid.core.geometry import sensor_matrix
+    >>> pos = np.array([[1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1.0]])
+    >>> dirs = np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0.0]])
+    >>> t = sensor_matrix(pos, dirs)
+    >>> coords, residual = project_rigid(t, t @ np.array([[1.0], [0], [0], [0], [0], [0]]))
+    >>> (coords.real.round(12) + 0.0).ravel().tolist(), residual.round(12).tolist()
+    ([1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0])
     """
     t = np.asarray(transformation, dtype=float)
     psi = np.asarray(shapes, dtype=complex)
-    coords, *_ = np.linalg.lstsq(t.astype(complex), psi, rcond=None)
-    misfit = np.linalg.norm(psi - t @ coords, axis=0)
-    norms = np.linalg.norm(psi, axis=0)
+    coords, residual, ok = project_rigid_batch(t[None], psi[None])
+    if not ok[0]:
+        raise IdentificationError("the sensor layout has rank below 6; rigid-body motion needs rank 6")
+    return coords[0], residual[0]
+
+
+def project_rigid_batch(transformation: Array, shapes: CArray) -> tuple[CArray, Array, NDArray[np.bool_]]:
+    """:func:`project_rigid` for a stack of tests: QR of each ``T``, real and imaginary parts together.
+
+    Parameters
+    ----------
+    transformation : ndarray, shape (B, p, 6)
+    shapes : ndarray of complex, shape (B, p, n)
+
+    Returns
+    -------
+    coordinates : ndarray of complex, shape (B, 6, n)
+    residual : ndarray, shape (B, n)
+    ok : ndarray of bool, shape (B,)
+        False where ``T`` is singular (its coordinates are NaN).
+    """
+    n = shapes.shape[-1]
+    rhs = np.concatenate([shapes.real, shapes.imag], axis=-1)
+    if transformation.shape[1] == 6:
+        sol, ok = solve_rows(transformation, rhs)
+    else:
+        q, r = np.linalg.qr(transformation)
+        sol, ok = solve_rows(r, np.swapaxes(q, -1, -2) @ rhs)
+    coords = sol[..., :n] + 1j * sol[..., n:]
+    misfit = np.linalg.norm(shapes - transformation @ coords, axis=-2)
+    norms = np.linalg.norm(shapes, axis=-2)
     residual = np.divide(misfit, norms, out=np.ones_like(misfit), where=norms > 0)
-    return coords, residual
+    return coords, residual, ok
 
 
 def rigid_fit_residuals(transformation: ArrayLike, shapes: ArrayLike) -> Array:
@@ -95,7 +142,9 @@ def select_rigid_modes(transformation: ArrayLike, shapes: ArrayLike, count: int 
     t = np.asarray(transformation, dtype=float)
     psi = np.asarray(shapes, dtype=complex)
     if t.shape[0] <= 6:
-        raise IdentificationError("choosing the rigid-body modes needs more than six sensors; pass --modes")
+        raise IdentificationError(
+            "choosing the rigid-body modes needs more than six sensors; name the six modes (`modes_used`)"
+        )
     if psi.shape[1] < count:
         raise IdentificationError(f"need at least {count} modes, got {psi.shape[1]}")
     residual = rigid_fit_residuals(t, psi)

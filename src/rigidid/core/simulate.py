@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import sensor_matrix, skew
+from rigidid.core.statespace import state_matrix
 from rigidid.errors import InputError
 
 __all__ = ["Body", "Modes", "Mount", "add_noise", "body_modes", "random_body", "random_layout", "system_matrices"]
@@ -151,13 +152,10 @@ def body_modes(body: Body, positions: ArrayLike, directions: ArrayLike) -> Modes
         If the system is not positive definite and underdamped (a mode without
         an oscillating pair, or unstable).
     """
-    m, k, c = system_matrices(body)
     try:
-        mk = np.linalg.solve(m, k)
-        mc = np.linalg.solve(m, c)
+        a = state_matrix(*system_matrices(body))
     except np.linalg.LinAlgError as exc:
         raise InputError("the mass matrix is singular") from exc
-    a = np.block([[-mc, -mk], [np.eye(6), np.zeros((6, 6))]])
     mu, vec = np.linalg.eig(a)
     upper = mu.imag > 1e-9 * np.abs(mu).max()
     if upper.sum() != 6 or np.any(mu.real > 0.0):

@@ -11,13 +11,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.linalg import solve_rows
 from rigidid.errors import IdentificationError, InputError
 
 __all__ = [
+    "mac_matrix",
     "modal_from_poles",
     "poles_from_modal",
     "state_matrices",
+    "state_matrices_batch",
     "state_matrices_paper",
+    "state_matrix",
 ]
 
 Array = NDArray[np.float64]
@@ -106,22 +110,103 @@ def state_matrices(poles: ArrayLike, shapes: ArrayLike) -> tuple[Array, Array]:
     -----
     Exact for non-proportional damping, unlike eqs. (23)-(26), and invariant to
     the scaling of each mode shape. ``V^-1`` is never formed: the product is
-    obtained with one linear solve.
+    obtained with one linear solve (:func:`state_matrices_batch`).
+
+    Examples
+    --------
+    One undamped mode at 1 rad/s: ``M^-1 K = 1``, ``M^-1 C = 0``.
+
+    >>> k, c = state_matrices([1j], [[1.0]])
+    >>> round(float(k[0, 0]), 12), abs(round(float(c[0, 0]), 12))
+    (1.0, 0.0)
     """
     lam = np.asarray(poles, dtype=complex).ravel()
     phi = np.asarray(shapes, dtype=complex)
     _check_square(lam, phi)
-    n = lam.shape[0]
-    mu = np.concatenate([lam, lam.conj()])
-    ell = np.hstack([phi, phi.conj()])
-    v = np.vstack([ell * mu, ell])
+    q, p, ok = state_matrices_batch(lam[None], phi[None])
+    if not ok[0]:
+        raise IdentificationError("the modes do not span the rigid-body motion (singular modal matrix)")
+    return q[0], p[0]
+
+
+def state_matrices_batch(poles: CArray, shapes: CArray) -> tuple[Array, Array, NDArray[np.bool_]]:
+    """Eq. (19) of [1] for a stack of tests; see :func:`state_matrices`.
+
+    Parameters
+    ----------
+    poles : ndarray of complex, shape (B, n)
+    shapes : ndarray of complex, shape (B, n, n)
+
+    Returns
+    -------
+    stiffness, damping : ndarray, shape (B, n, n)
+        ``M^-1 K`` and ``M^-1 C`` of each test (NaN where it failed).
+    ok : ndarray of bool, shape (B,)
+        False where ``V`` is singular or the result not finite.
+    """
+    n = poles.shape[-1]
+    mu = np.concatenate([poles, poles.conj()], axis=-1)
+    ell = np.concatenate([shapes, shapes.conj()], axis=-1)
+    v = np.concatenate([ell * mu[:, None, :], ell], axis=-2)
     # A = V diag(mu) V^-1  <=>  A^T = V^-T (V diag(mu))^T
-    try:
-        a_t = np.linalg.solve(v.T, (v * mu).T)
-    except np.linalg.LinAlgError as exc:
-        raise IdentificationError("the modes do not span the rigid-body motion (singular modal matrix)") from exc
-    a = a_t.T.real
-    return -a[:n, n:].copy(), -a[:n, :n].copy()
+    a_t, ok = solve_rows(np.swapaxes(v, -1, -2), np.swapaxes(v * mu[:, None, :], -1, -2))
+    a = np.swapaxes(a_t, -1, -2).real
+    ok &= np.all(np.isfinite(a), axis=(-1, -2))
+    return np.ascontiguousarray(-a[:, :n, n:]), np.ascontiguousarray(-a[:, :n, :n]), ok
+
+
+def state_matrix(mass: ArrayLike, stiffness: ArrayLike, damping: ArrayLike) -> Array:
+    """First-order state matrix ``[[-M^-1 C, -M^-1 K], [I, 0]]`` of eq. (1) of [1].
+
+    Parameters
+    ----------
+    mass, stiffness, damping : array_like, shape (n, n)
+        ``M`` (regular), ``K`` and ``C`` in the same coordinates.
+
+    Returns
+    -------
+    ndarray, shape (2 n, 2 n)
+        Its eigenvalues are the poles; the lower half of an eigenvector is the
+        mode shape, the upper half the pole times it.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If ``M`` is singular.
+
+    Examples
+    --------
+    >>> state_matrix([[2.0]], [[8.0]], [[0.0]]).tolist()
+    [[-0.0, -4.0], [1.0, 0.0]]
+    """
+    m = np.asarray(mass, dtype=float)
+    n = m.shape[0]
+    rhs = np.hstack([np.asarray(damping, dtype=float), np.asarray(stiffness, dtype=float)])
+    return np.vstack([-np.linalg.solve(m, rhs), np.hstack([np.eye(n), np.zeros((n, n))])])
+
+
+def mac_matrix(a: CArray, b: CArray) -> Array:
+    """Modal assurance criterion between the columns of two shape matrices.
+
+    Parameters
+    ----------
+    a : ndarray of complex, shape (r, k)
+    b : ndarray of complex, shape (r, l)
+
+    Returns
+    -------
+    ndarray, shape (k, l)
+        ``|a_i^H b_j|^2 / (|a_i|^2 |b_j|^2)``, in ``[0, 1]`` (0 for a zero shape).
+
+    Examples
+    --------
+    >>> mac_matrix(np.array([[1.0], [1j]]), np.array([[2.0], [2j]])).round(12).tolist()
+    [[1.0]]
+    """
+    num = np.abs(a.conj().T @ b) ** 2
+    den = np.outer(np.sum(np.abs(a) ** 2, axis=0), np.sum(np.abs(b) ** 2, axis=0))
+    result: Array = np.divide(num, den, out=np.zeros_like(num), where=den > 0.0)
+    return result
 
 
 def state_matrices_paper(poles: ArrayLike, shapes: ArrayLike) -> tuple[Array, Array]:

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import normalise_directions, sensor_matrix
 from rigidid.core.simulate import Body, system_matrices
+from rigidid.core.statespace import state_matrix
 from rigidid.errors import InputError
 
 __all__ = ["impulse_records", "record_time"]
@@ -128,13 +129,10 @@ def impulse_records(
 
     m, k, c = system_matrices(body)
     try:
-        mk = np.linalg.solve(m, k)
-        mc = np.linalg.solve(m, c)
-        minv = np.linalg.inv(m)
+        a = state_matrix(m, k, c)
     except np.linalg.LinAlgError as exc:
         raise InputError("the mass matrix is singular") from exc
-    out = np.hstack([-mc, -mk])
-    a = np.vstack([out, np.hstack([np.eye(6), np.zeros((6, 6))])])
+    out = a[:6]
     mu, vec = np.linalg.eig(a)
     if np.linalg.cond(vec) > 1e10:
         raise InputError("the state matrix of the body has no complete set of eigenvectors")
@@ -158,7 +156,7 @@ def impulse_records(
             )
         f = f / norm
         force = np.concatenate([f, np.cross(r_f - g, f)])
-        z0 = np.concatenate([minv @ force, np.zeros(6)])
+        z0 = np.concatenate([np.linalg.solve(m, force), np.zeros(6)])
         b = np.linalg.solve(vec, z0.astype(complex))
         weights = output * b
         record = np.zeros((n_pre + n_decay, pos.shape[0]))

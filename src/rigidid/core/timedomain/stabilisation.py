@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.statespace import mac_matrix
+
 __all__ = ["Cluster", "Criteria", "OrderPoles", "cluster_stable", "mac_matrix", "stabilise"]
 
 Array = NDArray[np.float64]
@@ -111,25 +113,6 @@ class Cluster:
     count: int
     spread: float
     order: int
-
-
-def mac_matrix(a: CArray, b: CArray) -> Array:
-    """Modal assurance criterion between the columns of two shape matrices.
-
-    Parameters
-    ----------
-    a : ndarray of complex, shape (r, k)
-    b : ndarray of complex, shape (r, l)
-
-    Returns
-    -------
-    ndarray, shape (k, l)
-        ``|a_i^H b_j|^2 / (|a_i|^2 |b_j|^2)``, in ``[0, 1]`` (0 for a zero shape).
-    """
-    num = np.abs(a.conj().T @ b) ** 2
-    den = np.outer(np.sum(np.abs(a) ** 2, axis=0), np.sum(np.abs(b) ** 2, axis=0))
-    result: Array = np.divide(num, den, out=np.zeros_like(num), where=den > 0.0)
-    return result
 
 
 def _physical(poles: CArray, band: tuple[float, float], max_damping: float) -> BoolArray:

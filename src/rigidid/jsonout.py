@@ -1,0 +1,345 @@
+"""The JSON forms of rigidid's results: the result JSON of ``docs/FORMATS.md`` and its parts.
+
+Every function turns a result object of :mod:`rigidid.api` or :mod:`rigidid.core`
+into plain dicts, lists, floats and strings, ready for :func:`json.dumps`.
+Non-finite numbers become ``None`` where a field allows it. Nothing here prints
+or writes; :mod:`rigidid.render` makes the tables, :mod:`rigidid.reporting`
+the HTML report.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid import __version__
+
+if TYPE_CHECKING:
+    from rigidid.api import IdentifyResult, PlanResult
+    from rigidid.core.layout_check import LayoutReport
+    from rigidid.core.noise import NoiseLevels
+    from rigidid.core.plan import PredictedFigures, Prediction, SensorPlan
+    from rigidid.core.record_spread import RecordSpread
+    from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
+
+__all__ = [
+    "estimate_to_dict",
+    "interval_to_dict",
+    "layout_report_to_dict",
+    "noise_to_dict",
+    "plan_to_dict",
+    "predicted_figures_to_dict",
+    "prediction_to_dict",
+    "record_spread_to_dict",
+    "result_to_dict",
+    "sensor_plan_to_dict",
+    "uncertainty_to_dict",
+]
+
+
+def _none_if_inf(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _plain(a: NDArray[np.float64]) -> Any:
+    """Nested lists of Python floats; NaN and infinities become None (valid JSON)."""
+    return _nan_none(np.asarray(a, dtype=float).tolist())
+
+
+def _nan_none(x: Any) -> Any:
+    if isinstance(x, list):
+        return [_nan_none(v) for v in x]
+    return _none_if_inf(float(x))
+
+
+def _rows(a: NDArray[np.float64] | None) -> list[list[float]] | None:
+    return None if a is None else [[float(v) for v in row] for row in a]
+
+
+def _vec(a: NDArray[np.float64] | None) -> list[float] | None:
+    return None if a is None else [float(v) for v in a]
+
+
+def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
+    """The result JSON of FORMATS.md (validated by :class:`rigidid.models.ResultFile`).
+
+    Parameters
+    ----------
+    result : IdentifyResult
+
+    Returns
+    -------
+    dict
+        Plain lists and floats, ready for :func:`json.dumps`.
+    """
+    ident = result.identification
+    diag = ident.diagnostics
+    modes = [
+        {
+            "mode": label,
+            "frequency_hz": float(ident.frequency_hz[k]),
+            "damping_ratio": float(ident.damping_ratio[k]),
+            "rigid_fit_residual": float(diag.rigid_fit_residual[k]),
+            "model_frequency_hz": float(diag.model_frequency_hz[k]),
+            "model_damping_ratio": float(diag.model_damping_ratio[k]),
+            "model_mac": float(diag.model_mac[k]),
+        }
+        for k, label in enumerate(result.modes_used)
+    ]
+    candidates = None
+    if result.candidate_residuals is not None:
+        candidates = [{"mode": label, "rigid_fit_residual": r} for label, r in result.candidate_residuals.items()]
+    from rigidid.core.energy import kinetic_energy_distribution, kinetic_energy_distribution_principal
+
+    energy = {
+        "dof": ["x", "y", "z", "rx", "ry", "rz"],
+        "principal_dof": ["x", "y", "z", "r1", "r2", "r3"],
+        "modes": list(result.modes_used),
+        "cg_axes": _rows(kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)),
+        "principal_axes": _rows(kinetic_energy_distribution_principal(ident.inertia_per_mass, ident.mode_shapes_cg)),
+    }
+    out: dict[str, Any] = {
+        "rigidid_version": __version__,
+        "method": ident.method,
+        "units": {"length": result.units["length"], "mass": result.units["mass"], "time": "s"},
+        "mass": ident.mass,
+        "center_of_gravity": _vec(ident.center_of_gravity),
+        "inertia_per_mass": _rows(ident.inertia_per_mass),
+        "inertia_tensor": _rows(ident.inertia_tensor),
+        "principal_moments": _vec(ident.principal_moments),
+        "principal_moments_per_mass": _vec(ident.principal_moments_per_mass),
+        "principal_axes": _rows(ident.principal_axes),
+        "stiffness_per_mass": _rows(ident.stiffness_per_mass),
+        "stiffness_matrix": _rows(ident.stiffness_matrix),
+        "damping_per_mass": _rows(ident.damping_per_mass),
+        "damping_matrix": _rows(ident.damping_matrix),
+        "modes_used": list(result.modes_used),
+        "modes_selected": result.selection,
+        "energy_distribution": energy,
+        "diagnostics": {
+            "layout_condition": diag.layout_condition,
+            "layout_rank": diag.layout_rank,
+            "structure_residual": diag.structure_residual,
+            "inertia_observability": diag.inertia_observability,
+            "modes": modes,
+            "candidate_modes": candidates,
+            "warnings": list(diag.warnings),
+        },
+    }
+    if result.uncertainty is not None:
+        out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
+    if result.record_spread is not None:
+        out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
+    return out
+
+
+def noise_to_dict(noise: NoiseLevels) -> dict[str, float]:
+    """The noise levels: ``{"frequency", "damping", "shape", "position", "angle_deg", "mass"}``."""
+    return {
+        "frequency": noise.frequency,
+        "damping": noise.damping,
+        "shape": noise.shape,
+        "position": noise.position,
+        "angle_deg": noise.angle_deg,
+        "mass": noise.mass,
+    }
+
+
+def interval_to_dict(interval: IntervalEstimate) -> dict[str, Any]:
+    """``{"estimate", "std", "ci95"}`` as nested lists of floats; ``ci95`` pairs ``[low, high]``."""
+    ci = np.stack([interval.low, interval.high], axis=-1)
+    return {"estimate": _plain(interval.estimate), "std": _plain(interval.std), "ci95": _plain(ci)}
+
+
+def uncertainty_to_dict(result: Uncertainty) -> dict[str, Any]:
+    """JSON form of Monte Carlo intervals (:func:`rigidid.core.uncertainty.propagate`).
+
+    Returns
+    -------
+    dict
+        ``{"center_of_gravity": {"estimate": [3], "std": [3], "ci95": [[lo, hi] x 3]},
+        "inertia_tensor": {... 3x3, ci95 3x3x2}, "principal_moments": {...},
+        "stiffness_diagonal": {...}, "damping_diagonal": {...}, "per_mass": bool,
+        "draws": int, "failed": int, "implausible": int, "seed": int | None,
+        "noise": {...}}``. Without a mass the keys of the per-mass quantities
+        end in ``_per_mass`` (``"inertia_per_mass"``,
+        ``"principal_moments_per_mass"``, ``"stiffness_diagonal_per_mass"``,
+        ``"damping_diagonal_per_mass"``), as the attributes of
+        :class:`~rigidid.core.identify.Identification`.
+    """
+    suffix = "_per_mass" if result.per_mass else ""
+    inertia_key = "inertia_per_mass" if result.per_mass else "inertia_tensor"
+    return {
+        "center_of_gravity": interval_to_dict(result.center_of_gravity),
+        inertia_key: interval_to_dict(result.inertia),
+        "principal_moments" + suffix: interval_to_dict(result.principal_moments),
+        "stiffness_diagonal" + suffix: interval_to_dict(result.stiffness_diagonal),
+        "damping_diagonal" + suffix: interval_to_dict(result.damping_diagonal),
+        "per_mass": result.per_mass,
+        "draws": result.draws,
+        "failed": result.failed,
+        "implausible": result.implausible,
+        "seed": result.seed,
+        "noise": noise_to_dict(result.noise),
+    }
+
+
+def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:
+    """JSON form of record-segment intervals: per quantity ``{"estimate", "std", "ci95"}``, and
+    ``method``, ``segments``, ``used``."""
+    suffix = "_per_mass" if spread.per_mass else ""
+    return {
+        "method": "interleaved record segments",
+        "segments": spread.segments,
+        "used": spread.used,
+        "center_of_gravity": interval_to_dict(spread.center_of_gravity),
+        ("inertia_per_mass" if spread.per_mass else "inertia_tensor"): interval_to_dict(spread.inertia),
+        "principal_moments" + suffix: interval_to_dict(spread.principal_moments),
+        "stiffness_diagonal" + suffix: interval_to_dict(spread.stiffness_diagonal),
+    }
+
+
+def layout_report_to_dict(report: LayoutReport) -> dict[str, Any]:
+    """JSON form of a layout check.
+
+    Returns
+    -------
+    dict
+        ``{"sensors", "rank", "condition" (None when infinite), "ok", "worst",
+        "axis_counts": {"x", "y", "z", "oblique"}, "weakest_motion",
+        "findings": [{"severity", "message", "code", "sensors"}]}``.
+    """
+    x, y, z, o = report.axis_counts
+    return {
+        "sensors": report.sensors,
+        "rank": report.rank,
+        "condition": _none_if_inf(report.condition),
+        "ok": report.ok,
+        "worst": report.worst,
+        "axis_counts": {"x": x, "y": y, "z": z, "oblique": o},
+        "weakest_motion": report.weakest_motion,
+        "findings": [
+            {"severity": f.severity, "message": f.message, "code": f.code, "sensors": list(f.sensors)}
+            for f in report.findings
+        ],
+    }
+
+
+def predicted_figures_to_dict(figures: PredictedFigures) -> dict[str, Any]:
+    """JSON form of predicted figures (lists and floats; infinite and NaN values as None)."""
+    return {
+        "score": _none_if_inf(figures.score),
+        "center_of_gravity_std": _plain(figures.center_of_gravity_std),
+        "principal_moments_std": _plain(figures.principal_moments_std),
+        "principal_moments_rel_std": _plain(figures.principal_moments_rel_std),
+        "condition": _none_if_inf(figures.condition),
+        "failed": figures.failed,
+    }
+
+
+def prediction_to_dict(prediction: Prediction) -> dict[str, Any]:
+    """JSON form of a prediction: the figures, ``inertia_std`` and the full uncertainty."""
+    out = predicted_figures_to_dict(prediction.figures)
+    out["inertia_std"] = _plain(prediction.inertia_std)
+    out["uncertainty"] = uncertainty_to_dict(prediction.uncertainty)
+    return out
+
+
+def sensor_plan_to_dict(plan: SensorPlan, *, ranking: int = 5) -> dict[str, Any]:
+    """JSON form of sensor suggestions.
+
+    Parameters
+    ----------
+    plan : SensorPlan
+    ranking : int
+        How many of the best candidates of each step to list.
+
+    Returns
+    -------
+    dict
+        ``{"baseline": {figures}, "steps": [{"step", "candidate", "position",
+        "direction", "figures", "ranking": [{"candidate", "position",
+        "direction", "score"}]}], "noise", "draws"}``.
+    """
+
+    def entry(c: int, score: float) -> dict[str, Any]:
+        return {
+            "candidate": c,
+            "position": plan.candidate_positions[c].tolist(),
+            "direction": plan.candidate_directions[c].tolist(),
+            "score": _none_if_inf(score),
+        }
+
+    return {
+        "baseline": predicted_figures_to_dict(plan.baseline),
+        "steps": [
+            {
+                "step": s.step,
+                "candidate": s.candidate,
+                "position": s.position.tolist(),
+                "direction": s.direction.tolist(),
+                "figures": predicted_figures_to_dict(s.figures),
+                "ranking": [entry(c, v) for c, v in s.ranking[:ranking]],
+            }
+            for s in plan.steps
+        ],
+        "noise": noise_to_dict(plan.noise),
+        "draws": plan.draws,
+    }
+
+
+def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
+    """JSON form of ``rigidid plan``: units, layout findings, prediction and suggestions (null when absent)."""
+    return {
+        "rigidid_version": __version__,
+        "units": {**plan.units, "time": "s"},
+        "layout": layout_report_to_dict(plan.report),
+        "prediction": None if plan.prediction is None else prediction_to_dict(plan.prediction),
+        "suggestions": None if plan.suggestions is None else sensor_plan_to_dict(plan.suggestions),
+    }
+
+
+def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
+    """JSON form of a modal estimation from records, with its stabilisation diagram.
+
+    Returns
+    -------
+    dict
+        ``{"method", "sample_interval", "decimation", "band", "channels_fitted",
+        "adequate_order", "impacts": [{"onset", "peak", "start"}], "modes":
+        [{"mode", "frequency_hz", "damping_ratio", "stable_count",
+        "model_order"}], "stabilisation": [{"order", "frequency_hz",
+        "damping_ratio", "stable"}]}``.
+    """
+    return {
+        "method": estimate.method,
+        "sample_interval": estimate.sample_interval,
+        "decimation": estimate.decimation,
+        "band": list(estimate.band),
+        "channels_fitted": estimate.channels_fitted,
+        "adequate_order": estimate.adequate_order,
+        "impacts": [{"onset": i.onset, "peak": i.peak, "start": i.start} for i in estimate.impacts],
+        "modes": [
+            {
+                "mode": k + 1,
+                "frequency_hz": float(estimate.frequency_hz[k]),
+                "damping_ratio": float(estimate.damping_ratio[k]),
+                "stable_count": int(estimate.stable_count[k]),
+                "model_order": int(estimate.model_order[k]),
+            }
+            for k in range(len(estimate.frequency_hz))
+        ],
+        "stabilisation": [
+            {
+                "order": entry.order,
+                "frequency_hz": _vec(entry.frequency_hz),
+                "damping_ratio": _vec(entry.damping_ratio),
+                "stable": [bool(v) for v in entry.stable],
+            }
+            for entry in estimate.diagram
+        ],
+    }
