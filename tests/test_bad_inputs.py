@@ -88,5 +88,5 @@ def test_more_modes_than_six_with_six_sensors_asks_for_modes_option() -> None:
         table.sensor_ids,
         np.hstack([table.shapes, table.shapes[:, :1]]),
     )
-    with pytest.raises(InputError, match="pass --modes"):
+    with pytest.raises(InputError, match="`modes_used`"):
         api.identify(layout, seven)

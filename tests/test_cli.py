@@ -145,3 +145,41 @@ def test_help_and_version() -> None:
     assert out.returncode == 0 and "identify" in out.stdout and "simulate" in out.stdout
     version = run("--version")
     assert version.returncode == 0 and version.stdout.startswith("rigidid ")
+
+
+def test_errors_name_the_option_where_the_api_names_its_parameter(tmp_path: Path) -> None:
+    """The API says `modes_used`; the command line says --modes (one mapping, in cli._FLAGS)."""
+    text = (PAPER / "modes.csv").read_text()
+    extra = [line.replace("1,", "7,", 1) for line in text.splitlines()[1:7]]
+    seven = tmp_path / "seven.csv"
+    seven.write_text(text + "\n".join(extra) + "\n")
+    out = run("identify", PAPER / "layout.json", seven)
+    assert out.returncode == 2
+    assert "--modes" in out.stderr and "modes_used" not in out.stderr
+    few = run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--uncertainty", "1")
+    assert few.returncode == 2
+    assert few.stderr.startswith("rigidid: error: --uncertainty: need at least 2 draws")
+
+
+def test_warnings_come_before_the_error_they_led_to(tmp_path: Path) -> None:
+    """A warning raised before an identification error is printed, and first (it was lost before)."""
+    from rigidid.core.simulate import body_modes
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.io.files import ModeTable, modes_csv_text
+
+    from .bodies import flat_layout_on_symmetric_mounts
+
+    body, pos, dirs = flat_layout_on_symmetric_mounts()
+    modes = body_modes(body, pos, dirs)
+    f, z = np.abs(modes.poles) / (2 * np.pi), -modes.poles.real / np.abs(modes.poles)
+    ids = [str(i + 1) for i in range(len(pos))]
+    write_text_atomic(tmp_path / "m.csv", modes_csv_text(ModeTable.numbered(f, z, ids, modes.shapes), digits=17))
+    rows = zip(ids, pos, dirs, strict=True)
+    sensors = [{"id": i, "position": p.tolist(), "direction": d.tolist()} for i, p, d in rows]
+    layout = {"units": {"length": "m", "mass": "kg"}, "sensors": sensors}
+    (tmp_path / "layout.json").write_text(json.dumps(layout))
+    out = run("identify", tmp_path / "layout.json", tmp_path / "m.csv")
+    assert out.returncode == 1
+    lines = out.stderr.splitlines()
+    assert lines[0].startswith("rigidid: warning: sensor layout is ill-conditioned"), out.stderr
+    assert lines[-1].startswith("rigidid: error: the inertia is not observable"), out.stderr

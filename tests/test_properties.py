@@ -10,9 +10,10 @@ from hypothesis import strategies as st
 
 from rigidid.core.identify import Identification
 from rigidid.core.identify import identify as _identify
-from rigidid.core.simulate import add_noise, body_modes, random_body, random_layout
+from rigidid.core.simulate import add_noise, body_modes
 from rigidid.errors import RigididWarning
 
+from .bodies import random_body, random_layout
 from .tolerances import EXACT_REL
 
 seeds = st.integers(min_value=0, max_value=2**31 - 1)

@@ -158,10 +158,10 @@ def _choose_modes(
         unknown = [m for m in labels if m not in modes.labels]
         if unknown:
             raise InputError(
-                f"mode {unknown[0]} is not in the modes file (it has {list(modes.labels)})", source="--modes"
+                f"mode {unknown[0]} is not in the modes file (it has {list(modes.labels)})", source="modes_used"
             )
         if len(labels) != 6 or len(set(labels)) != 6:
-            raise InputError(f"give six different mode labels, got {list(labels)}", source="--modes")
+            raise InputError(f"give six different mode labels, got {list(labels)}", source="modes_used")
         return labels, "given", None
     n = len(modes.labels)
     if n < 6:
@@ -171,7 +171,7 @@ def _choose_modes(
     if transformation.shape[0] <= 6:
         raise InputError(
             f"{n} modes given and only {transformation.shape[0]} sensors: with six sensors every shape fits "
-            "rigid-body motion, so the rigid modes cannot be chosen; pass --modes",
+            "rigid-body motion, so the rigid modes cannot be chosen; name them (`modes_used`)",
             source=source,
         )
     chosen = tuple(modes.labels[i] for i in select_rigid_modes(transformation, modes.shapes))
@@ -232,6 +232,8 @@ def identify(
     """
     from rigidid.core.geometry import layout_frame, sensor_matrix
 
+    if uncertainty and uncertainty < 2:
+        raise InputError(f"need at least 2 draws, got {uncertainty}", source="uncertainty")
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     source = None if isinstance(modes, ModeTable) else str(modes)
     table = modes if isinstance(modes, ModeTable) else load_modes(modes, lay)
@@ -250,8 +252,6 @@ def identify(
         from rigidid.core.noise import estimate_noise
         from rigidid.core.uncertainty import propagate
 
-        if uncertainty < 2:
-            raise InputError(f"need at least 2 draws, got {uncertainty}", source="--uncertainty")
         if isinstance(noise, Mapping) or noise is None:
             levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
         else:
@@ -329,7 +329,7 @@ def simulate(
     if frequency_noise or damping_noise or shape_noise:
         modes = add_noise(modes, frequency=frequency_noise, damping=damping_noise, shape=shape_noise, seed=seed)
     f, z = modal_from_poles(modes.poles)
-    return ModeTable(tuple(range(1, 7)), f, z, ids, modes.shapes)
+    return ModeTable.numbered(f, z, ids, modes.shapes)
 
 
 @dataclass(frozen=True)
@@ -410,7 +410,7 @@ def plan(
     report = check_layout(positions, directions, unit=lay.units.length)
     if body is None:
         if add:
-            raise InputError("suggesting sensors needs a body estimate", source="--add")
+            raise InputError("suggesting sensors needs a body estimate", source="add")
         return PlanResult(units, report)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
@@ -422,7 +422,7 @@ def plan(
     suggestions = None
     if add:
         if add < 0:
-            raise InputError(f"must be positive, got {add}", source="--add")
+            raise InputError(f"must be positive, got {add}", source="add")
         cand_pos = cand_dir = None
         if candidates is not None:
             cand = (
@@ -538,39 +538,14 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
         ) from None
     modes = None
     if contents.mode_rows:
-        modes = _table_from_rows(contents.mode_rows, tuple(s.id for s in layout.sensors), src)
+        values = [files.ModeValue(None, m, f, z, sid, complex(re, im)) for m, f, z, sid, re, im in contents.mode_rows]
+        modes = files.mode_table_from_rows(values, tuple(s.id for s in layout.sensors), src)
     records = []
     for record in contents.records:
         time = np.asarray(record.time, dtype=float)
         order = [record.sensor_ids.index(sid) for sid in (s.id for s in layout.sensors)]
         records.append((np.asarray(record.data, dtype=float)[:, order], float(time[1] - time[0])))
     return TestData(layout, modes, records, list(contents.record_labels))
-
-
-def _table_from_rows(
-    rows: Sequence[tuple[int, float, float, str, float, float]], ids: tuple[str, ...], src: str
-) -> ModeTable:
-    labels: list[int] = []
-    freq: dict[int, tuple[float, float]] = {}
-    values: dict[tuple[int, str], complex] = {}
-    for mode, f, z, sid, re, im in rows:
-        if mode not in freq:
-            labels.append(mode)
-            freq[mode] = (f, z)
-        values[(mode, sid)] = complex(re, im)
-    shapes = np.zeros((len(ids), len(labels)), dtype=complex)
-    for k, mode in enumerate(labels):
-        for i, sid in enumerate(ids):
-            if (mode, sid) not in values:
-                raise InputError(f"mode {mode} has no value for sensor {sid!r}", source=src)
-            shapes[i, k] = values[(mode, sid)]
-    return ModeTable(
-        tuple(labels),
-        np.array([freq[m][0] for m in labels]),
-        np.array([freq[m][1] for m in labels]),
-        ids,
-        shapes,
-    )
 
 
 def estimate_modes(
@@ -647,7 +622,7 @@ def estimate_modes(
         decimate=decimate,
     )
     ids = tuple(s.id for s in lay.sensors)
-    table = ModeTable(tuple(range(1, n_modes + 1)), result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
     return table, result
 
 
@@ -785,7 +760,7 @@ def simulate_records(
         impacts = [(positions[0], (1.0, 1.0, 1.0)), (positions[far], (-1.0, 1.0, -1.0))]
     for _, direction in impacts:
         if not np.any(np.asarray(direction, dtype=float)):
-            raise InputError("an impact direction is the zero vector", source="--impact")
+            raise InputError("an impact direction is the zero vector", source="impacts")
     if sample_rate <= 0 or duration <= 0 or pretrigger < 0:
         raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
     data = impulse_records(

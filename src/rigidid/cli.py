@@ -30,6 +30,7 @@ from rigidid.errors import InputError, RigididError
 if TYPE_CHECKING:
     from rigidid.api import IdentifyResult, TestData
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.io.files import ModeTable
 
 app = typer.Typer(
     name="rigidid",
@@ -129,29 +130,58 @@ Units = Annotated[
 # ----------------------------------------------------------------------------- helpers
 
 
+_FLAGS = {
+    "modes_used": "--modes",
+    "uncertainty": "--uncertainty",
+    "draws": "--uncertainty",
+    "segments": "--resample",
+    "add": "--add",
+    "impacts": "--impact",
+    "band": "--band",
+    "max_order": "--max-order",
+    "units": "--units",
+}
+"""API parameter names, as the API's errors name them, and the options that set them."""
+
+
+def _flag_text(exc: RigididError) -> str:
+    """The error's text with the API's parameter names replaced by the command line's options."""
+    if isinstance(exc, InputError) and exc.source in _FLAGS:
+        exc.source = _FLAGS[exc.source]
+    text = str(exc)
+    for name, flag in _FLAGS.items():
+        text = text.replace(f"`{name}`", flag)
+    return text
+
+
 def _fail(message: str, code: int) -> NoReturn:
     sys.stderr.write(f"rigidid: error: {message}\n")
     raise typer.Exit(code)
 
 
+def _print_warnings(caught: list[warnings.WarningMessage]) -> None:
+    seen: set[str] = set()
+    for w in caught:
+        text = str(w.message)
+        if text not in seen and issubclass(w.category, UserWarning):
+            seen.add(text)
+            sys.stderr.write(f"rigidid: warning: {text}\n")
+
+
 @contextmanager
 def _reported() -> Iterator[None]:
-    """Turn rigidid's errors into one line on stderr and its warnings into lines too."""
+    """Turn rigidid's errors into one line on stderr, after the warnings that came before them."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             yield
         except InputError as exc:
-            _fail(str(exc), EXIT_INPUT)
+            _print_warnings(caught)
+            _fail(_flag_text(exc), EXIT_INPUT)
         except RigididError as exc:
-            _fail(str(exc), EXIT_IDENTIFICATION)
-        finally:
-            seen: set[str] = set()
-            for w in caught:
-                text = str(w.message)
-                if text not in seen and issubclass(w.category, UserWarning):
-                    seen.add(text)
-                    sys.stderr.write(f"rigidid: warning: {text}\n")
+            _print_warnings(caught)
+            _fail(_flag_text(exc), EXIT_IDENTIFICATION)
+        _print_warnings(caught)
 
 
 def _console() -> Any:
@@ -231,16 +261,15 @@ def _estimate(
     band: tuple[float, float] | None,
     max_order: int | None,
     decimate: int | None,
-) -> ModalEstimate:
+) -> tuple[ModeTable, ModalEstimate]:
     from rigidid import api
     from rigidid.core.timedomain import METHODS
 
     if method is not None and method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--modal-method")
-    _, estimate = api.estimate_modes(
+    return api.estimate_modes(
         data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order, decimate=decimate
     )
-    return estimate
 
 
 def _identify(
@@ -261,19 +290,13 @@ def _identify(
     """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
     from rigidid.core.identify import METHODS
-    from rigidid.io.files import ModeTable
 
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     data = _test_data(layout, inputs or [], records, units)
-    estimate = _estimate(data, **modal) if records else None
-    modes = data.modes
-    if estimate is not None:
-        ids = tuple(s.id for s in data.layout.sensors)
-        labels = tuple(range(1, len(estimate.frequency_hz) + 1))
-        modes = ModeTable(labels, estimate.frequency_hz, estimate.damping_ratio, ids, estimate.shapes)
+    modes, estimate = _estimate(data, **modal) if records else (data.modes, None)
     assert modes is not None
     result = api.identify(
         data.layout,
@@ -396,14 +419,12 @@ def modes(
     """Estimate modal parameters from impact records (free decays) and write modes.csv."""
     with _reported():
         from rigidid.io.atomic import write_text_atomic
-        from rigidid.io.files import ModeTable, modes_csv_text
+        from rigidid.io.files import modes_csv_text
         from rigidid.jsonout import estimate_to_dict
 
         data = _test_data(layout, records or [], True, units)
-        estimate = _estimate(data, method, n_modes, band, max_order, decimate)
-        ids = tuple(s.id for s in data.layout.sensors)
-        labels = tuple(range(1, len(estimate.frequency_hz) + 1))
-        text = modes_csv_text(ModeTable(labels, estimate.frequency_hz, estimate.damping_ratio, ids, estimate.shapes))
+        table, estimate = _estimate(data, method, n_modes, band, max_order, decimate)
+        text = modes_csv_text(table)
         if json_path is not None:
             _write_json(json_path, estimate_to_dict(estimate))
         if output == "-":
@@ -416,7 +437,8 @@ def modes(
                 from rigidid.render import estimate_tables
 
                 _console().print(estimate_tables(estimate))
-            sys.stderr.write(f"rigidid: wrote {len(labels)} modes x {len(ids)} sensors to {output}\n")
+            shape = f"{len(table.labels)} modes x {len(table.sensor_ids)} sensors"
+            sys.stderr.write(f"rigidid: wrote {shape} to {output}\n")
 
 
 @app.command()

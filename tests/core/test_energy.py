@@ -12,8 +12,10 @@ from rigidid.core.energy import (
     kinetic_energy_distribution_principal,
 )
 from rigidid.core.identify import identify, principal_axes
-from rigidid.core.simulate import Body, Mount, body_modes, random_body, random_layout, system_matrices
+from rigidid.core.simulate import Body, Mount, body_modes, system_matrices
 from rigidid.errors import InputError
+
+from ..bodies import random_body, random_layout
 
 
 def cg_modes(body: Body) -> tuple[np.ndarray, np.ndarray]:

@@ -8,18 +8,10 @@ import numpy as np
 import pytest
 
 from rigidid.core.identify import identify, principal_axes
-from rigidid.core.simulate import (
-    Body,
-    Modes,
-    Mount,
-    add_noise,
-    body_modes,
-    random_body,
-    random_layout,
-    system_matrices,
-)
+from rigidid.core.simulate import Body, Modes, Mount, add_noise, body_modes, system_matrices
 from rigidid.errors import IdentificationError, IllConditionedWarning, InputError, PhysicalPlausibilityWarning
 
+from ..bodies import flat_layout_on_symmetric_mounts, random_body, random_layout
 from ..tolerances import EXACT_REL
 
 
@@ -226,3 +218,25 @@ def test_measured_shapes_at_the_cg_match_the_body_modes() -> None:
         truth = vec[6:, np.argmin(np.abs(mu - modes.poles[col]))]
         mac = abs(np.vdot(truth, r.mode_shapes_cg[:, col])) ** 2 / (np.vdot(truth, truth).real)
         assert mac == pytest.approx(1.0, abs=1e-9)
+
+
+def test_a_warning_before_an_error_reaches_the_caller() -> None:
+    """Notices are emitted when the error is known, not lost with it."""
+    body, pos, dirs = flat_layout_on_symmetric_mounts()
+    modes = body_modes(body, pos, dirs)
+    with pytest.warns(IllConditionedWarning, match="ill-conditioned"), pytest.raises(
+        IdentificationError, match="not observable"
+    ):
+        identify(pos, dirs, modes.poles, modes.shapes, mass=body.mass)
+
+
+def test_quiet_identification_keeps_its_findings_in_the_diagnostics() -> None:
+    _, positions, directions = flat_layout_on_symmetric_mounts()
+    body = random_body(np.random.default_rng(3))
+    modes = body_modes(body, positions, directions)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = identify(positions, directions, modes.poles, modes.shapes, warn=False)
+    assert any("ill-conditioned" in w for w in result.diagnostics.warnings)
+    with pytest.warns(IllConditionedWarning, match="ill-conditioned"):
+        identify(positions, directions, modes.poles, modes.shapes)

@@ -7,8 +7,10 @@ import pytest
 
 from rigidid.core.geometry import sensor_matrix
 from rigidid.core.selection import project_rigid, select_rigid_modes
-from rigidid.core.simulate import body_modes, random_body, random_layout
+from rigidid.core.simulate import body_modes
 from rigidid.errors import IdentificationError
+
+from ..bodies import random_body, random_layout
 
 
 def test_rigid_shapes_fit_exactly_and_elastic_ones_do_not(rng: np.random.Generator) -> None:

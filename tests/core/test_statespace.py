@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigidid.core.simulate import random_body, system_matrices
+from rigidid.core.simulate import system_matrices
 from rigidid.core.statespace import modal_from_poles, poles_from_modal, state_matrices, state_matrices_paper
 from rigidid.errors import IdentificationError, InputError
 
+from ..bodies import random_body
 from ..tolerances import EXACT_REL
 
 

@@ -324,7 +324,7 @@ def test_band_and_explicit_decimation(noisy_records: list[np.ndarray]) -> None:
 
 
 def test_too_few_stable_modes_raise(noisy_records: list[np.ndarray]) -> None:
-    with pytest.raises(IdentificationError, match=r"found 2 stable modes, 6 needed.*--band.*--max-order"):
+    with pytest.raises(IdentificationError, match=r"found 2 stable modes, 6 needed.*`band`.*`max_order`"):
         estimate_modes(noisy_records, 1.0 / SAMPLE_RATE, method="era", band=(5.0, 12.0))
 
 

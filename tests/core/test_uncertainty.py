@@ -16,11 +16,12 @@ from rigidid.core.geometry import layout_frame, sensor_matrix
 from rigidid.core.identify import DAMPING_WEIGHT, Identification, identify
 from rigidid.core.noise import NoiseLevels, estimate_noise, perturb, shape_noise_from_residuals, tilt_directions
 from rigidid.core.selection import project_rigid
-from rigidid.core.simulate import Body, Modes, add_noise, body_modes, random_body, random_layout
+from rigidid.core.simulate import Body, Modes, add_noise, body_modes
 from rigidid.core.uncertainty import identify_batch, propagate, summarise
 from rigidid.errors import IdentificationError, IllConditionedWarning, InputError
 from rigidid.jsonout import uncertainty_to_dict
 
+from ..bodies import random_body, random_layout
 from ..tolerances import (
     BATCH_REL,
     COVERAGE_MAX,

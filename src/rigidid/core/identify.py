@@ -38,7 +38,7 @@ from rigidid.errors import (
 __all__ = [
     "DAMPING_WEIGHT",
     "METHODS",
-    "Diagnostics",
+    "FitDiagnostics",
     "Identification",
     "identify",
     "inertia_observability",
@@ -210,7 +210,7 @@ def principal_axes(inertia: ArrayLike) -> tuple[Array, Array]:
 
 
 @dataclass(frozen=True)
-class Diagnostics:
+class FitDiagnostics:
     """How well-posed the identification was and how well the result fits.
 
     Attributes
@@ -270,7 +270,7 @@ class Identification:
         unit Euclidean norm.
     method : str
         ``"structured"`` or ``"paper"``.
-    diagnostics : Diagnostics
+    diagnostics : FitDiagnostics
     """
 
     center_of_gravity: Array
@@ -282,7 +282,7 @@ class Identification:
     damping_ratio: Array
     mode_shapes_cg: CArray
     method: str
-    diagnostics: Diagnostics
+    diagnostics: FitDiagnostics
 
     def _absolute(self, per_mass: Array) -> Array | None:
         return None if self.mass is None else self.mass * per_mass
@@ -571,7 +571,7 @@ def _identify(
         damping_ratio=z,
         mode_shapes_cg=shapes_cg / np.linalg.norm(shapes_cg, axis=0),
         method=method,
-        diagnostics=Diagnostics(
+        diagnostics=FitDiagnostics(
             layout_condition=cond,
             layout_rank=rank,
             rigid_fit_residual=prep.fit_residual[0],

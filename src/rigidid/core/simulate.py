@@ -8,7 +8,6 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +17,7 @@ from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.core.statespace import state_matrix
 from rigidid.errors import InputError
 
-__all__ = ["Body", "Modes", "Mount", "add_noise", "body_modes", "random_body", "random_layout", "system_matrices"]
+__all__ = ["Body", "Modes", "Mount", "add_noise", "body_modes", "system_matrices"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -214,91 +213,3 @@ def add_noise(
     rms = np.sqrt(np.mean(np.abs(psi) ** 2, axis=0))
     noise = (gen.standard_normal(psi.shape) + 1j * gen.standard_normal(psi.shape)) / np.sqrt(2.0)
     return Modes(poles_from_modal(f, z), psi + shape * rms * noise)
-
-
-def random_body(
-    rng: np.random.Generator,
-    *,
-    n_mounts: int = 4,
-    damping: float = 0.02,
-    proportional: bool = False,
-    scale: float = 1.0,
-) -> Body:
-    """A random, physically valid body on mounts (for tests and benchmarks).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Source of randomness.
-    n_mounts : int
-        Number of mounts, at least 3, placed around and below the CG.
-    damping : float
-        Typical modal damping ratio the mount damping aims at.
-    proportional : bool
-        If false, each mount has its own damping-to-stiffness ratio and a full
-        3x3 damping matrix (non-proportional damping, complex modes).
-    scale : float
-        Length scale of the body (length units).
-
-    Returns
-    -------
-    Body
-    """
-    mass = float(rng.uniform(5.0, 500.0))
-    cg = rng.uniform(-1.0, 1.0, 3) * scale
-    axes = np.sort(rng.uniform(0.3, 1.0, 3)) * scale
-    a2 = axes**2
-    moments = mass / 5.0 * np.array([a2[1] + a2[2], a2[0] + a2[2], a2[0] + a2[1]])
-    q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
-    inertia = q @ np.diag(moments) @ q.T
-    mounts: list[Mount] = []
-    k0 = mass * (2.0 * np.pi * rng.uniform(5.0, 15.0)) ** 2 / n_mounts
-    for i in range(n_mounts):
-        angle = 2.0 * np.pi * (i + rng.uniform(-0.2, 0.2)) / n_mounts
-        pos = cg + scale * np.array([np.cos(angle), np.sin(angle), -rng.uniform(0.2, 0.8)])
-        kd = k0 * rng.uniform(0.3, 1.5, 3)
-        r, _ = np.linalg.qr(rng.standard_normal((3, 3)))
-        kmat = r @ np.diag(kd) @ r.T
-        if proportional:
-            cmat = 2.0 * damping / (2.0 * np.pi * 10.0) * kmat
-        else:
-            r2, _ = np.linalg.qr(rng.standard_normal((3, 3)))
-            cd = 2.0 * damping * np.sqrt(kd * mass / n_mounts) * rng.uniform(0.2, 2.0, 3)
-            cmat = r2 @ np.diag(cd) @ r2.T
-        mounts.append(Mount(pos, kmat, cmat))
-    return Body(mass, cg, inertia, tuple(mounts))
-
-
-def random_layout(
-    rng: np.random.Generator,
-    n_sensors: int,
-    *,
-    scale: float = 1.0,
-    centre: Sequence[float] = (0.0, 0.0, 0.0),
-    skewed: bool = True,
-) -> tuple[Array, Array]:
-    """Random sensor positions and unit directions of full rank.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Source of randomness.
-    n_sensors : int
-        Number of sensors, at least 6.
-    scale : float
-        Half-width of the box the sensors lie in (length).
-    centre : sequence of 3 floats
-        Centre of that box.
-    skewed : bool
-        Random unit directions if true, else cycling through the +/- axes.
-
-    Returns
-    -------
-    positions, directions : ndarray, shape (n_sensors, 3)
-    """
-    pos = np.asarray(centre, dtype=float) + scale * rng.uniform(-1.0, 1.0, (n_sensors, 3))
-    if skewed:
-        d = rng.standard_normal((n_sensors, 3))
-    else:
-        d = np.eye(3)[np.arange(n_sensors) % 3] * rng.choice([-1.0, 1.0], (n_sensors, 1))
-    return pos, d / np.linalg.norm(d, axis=1)[:, None]

@@ -13,7 +13,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,10 +25,12 @@ from rigidid.models import BodyFile, LayoutFile, ModeRow
 __all__ = [
     "MODES_COLUMNS",
     "ModeTable",
+    "ModeValue",
     "layout_arrays",
     "load_body",
     "load_layout",
     "load_modes",
+    "mode_table_from_rows",
     "modes_csv_text",
 ]
 
@@ -59,6 +61,17 @@ class ModeTable:
     damping_ratio: NDArray[np.float64]
     sensor_ids: tuple[str, ...]
     shapes: NDArray[np.complex128]
+
+    @classmethod
+    def numbered(
+        cls,
+        frequency_hz: NDArray[np.float64],
+        damping_ratio: NDArray[np.float64],
+        sensor_ids: Sequence[str],
+        shapes: NDArray[np.complex128],
+    ) -> ModeTable:
+        """A table of estimated or simulated modes, labelled 1, 2, ... in the order given."""
+        return cls(tuple(range(1, len(frequency_hz) + 1)), frequency_hz, damping_ratio, tuple(sensor_ids), shapes)
 
     def subset(self, labels: Sequence[int]) -> ModeTable:
         """The modes with the given labels, in that order."""
@@ -214,10 +227,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
             )
     if len(set(columns)) != len(columns):
         raise InputError("a column appears twice", source=src, location="row 1")
-    index = {sid: i for i, sid in enumerate(sensor_ids)}
-    labels: list[int] = []
-    freq: dict[int, tuple[float, float, int]] = {}
-    values: dict[int, dict[str, complex]] = {}
+    rows: list[ModeValue] = []
     for line, row in enumerate(reader, start=2):
         if not row or all(not cell.strip() for cell in row):
             continue
@@ -232,32 +242,79 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         except ValidationError as exc:
             loc, message = _first_error(exc)
             raise InputError(message, source=src, location=f"{where}: {loc}") from None
-        if parsed.sensor not in index:
-            raise InputError(f"sensor {parsed.sensor!r} is not in the layout", source=src, location=where)
-        mode = parsed.mode
+        value = complex(parsed.real, parsed.imag)
+        rows.append(ModeValue(where, parsed.mode, parsed.frequency_hz, parsed.damping_ratio, parsed.sensor, value))
+    return mode_table_from_rows(rows, sensor_ids, src)
+
+
+class ModeValue(NamedTuple):
+    """One validated mode-shape value, with where it was read (``"row 5"``, ``"dataset 55 #3"``)."""
+
+    where: str | None
+    mode: int
+    frequency_hz: float
+    damping_ratio: float
+    sensor: str
+    value: complex
+
+
+def mode_table_from_rows(rows: Sequence[ModeValue], sensor_ids: Sequence[str], source: str | None) -> ModeTable:
+    """Assemble validated mode-shape values into a :class:`ModeTable`, every reader's last step.
+
+    Parameters
+    ----------
+    rows : sequence of ModeValue
+        One value per mode and sensor, in file order.
+    sensor_ids : sequence of str
+        The layout's sensor ids; every mode must give each exactly once.
+    source : str or None
+        The file, for the error messages.
+
+    Returns
+    -------
+    ModeTable
+        Modes in order of first appearance, rows in the layout's order.
+
+    Raises
+    ------
+    InputError
+        An unknown sensor, a sensor given twice in a mode, frequency or
+        damping differing between values of one mode (relative 1e-6), a mode
+        missing a sensor, a mode whose values are all zero, or no values.
+    """
+    index = {sid: i for i, sid in enumerate(sensor_ids)}
+    labels: list[int] = []
+    freq: dict[int, tuple[float, float, str | None]] = {}
+    values: dict[int, dict[str, complex]] = {}
+    for row in rows:
+        if row.sensor not in index:
+            raise InputError(f"sensor {row.sensor!r} is not in the layout", source=source, location=row.where)
+        mode = row.mode
         if mode not in freq:
             labels.append(mode)
-            freq[mode] = (parsed.frequency_hz, parsed.damping_ratio, line)
+            freq[mode] = (row.frequency_hz, row.damping_ratio, row.where)
             values[mode] = {}
         else:
             f0, z0, first = freq[mode]
-            if not (np.isclose(f0, parsed.frequency_hz, rtol=1e-6) and np.isclose(z0, parsed.damping_ratio, rtol=1e-6)):
+            if not (np.isclose(f0, row.frequency_hz, rtol=1e-6) and np.isclose(z0, row.damping_ratio, rtol=1e-6)):
                 raise InputError(
-                    f"mode {mode}: frequency or damping differs from row {first}", source=src, location=where
+                    f"mode {mode}: frequency or damping differs from {first or 'its first value'}",
+                    source=source,
+                    location=row.where,
                 )
-        if parsed.sensor in values[mode]:
-            raise InputError(f"mode {mode} gives sensor {parsed.sensor!r} twice", source=src, location=where)
-        values[mode][parsed.sensor] = complex(parsed.real, parsed.imag)
+        if row.sensor in values[mode]:
+            raise InputError(f"mode {mode} gives sensor {row.sensor!r} twice", source=source, location=row.where)
+        values[mode][row.sensor] = row.value
     if not labels:
-        raise InputError("no mode rows", source=src)
+        raise InputError("no mode rows", source=source)
     shapes = np.zeros((len(sensor_ids), len(labels)), dtype=complex)
     for k, mode in enumerate(labels):
         missing = [sid for sid in sensor_ids if sid not in values[mode]]
         if missing:
-            raise InputError(f"mode {mode} has no value for sensor {missing[0]!r}", source=src)
+            raise InputError(f"mode {mode} has no value for sensor {missing[0]!r}", source=source)
         shapes[:, k] = [values[mode][sid] for sid in sensor_ids]
         if not np.any(shapes[:, k]):
-            raise InputError(f"mode {mode}: every shape value is zero", source=src)
+            raise InputError(f"mode {mode}: every shape value is zero", source=source)
     return ModeTable(
         tuple(labels),
         np.array([freq[m][0] for m in labels]),

@@ -397,7 +397,7 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     if len(clusters) < n_modes:
         raise IdentificationError(
             f"found {len(clusters)} stable mode{'s' if len(clusters) != 1 else ''}, {n_modes} needed; "
-            "narrow the frequency band (--band) or raise the model order (--max-order)"
+            "narrow the frequency band (`band`) or raise the model order (`max_order`)"
         )
     chosen = sorted(clusters[:n_modes], key=lambda c: abs(c.pole))
     poles_out = np.array([c.pole for c in chosen], dtype=complex)
