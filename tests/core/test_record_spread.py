@@ -61,3 +61,21 @@ def test_needs_two_segments() -> None:
     _, positions, directions, records, full = _engine(0.0, seed=0)
     with pytest.raises(InputError, match="at least 2 segments"):
         record_spread(records, 1.0 / RATE, positions, directions, full, segments=1)
+
+
+def test_std_is_the_segment_spread_over_root_k() -> None:
+    """std = std(segment estimates, ddof=1) / sqrt(K): the segments hold 1/K of the data each."""
+    from scipy.special import stdtrit
+
+    body, positions, directions, records, full = _engine(0.02, seed=4)
+    k = 4
+    spread = record_spread(records, 1.0 / RATE, positions, directions, full, segments=k, mass=body.mass)
+    assert spread.used == k
+    cgs = []
+    for j in range(k):
+        est = estimate_modes([r[j::k] for r in records], k / RATE)
+        cgs.append(identify(positions, directions, est.poles, est.shapes, mass=body.mass, warn=False).center_of_gravity)
+    expected = np.std(np.stack(cgs), axis=0, ddof=1) / np.sqrt(k)
+    np.testing.assert_allclose(spread.center_of_gravity.std, expected, rtol=1e-9)
+    half = float(stdtrit(k - 1, 0.975)) * expected
+    np.testing.assert_allclose(spread.center_of_gravity.high - spread.center_of_gravity.low, 2 * half, rtol=1e-9)

@@ -27,6 +27,12 @@ __all__ = [
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
 
+SINGULAR_CONDITION = 1e12
+"""Condition number of the modal matrix ``V`` of eq. (19) above which the modes count as
+not spanning the motion. Two modes with one pole and one shape give about 4e16; the
+bundled samples give 3-6, and 200 random bodies with 0.1 % damping (pairs down to 0.4 %
+apart) at most 28."""
+
 
 def poles_from_modal(frequency_hz: ArrayLike, damping_ratio: ArrayLike) -> CArray:
     """Poles with positive imaginary part from natural frequency and damping ratio.
@@ -142,7 +148,8 @@ def state_matrices_batch(poles: CArray, shapes: CArray) -> tuple[Array, Array, N
     stiffness, damping : ndarray, shape (B, n, n)
         ``M^-1 K`` and ``M^-1 C`` of each test (NaN where it failed).
     ok : ndarray of bool, shape (B,)
-        False where ``V`` is singular or the result not finite.
+        False where ``V`` is singular (condition above
+        :data:`SINGULAR_CONDITION`) or the result not finite.
     """
     n = poles.shape[-1]
     mu = np.concatenate([poles, poles.conj()], axis=-1)
@@ -152,6 +159,8 @@ def state_matrices_batch(poles: CArray, shapes: CArray) -> tuple[Array, Array, N
     a_t, ok = solve_rows(np.swapaxes(v, -1, -2), np.swapaxes(v * mu[:, None, :], -1, -2))
     a = np.swapaxes(a_t, -1, -2).real
     ok &= np.all(np.isfinite(a), axis=(-1, -2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ok &= np.linalg.cond(v) < SINGULAR_CONDITION
     return np.ascontiguousarray(-a[:, :n, n:]), np.ascontiguousarray(-a[:, :n, :n]), ok
 
 
