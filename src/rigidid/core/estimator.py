@@ -129,11 +129,23 @@ def _pinv_psd(n: Array) -> Array:
     return np.asarray(x, dtype=float)
 
 
+class _Statuses:
+    """A stack of tests, each with a status code (0 for usable, else a key of :data:`STATUS_MESSAGES`)."""
+
+    status: IArray
+
+    @property
+    def ok(self) -> BArray:
+        """Tests with status 0."""
+        result: BArray = self.status == OK
+        return result
+
+
 # --------------------------------------------------------------------------- step 1: data -> Q, P
 
 
 @dataclass(frozen=True)
-class Prepared:
+class Prepared(_Statuses):
     """A stack of tests in the dimensionless frame, ready for eq. (18).
 
     Attributes
@@ -168,12 +180,6 @@ class Prepared:
     stiffness: Array
     damping: Array
     status: IArray
-
-    @property
-    def ok(self) -> BArray:
-        """Tests that can be identified."""
-        result: BArray = self.status == OK
-        return result
 
 
 def _patch(values: NDArray[Any], ok: BArray) -> NDArray[Any]:
@@ -555,7 +561,7 @@ def _sym(a: Array) -> Array:
 
 
 @dataclass(frozen=True)
-class Estimates:
+class Estimates(_Statuses):
     """Per-mass results of :func:`estimate`, one row per test, in the layout's units.
 
     Attributes
@@ -579,12 +585,6 @@ class Estimates:
     stiffness_per_mass: Array
     damping_per_mass: Array
     status: IArray
-
-    @property
-    def ok(self) -> BArray:
-        """Tests identified."""
-        result: BArray = self.status == OK
-        return result
 
     @property
     def principal_moments_per_mass(self) -> Array:
