@@ -496,7 +496,7 @@ def solve_cg(
     >>> m, k, _ = system_matrices(Body(1.0, g_true, np.diag([1.0, 2.0, 3.0]), mounts))
     >>> q = transfer_matrix(-g_true) @ np.linalg.solve(m, k) @ transfer_matrix(g_true)
     >>> cg, j, _ = solve_cg(q[None])
-    >>> cg.round(9).tolist(), np.diag(j[0]).round(9).tolist()
+    >>> (cg.round(9) + 0.0).tolist(), np.diag(j[0]).round(9).tolist()
     ([[0.1, 0.0, 0.0]], [1.0, 2.0, 3.0])
     """
     b = stiffness.shape[0]
