@@ -64,6 +64,13 @@ def transfer_matrix(offset: ArrayLike) -> Array:
         ``G`` with ``x_point = G @ x_ref`` for rigid motion, i.e.
         ``[[I, -S(offset)], [0, I]]``. With ``offset = d - g`` this is ``G_dg``
         of eq. (12); its inverse is ``transfer_matrix(-offset)`` (eq. (14)).
+
+    Examples
+    --------
+    A rotation about z moves a point at ``(1, 0, 0)`` along y:
+
+    >>> (transfer_matrix([1.0, 0.0, 0.0]) @ [0, 0, 0, 0, 0, 1.0])[:3].tolist()
+    [0.0, 1.0, 0.0]
     """
     g = np.eye(6)
     g[:3, 3:] = -skew(offset)

@@ -200,6 +200,14 @@ def principal_axes(inertia: ArrayLike) -> tuple[Array, Array]:
         Column ``i`` is the unit axis of ``moments[i]``; the first two columns
         have their largest component positive, the third completes a
         right-handed frame.
+
+    Examples
+    --------
+    >>> moments, axes = principal_axes([[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 5.0]])
+    >>> moments.round(12).tolist()
+    [1.0, 3.0, 5.0]
+    >>> (axes[:, 0] * np.sqrt(2) + 0.0).round(12).tolist()
+    [1.0, -1.0, 0.0]
     """
     w, v = np.linalg.eigh(_sym(np.asarray(inertia, dtype=float)))
     for i in range(2):

@@ -54,6 +54,12 @@ def poles_from_modal(frequency_hz: ArrayLike, damping_ratio: ArrayLike) -> CArra
     InputError
         For a non-positive frequency or a damping ratio outside ``[0, 1)``
         (over-damped modes have no oscillating pair and are not supported).
+
+    Examples
+    --------
+    >>> lam = poles_from_modal([10.0], [0.05])
+    >>> [round(float(x), 6) for x in modal_from_poles(lam)[0]], float(modal_from_poles(lam)[1][0])
+    ([10.0], 0.05)
     """
     f = np.asarray(frequency_hz, dtype=float)
     z = np.asarray(damping_ratio, dtype=float)
