@@ -405,9 +405,9 @@ def plan(
         lay = load_uff(layout).layout
     else:
         lay = files.load_layout(layout, require_rank=False)
-    _, positions, directions = files.layout_arrays(lay)
+    ids, positions, directions = files.layout_arrays(lay)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
-    report = check_layout(positions, directions, unit=lay.units.length)
+    report = check_layout(positions, directions, unit=lay.units.length, names=ids)
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")

@@ -228,3 +228,12 @@ def test_greedy_with_directions_and_from_too_few_sensors() -> None:
     with pytest.raises(InputError):
         suggest_sensors(body(), positions, directions, candidates=positions[:2], candidate_directions=directions[:2],
                         add=3, draws=10)  # fmt: skip
+
+
+def test_findings_name_sensors_by_their_ids() -> None:
+    pos, dirs = collinear_layout()
+    names = [f"acc-{chr(65 + i)}" for i in range(len(pos))]
+    report = check_layout(pos, dirs, names=names)
+    text = " ".join(f.message for f in report.findings if f.sensors)
+    assert "acc-" in text
+    assert all(f"sensor {i + 1} " not in text for i in range(len(pos)))
