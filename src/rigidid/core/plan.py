@@ -347,6 +347,19 @@ def _figures_batch(
     return out
 
 
+def _by_conditioning(positions: Array, directions: Array, c_pos: Array, c_dir: Array) -> NDArray[np.intp]:
+    """Candidates ordered by the layout each makes: most independent motions first, then best conditioned."""
+    ranks, ratios = [], []
+    for where, along in zip(c_pos, c_dir, strict=True):
+        lay_p, lay_d = np.vstack([positions, where]), np.vstack([directions, along])
+        s = np.linalg.svd(sensor_matrix(layout_frame(lay_p).to_local(lay_p), lay_d), compute_uv=False)
+        r = int(numerical_rank(s, lay_p.shape[0]))
+        ranks.append(r)
+        ratios.append(s[r - 1] / s[0] if r else 0.0)
+    order: NDArray[np.intp] = np.lexsort((-np.array(ratios), -np.array(ranks)))
+    return order
+
+
 def suggest_sensors(
     body: Body,
     positions: ArrayLike,
@@ -466,16 +479,8 @@ def suggest_sensors(
         scores = np.array([f.score for f in figs])
         if np.all(~np.isfinite(scores)):
             # cannot identify yet: take the best-conditioned (rank first) layout
-            ranks, ratios = [], []
-            for c in remaining:
-                lay_p = np.vstack([pos, c_pos[chosen], c_pos[c]])
-                lay_d = np.vstack([dirs, c_dir[chosen], c_dir[c]])
-                s = np.linalg.svd(sensor_matrix(layout_frame(lay_p).to_local(lay_p), lay_d), compute_uv=False)
-                r = int(numerical_rank(s, lay_p.shape[0]))
-                ranks.append(r)
-                ratios.append(s[r - 1] / s[0] if r else 0.0)
-            # most independent motions first, then the best conditioned
-            order = np.lexsort((-np.array(ratios), -np.array(ranks)))
+            base_pos, base_dir = np.vstack([pos, c_pos[chosen]]), np.vstack([dirs, c_dir[chosen]])
+            order = _by_conditioning(base_pos, base_dir, c_pos[remaining], c_dir[remaining])
             if p + step >= 6:
                 notices.append(
                     Notice(
