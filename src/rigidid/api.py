@@ -361,6 +361,8 @@ def plan(
     noise: Mapping[str, float] | None = None,
     draws: int = 1000,
     seed: int | None = 0,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -384,6 +386,10 @@ def plan(
         Monte Carlo draws of each prediction.
     seed : int, optional
         Seed of the draws.
+    units : dict, optional
+        ``{"length", "mass"}`` of a UFF layout without dataset 164.
+    geometry : path-like, optional
+        A UFF file completing a UFF layout (see :func:`load_uff`).
 
     Returns
     -------
@@ -400,7 +406,7 @@ def plan(
     if isinstance(layout, LayoutFile):
         lay = layout
     elif Path(layout).suffix.lower() in (".uff", ".unv"):
-        lay = load_uff(layout).layout
+        lay = load_uff(layout, units=units, geometry=geometry).layout
     else:
         lay = files.load_layout(layout, require_rank=False)
     _, positions, directions = files.layout_arrays(lay)
@@ -501,7 +507,9 @@ def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[ND
     return [read_record(p, ids) for p in paths]
 
 
-def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData:
+def load_uff(
+    path: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None
+) -> TestData:
     """Read a test from a universal file (datasets 15/2411, 58, 55, 164) through pyuff.
 
     Parameters
@@ -510,6 +518,9 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
         The ``.uff``/``.unv`` file.
     units : dict, optional
         ``{"length", "mass"}`` when the file has no dataset 164.
+    geometry : path-like, optional
+        A second UFF file with the nodes (15/2411), coordinate systems
+        (18/2420), units (164) and name (151) that `path` lacks.
 
     Returns
     -------
@@ -527,7 +538,7 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
     from rigidid.io.uff import read_uff
 
     src = str(path)
-    contents = read_uff(path, units=units)
+    contents = read_uff(path, units=units, geometry=geometry)
     try:
         layout = LayoutFile.model_validate(contents.layout)
     except ValidationError as exc:
@@ -700,7 +711,9 @@ def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
     return None
 
 
-def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None) -> list[Path]:
+def convert(
+    path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None
+) -> list[Path]:
     """Turn a universal file into ``layout.json``, ``modes.csv`` and ``record-<k>.csv`` files.
 
     Parameters
@@ -711,6 +724,8 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
         Folder to write into (created if needed).
     units : dict, optional
         ``{"length", "mass"}`` when the file has no dataset 164.
+    geometry : path-like, optional
+        A UFF file completing `path` (see :func:`load_uff`).
 
     Returns
     -------
@@ -721,7 +736,7 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
 
     from rigidid.io.records import write_record
 
-    data = load_uff(path, units=units)
+    data = load_uff(path, units=units, geometry=geometry)
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
     written = [folder / "layout.json"]

@@ -669,6 +669,12 @@ def read_uff(
             raise refusal
         node, code = int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0))
         here = f"{where}, node {node}"
+        if node <= 0:
+            raise reader.error(
+                f"the record names no response node (node {node}, direction {code}): it carries no geometry; "
+                "rigidid needs the node and direction of every record (name them in the exporting tool)",
+                here,
+            )
         if not 1 <= abs(code) <= 3:
             what = "a rotation" if 4 <= abs(code) <= 6 else "not a direction"
             raise reader.error(

@@ -19,6 +19,11 @@ Dataset 2420
     A 4 x 3 matrix: rows 1-3 are the system's x, y, z axes as unit vectors
     in global axes, row 4 its origin in global axes (``1P3D25.16``: full
     double precision).
+System 1 when no dataset defines it
+    The global system: I-DEAS and the exporters that follow it number the
+    global system 1 (ArtemiS, permas4edu and other exports give every node
+    definition system 1 and no dataset 18 or 2420). A defined system 1
+    (Test.Lab writes one per node) is used as defined.
 A node's global position is ``origin + R @ local`` and a measured direction
 ``+a`` (a = x, y, z) of a node is the column ``R[:, a]``, where the columns
 of ``R`` are the system's axes in global axes.
@@ -156,9 +161,13 @@ class CoordinateSystems:
             self.origin[num] = o_local
         del self._pending[num]
 
+    def is_global(self, num: int) -> bool:
+        """System 0, or system 1 when no dataset defines it (I-DEAS numbers its global system 1)."""
+        return num == 0 or (num == 1 and 1 not in self.where)
+
     def check(self, num: int, what: str) -> str | None:
         """Why system `num` cannot be used for `what` (``"node 3's position"``), or None."""
-        if num == 0 or num in self.rotation:
+        if self.is_global(num) or num in self.rotation:
             return None
         if num in self.unusable:
             return f"{what}: {self.unusable[num]}"
@@ -166,14 +175,14 @@ class CoordinateSystems:
 
     def to_global(self, num: int, local: Array) -> Array:
         """Global coordinates of a point given in system `num` (must be usable)."""
-        if num == 0:
+        if self.is_global(num):
             return np.asarray(local, dtype=float)
         return self.origin[num] + self.rotation[num] @ np.asarray(local, dtype=float)
 
     def axis(self, num: int, code: int) -> Array:
         """Global unit vector of signed axis `code` (1..3, -1..-3) of system `num`."""
         sign = 1.0 if code > 0 else -1.0
-        if num == 0:
+        if self.is_global(num):
             e = np.zeros(3)
             e[abs(code) - 1] = sign
             return e
