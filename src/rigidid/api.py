@@ -743,7 +743,9 @@ def convert(
     write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
     if data.modes is not None:
         written.append(folder / "modes.csv")
-        write_text_atomic(written[-1], files.modes_csv_text(data.modes))
+        # 17 digits: the numbers the UFF file holds, unrounded (identify on the converted files
+        # then matches identify on the UFF file to rounding)
+        write_text_atomic(written[-1], files.modes_csv_text(data.modes, digits=17))
     ids = [s.id for s in data.layout.sensors]
     for k, (values, dt) in enumerate(data.records, start=1):
         written.append(folder / f"record-{k}.csv")
