@@ -1,8 +1,8 @@
 """How closely a UFF test in local coordinate systems identifies the body of the same test in global axes.
 
 Run: `python benchmarks/uff_local_systems.py`. Compares `samples/uff-local-systems/test.unv`
-(read directly, and after `convert`) and the same file with its nodes in dataset 15 (6 digits)
-instead of 2411 (17 digits) against `layout.json` + `modes.csv` of that sample. Prints the
+(read directly, and after `convert`) and the same file with its global-coordinate nodes in
+dataset 15 (6 digits) instead of 2411 (17 digits) against `layout.json` + `modes.csv` of that sample. Prints the
 largest difference of each quantity relative to its largest entry.
 """
 
@@ -35,8 +35,9 @@ def main() -> None:
         converted = api.load_layout(folder / "converted" / "layout.json")
         sets = pyuff.UFF(str(SAMPLE / "test.unv")).read_sets()
         for d in sets:
-            if d["type"] == 2411:
+            if d["type"] == 2411:  # the nodes given in global coordinates, now with 6 digits
                 d["type"] = 15
+                d["def_cs"] = np.zeros(len(d["node_nums"]), dtype=int)
                 for key in ("node_nums", "def_cs", "disp_cs", "color"):
                     d[key] = np.asarray(d[key], dtype=int)
         pyuff.UFF(str(folder / "nodes15.unv")).write_sets(sets, mode="overwrite")
@@ -45,7 +46,7 @@ def main() -> None:
             "convert -> identify": _identify(
                 api.TestData(converted, api.load_modes(folder / "converted" / "modes.csv", converted))
             ),
-            "nodes in dataset 15": _identify(api.load_uff(folder / "nodes15.unv")),
+            "2411 nodes as 15": _identify(api.load_uff(folder / "nodes15.unv")),
         }
     print(f"{'case':22s}" + "".join(f"{q:>20s}" for q in QUANTITIES))
     for name, result in cases.items():

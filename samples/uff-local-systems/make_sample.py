@@ -49,16 +49,17 @@ SYSTEMS = [
     (3, 2420, rotation((-2.0, 0.5, 1.0), 121.0), np.array([-0.25, -0.26, 0.2])),
     (4, 18, np.array([[0.6, -0.8, 0.0], [0.8, 0.6, 0.0], [0.0, 0.0, 1.0]]), np.array([0.25, -0.2, -0.1])),
 ]
-# (node, system, global position, measured local axes)
+# (node, system, local coordinates (6 significant digits at most: dataset 15 keeps 6), measured local axes,
+#  the dataset that gives the node: 15 in its definition system, 2411 in global coordinates)
 NODES = [
-    (11, 1, (0.3, 0.2, 0.15), (1, 3)),
-    (12, 2, (-0.3, 0.2, 0.15), (1, 2)),
-    (13, 3, (-0.3, -0.2, 0.15), (2, 3)),
-    (14, 4, (0.3, -0.2, 0.15), (1, 3)),
-    (15, 2, (0.3, 0.2, -0.15), (3,)),
-    (16, 3, (-0.3, 0.2, -0.15), (1,)),
-    (17, 1, (-0.3, -0.2, -0.15), (2,)),
-    (18, 4, (0.3, -0.2, -0.15), (1, 2, 3)),
+    (11, 1, (0.0, 0.0, 0.0), (1, 3), 15),
+    (12, 2, (0.05, -0.1, 0.02), (1, 2), 15),
+    (13, 3, (-0.04, 0.08, 0.1), (2, 3), 2411),
+    (14, 4, (0.05, 0.0, 0.25), (1, 3), 15),
+    (15, 2, (0.4, 0.35, -0.3), (3,), 2411),
+    (16, 3, (0.15, -0.2, 0.3), (1,), 15),
+    (17, 1, (0.6, -0.4, 0.3), (2,), 15),
+    (18, 4, (0.1, 0.05, -0.05), (1, 2, 3), 2411),
 ]
 
 
@@ -66,10 +67,10 @@ def main() -> None:
     rot = {num: r for num, _, r, _ in SYSTEMS}
     orig = {num: o for num, _, _, o in SYSTEMS}
     sensors = []  # (id, node, system, axis, global position, global direction)
-    for node, cs, pos, axes in NODES:
+    for node, cs, pos, axes, _ in NODES:
         for axis in axes:
             sid = f"{node}{'+' + 'xyz'[axis - 1]}" if len(axes) > 1 else str(node)
-            sensors.append((sid, node, cs, axis, np.array(pos, dtype=float), rot[cs][:, axis - 1]))
+            sensors.append((sid, node, cs, axis, orig[cs] + rot[cs] @ np.array(pos), rot[cs][:, axis - 1]))
     positions = np.array([s[4] for s in sensors])
     directions = np.array([s[5] for s in sensors])
     body = api.body_from_file(load_body(BODY))
@@ -97,7 +98,6 @@ def main() -> None:
     import pyuff
 
     node_nums = [n for n, *_ in NODES]
-    local = np.array([rot[cs].T @ (np.array(pos) - orig[cs]) for _, cs, pos, _ in NODES])
     sets: list[dict] = [
         {"type": 151, "model_name": "four-mounts local systems", "description": "rigidid sample",
          "db_app": "rigidid", "program": "make_sample.py"},
@@ -109,10 +109,15 @@ def main() -> None:
         {"type": 18, "cs_num": [4], "cs_type": [0], "ref_cs_num": [0], "color": [8], "method": [1],
          "cs_name": ["CS4"], "ref_o": [orig[4]], "x_point": [orig[4] + 5.0 * rot[4][:, 0]],
          "xz_point": [orig[4] + 2.0 * rot[4][:, 2]]},
-        {"type": 2411, "node_nums": np.array(node_nums), "def_cs": np.array([cs for _, cs, _, _ in NODES]),
-         "disp_cs": np.array([cs for _, cs, _, _ in NODES]), "color": np.ones(len(NODES), dtype=int),
-         "x": local[:, 0], "y": local[:, 1], "z": local[:, 2]},
     ]  # fmt: skip
+    for kind in (15, 2411):
+        chosen = [(n, cs, np.array(pos)) for n, cs, pos, _, k in NODES if k == kind]
+        xyz = np.array([p if kind == 15 else orig[cs] + rot[cs] @ p for _, cs, p in chosen])
+        sets.append(
+            {"type": kind, "node_nums": np.array([n for n, _, _ in chosen]),
+             "def_cs": np.array([cs for _, cs, _ in chosen]), "disp_cs": np.array([cs for _, cs, _ in chosen]),
+             "color": np.ones(len(chosen), dtype=int), "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2]}
+        )  # fmt: skip
     row = {n: i for i, n in enumerate(node_nums)}
     for k, pole in enumerate(poles):
         vec = np.zeros((len(NODES), 3), dtype=complex)

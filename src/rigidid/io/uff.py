@@ -381,12 +381,15 @@ class _Reader:
     def error(self, message: str, where: str | None = None) -> InputError:
         return InputError(message, source=self.source, location=where)
 
-    def add_nodes(self, dset: dict[str, Any], where: str) -> None:
+    def add_nodes(self, dset: dict[str, Any], where: str, kind: int = 15) -> None:
+        """Nodes of a 15 (coordinates in the definition system) or 2411 (in the part, global, system)."""
         nums = np.asarray(dset.get("node_nums", []), dtype=float).reshape(-1)
         xyz = np.column_stack([np.asarray(dset.get(k, []), dtype=float).reshape(-1) for k in "xyz"])
         if xyz.shape[0] != nums.shape[0] or not np.all(np.isfinite(xyz)):
             raise self.error("node coordinates are incomplete or not finite", where)
         def_cs = np.asarray(dset.get("def_cs", np.zeros(nums.size)), dtype=int).reshape(-1)
+        if kind == 2411:  # field 2 is the export system, a label: 2411 coordinates are in the part system
+            def_cs = np.zeros(nums.size, dtype=int)
         disp_cs = np.asarray(dset.get("disp_cs", np.zeros(nums.size)), dtype=int).reshape(-1)
         if def_cs.size != nums.size or disp_cs.size != nums.size:
             raise self.error("node coordinate system numbers are incomplete", where)
@@ -583,7 +586,7 @@ def _read_into(reader: _Reader, path: Path, label: str, kinds: tuple[int, ...] |
         if kinds is not None and kind not in kinds:
             continue
         if kind in (15, 2411):
-            reader.add_nodes(dset, where)
+            reader.add_nodes(dset, where, kind)
         elif kind in (18, 2420):
             reader.add_systems(dset, kind, where)
         elif kind == 58:

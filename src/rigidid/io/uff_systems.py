@@ -1,7 +1,9 @@
 """UFF coordinate systems (datasets 18 and 2420) and their use on nodes and directions.
 
-A UFF node has a *definition* system (its coordinates are given in it) and
-a *displacement* system (its measured directions, 58 ``rsp_dir`` and 55
+A UFF node has a *definition* system (dataset 15 gives its coordinates in
+it; dataset 2411 gives them in the part, that is global, system, its field
+2 being only the system the node was exported in) and a *displacement*
+system (its measured directions, 58 ``rsp_dir`` and 55
 vector components, are along that system's axes). System 0 is the global
 system. Only cartesian systems are supported: a cylindrical or spherical
 system is kept as a reason, and using it for a node is an error naming the
