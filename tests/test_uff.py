@@ -13,7 +13,7 @@ from rigidid.core.geometry import skew
 from rigidid.core.identify import identify
 from rigidid.core.simulate import Body, Mount, body_modes
 from rigidid.core.statespace import modal_from_poles, poles_from_modal
-from rigidid.errors import InputError, RigididWarning
+from rigidid.errors import InputError
 from rigidid.io.uff import UffContents, read_uff, write_uff, write_uff_test
 
 from .paper_sample import layout_arrays, paper_identification, paper_layout

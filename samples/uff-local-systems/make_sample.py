@@ -92,7 +92,9 @@ def main() -> None:
     for k, pole in enumerate(poles):
         f, z = abs(pole) / (2.0 * math.pi), -pole.real / abs(pole)
         for j, (sid, *_rest) in enumerate(sensors):
-            lines.append(f"{k + 1},{float(f)!r},{float(z)!r},{sid},{float(shapes[j, k].real)!r},{float(shapes[j, k].imag)!r}")
+            lines.append(
+                f"{k + 1},{float(f)!r},{float(z)!r},{sid},{float(shapes[j, k].real)!r},{float(shapes[j, k].imag)!r}"
+            )
     write_text_atomic(HERE / "modes.csv", "\n".join(lines) + "\n")
 
     import pyuff
@@ -124,10 +126,27 @@ def main() -> None:
         for j, (_, node, _, axis, _, _) in enumerate(sensors):
             vec[row[node], axis - 1] = shapes[j, k]
         sets.append(
-            {"type": 55, "id1": f"mode {k + 1}", "id2": "NONE", "id3": "NONE", "id4": "NONE", "id5": "NONE",
-             "model_type": 1, "analysis_type": 3, "data_ch": 2, "spec_data_type": 8, "load_case": 1,
-             "mode_n": k + 1, "eig": complex(pole), "modal_a": 0j, "modal_b": 0j, "node_nums": np.array(node_nums),
-             "r1": vec[:, 0], "r2": vec[:, 1], "r3": vec[:, 2]}  # fmt: skip
+            {
+                "type": 55,
+                "id1": f"mode {k + 1}",
+                "id2": "NONE",
+                "id3": "NONE",
+                "id4": "NONE",
+                "id5": "NONE",
+                "model_type": 1,
+                "analysis_type": 3,
+                "data_ch": 2,
+                "spec_data_type": 8,
+                "load_case": 1,
+                "mode_n": k + 1,
+                "eig": complex(pole),
+                "modal_a": 0j,
+                "modal_b": 0j,
+                "node_nums": np.array(node_nums),
+                "r1": vec[:, 0],
+                "r2": vec[:, 1],
+                "r3": vec[:, 2],
+            }
         )
     pyuff.UFF(str(HERE / "test.unv")).write_sets(sets, mode="overwrite")
 

@@ -507,9 +507,7 @@ def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[ND
     return [read_record(p, ids) for p in paths]
 
 
-def load_uff(
-    path: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None
-) -> TestData:
+def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None) -> TestData:
     """Read a test from a universal file (datasets 15/2411, 58, 55, 164) through pyuff.
 
     Parameters

@@ -83,7 +83,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.errors import InputError, RigididError, RigididWarning
 from rigidid.io.atomic import atomic_path
 from rigidid.io.uff_eigen import EigenConvention, eigen_convention, stated_frequency
-from rigidid.io.uff_systems import CoordinateSystems, SystemError_
+from rigidid.io.uff_systems import CoordinateSystemError, CoordinateSystems
 
 if TYPE_CHECKING:
     from rigidid.core.identify import Identification
@@ -414,7 +414,7 @@ class _Reader:
                 self.systems.add_18(dset, where)
             else:
                 self.systems.add_2420(dset, where)
-        except SystemError_ as exc:
+        except CoordinateSystemError as exc:
             raise self.error(str(exc), exc.where) from None
 
     def set_units(self, dset: dict[str, Any], where: str) -> None:
@@ -431,7 +431,7 @@ class _Reader:
         """Global coordinates of every node, and why a node has none (an unusable definition system)."""
         try:
             self.systems.resolve()
-        except SystemError_ as exc:
+        except CoordinateSystemError as exc:
             raise self.error(str(exc), exc.where) from None
         all_coords = [c for defs in self.node_defs.values() for c, _ in defs]
         scale = max([1.0, *(abs(v) for c in all_coords for v in c)])
@@ -743,7 +743,8 @@ def _require_node(
 def _no_sensors_message(reader: _Reader, nodes: dict[int, tuple[float, float, float]]) -> str:
     text = "no sensors: the file has no dataset 58 (time records) or 55 (mode shapes)"
     if nodes:
-        text += f"; it holds geometry only ({len(nodes)} nodes): give it with --geometry beside a file of modes or records"
+        text += f"; it holds geometry only ({len(nodes)} nodes): give it with --geometry beside a file of "
+        text += "modes or records"
     not_read = [f"{kind} ({_NOT_READ[kind]})" for kind in sorted(reader.not_read) if kind in _NOT_READ]
     if 2414 in reader.not_read:
         text += "; dataset 2414 (analysis results) is not read"

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CoordinateSystems", "SystemError_"]
+__all__ = ["CoordinateSystemError", "CoordinateSystems"]
 
 Array = NDArray[np.float64]
 
@@ -47,7 +47,7 @@ _TYPES = {0: "cartesian", 1: "cylindrical", 2: "spherical"}
 _ORTHONORMAL_TOL = 1e-6
 
 
-class SystemError_(ValueError):  # noqa: N801 - a private carrier, turned into InputError by the reader
+class CoordinateSystemError(ValueError):
     """A coordinate system that cannot be built or used; ``where`` names the dataset."""
 
     def __init__(self, message: str, where: str) -> None:
@@ -67,9 +67,9 @@ class CoordinateSystems:
 
     def _define(self, num: int, where: str) -> None:
         if num == 0:
-            raise SystemError_("coordinate system 0 is the global system and cannot be redefined", where)
+            raise CoordinateSystemError("coordinate system 0 is the global system and cannot be redefined", where)
         if num in self.where:
-            raise SystemError_(f"coordinate system {num} is defined twice (also {self.where[num]})", where)
+            raise CoordinateSystemError(f"coordinate system {num} is defined twice (also {self.where[num]})", where)
         self.where[num] = where
 
     def add_18(self, dset: dict[str, Any], where: str) -> None:
@@ -83,7 +83,7 @@ class CoordinateSystems:
         xzp = np.asarray(dset.get("xz_point", []), dtype=float).reshape(-1, 3)
         n = len(nums)
         if not all(a.shape[0] == n for a in (kinds, refs, methods, o, xp, xzp)):
-            raise SystemError_("the coordinate system records are incomplete", where)
+            raise CoordinateSystemError("the coordinate system records are incomplete", where)
         for i, num in enumerate(nums):
             here = f"{where}, coordinate system {num}"
             self._define(num, here)
@@ -101,7 +101,7 @@ class CoordinateSystems:
                 )
                 continue
             if not (np.all(np.isfinite(o[i])) and np.all(np.isfinite(xp[i])) and np.all(np.isfinite(xzp[i]))):
-                raise SystemError_(f"coordinate system {num} has non-finite points", here)
+                raise CoordinateSystemError(f"coordinate system {num} has non-finite points", here)
             self._pending[num] = (int(refs[i]), _axes_from_points(o[i], xp[i], xzp[i], here), o[i].copy(), here)
 
     def add_2420(self, dset: dict[str, Any], where: str) -> None:
@@ -110,7 +110,7 @@ class CoordinateSystems:
         kinds = [int(k) for k in dset.get("CS_types", [])]
         mats = [np.asarray(m, dtype=float) for m in dset.get("CS_matrices", [])]
         if not (len(kinds) == len(mats) == len(nums)):
-            raise SystemError_("the coordinate system records are incomplete", where)
+            raise CoordinateSystemError("the coordinate system records are incomplete", where)
         for num, kind, m in zip(nums, kinds, mats, strict=True):
             here = f"{where}, coordinate system {num}"
             self._define(num, here)
@@ -121,11 +121,13 @@ class CoordinateSystems:
                 )
                 continue
             if m.shape != (4, 3) or not np.all(np.isfinite(m)):
-                raise SystemError_(f"coordinate system {num}: the transformation matrix is not 4 x 3 finite", here)
+                raise CoordinateSystemError(
+                    f"coordinate system {num}: the transformation matrix is not 4 x 3 finite", here
+                )
             r = m[:3].T.copy()
             err = float(np.max(np.abs(r.T @ r - np.eye(3))))
             if err > _ORTHONORMAL_TOL or np.linalg.det(r) < 0.0:
-                raise SystemError_(
+                raise CoordinateSystemError(
                     f"coordinate system {num}: rows 1-3 of the matrix are not a right-handed set of unit axes "
                     f"(orthonormality error {err:.3g})",
                     here,
@@ -143,18 +145,18 @@ class CoordinateSystems:
             return
         ref, r_local, o_local, here = self._pending[num]
         if num in chain:
-            raise SystemError_(f"coordinate systems refer to each other in a loop: {chain + [num]}", here)
+            raise CoordinateSystemError(f"coordinate systems refer to each other in a loop: {[*chain, num]}", here)
         if ref != 0:
             if ref in self._pending:
-                self._resolve(ref, chain + [num])
+                self._resolve(ref, [*chain, num])
             if ref in self.unusable:
-                self.unusable[num] = f"coordinate system {num} ({here}) is defined in an unusable system: " + (
-                    self.unusable[ref]
+                self.unusable[num] = (
+                    f"coordinate system {num} ({here}) is defined in an unusable system: " + (self.unusable[ref])
                 )
                 del self._pending[num]
                 return
             if ref not in self.rotation:
-                raise SystemError_(f"reference coordinate system {ref} of system {num} is not defined", here)
+                raise CoordinateSystemError(f"reference coordinate system {ref} of system {num} is not defined", here)
             r_ref, o_ref = self.rotation[ref], self.origin[ref]
             self.rotation[num] = r_ref @ r_local
             self.origin[num] = o_ref + r_ref @ o_local
@@ -198,12 +200,12 @@ def _axes_from_points(origin: Array, x_point: Array, xz_point: Array, where: str
     v = xz_point - origin
     scale = max(nx, float(np.linalg.norm(v)), 1e-300)
     if nx <= 1e-9 * scale or nx == 0.0:
-        raise SystemError_("the +x axis point coincides with the origin", where)
+        raise CoordinateSystemError("the +x axis point coincides with the origin", where)
     x = x / nx
     z = v - (v @ x) * x
     nz = float(np.linalg.norm(z))
     if nz <= 1e-9 * scale:
-        raise SystemError_("the +xz plane point lies on the x axis", where)
+        raise CoordinateSystemError("the +xz plane point lies on the x axis", where)
     z = z / nz
     y = np.cross(z, x)
     return np.column_stack([x, y, z])
