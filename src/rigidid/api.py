@@ -410,12 +410,12 @@ def plan(
     else:
         lay = files.load_layout(layout, require_rank=False)
     _, positions, directions = files.layout_arrays(lay)
-    units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length)
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="--add")
-        return PlanResult(units, report)
+        return PlanResult(layout_units, report)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -445,7 +445,7 @@ def plan(
             draws=min(draws, 300),
             seed=seed,
         )
-    return PlanResult(units, report, prediction, suggestions)
+    return PlanResult(layout_units, report, prediction, suggestions)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:

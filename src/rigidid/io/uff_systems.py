@@ -181,7 +181,8 @@ class CoordinateSystems:
         """Global coordinates of a point given in system `num` (must be usable)."""
         if self.is_global(num):
             return np.asarray(local, dtype=float)
-        return self.origin[num] + self.rotation[num] @ np.asarray(local, dtype=float)
+        out: Array = self.origin[num] + self.rotation[num] @ np.asarray(local, dtype=float)
+        return out
 
     def axis(self, num: int, code: int) -> Array:
         """Global unit vector of signed axis `code` (1..3, -1..-3) of system `num`."""
