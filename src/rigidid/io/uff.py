@@ -10,20 +10,28 @@ into :class:`~rigidid.errors.InputError` naming the data set.
 Datasets used
 -------------
 =====  ====================================================================
-15     nodes (coordinates, 6 significant digits); 2411 read as well (double)
-58     one time record per sensor and impact (``func_type`` 1)
+15     nodes, coordinates in their definition system (6 significant digits)
+2411   nodes, coordinates in the part (global) system (double precision)
+18     coordinate systems (origin, +x point, +xz point; 6 digits)
+2420   coordinate systems (axes and origin; double precision)
+58     one time record per sensor and impact (``func_type`` 1 only)
 55     mode shapes at nodes (normal, 2, or complex, 3 and 7)
 82     trace lines (written only, for animation)
 151    header: the model name becomes the layout's ``name``
 164    units
 =====  ====================================================================
 
+Other datasets (2412 elements, 2414 analysis results, ...) are not read; a
+file without 58 or 55 is refused saying so. A second file can give the
+geometry (``geometry=``: its 15, 2411, 18, 2420, 164 and 151).
+
 Conventions
 -----------
 Sensors
     A sensor is a (node, signed direction) pair of a dataset 58:
-    ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, in the
-    global axes. Rotations (4..6) and scalar records (0) are not
+    ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, along
+    the axes of the node's displacement coordinate system
+    (:mod:`rigidid.io.uff_systems`); the layout gets the global direction. Rotations (4..6) and scalar records (0) are not
     accelerometers and are refused. The sensors are listed in the order of
     their first record in the file.
 Sensor ids
@@ -38,13 +46,15 @@ Impacts
     appearance; every record of one impact must share one time axis. The
     writer gives impact ``i`` (from 1) load case ``i`` and reference node 0.
 Mode shapes
-    A 55 gives a 3-vector per node in global axes; a sensor reads its
-    component along the sensor's direction. When the file has no dataset
+    A 55 gives a 3-vector per node in the node's displacement system; a
+    sensor reads its component along the sensor's (local) axis. When the file has no dataset
     58, every node component that is non-zero in some mode becomes a
     sensor along +x, +y or +z (how modal software exports measured DOFs:
     unmeasured components are zero). Complex eigenvalues (analysis types 3
-    and 7) are poles in rad/s; normal modes (type 2) give the frequency in Hz
-    and the viscous damping ratio.
+    and 7) are read in the file's unit and sign convention
+    (:mod:`rigidid.io.uff_eigen`; the plain pole in rad/s by default);
+    normal modes (type 2) give the frequency in Hz and the viscous damping
+    ratio.
 Units
     Dataset 164's factors (UFF units per SI unit) decide: the length unit
     from the length factor, the mass unit as ``force / (length / s^2)``
