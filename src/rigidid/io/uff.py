@@ -31,8 +31,9 @@ Sensors
     A sensor is a (node, signed direction) pair of a dataset 58:
     ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, along
     the axes of the node's displacement coordinate system
-    (:mod:`rigidid.io.uff_systems`); the layout gets the global direction. Rotations (4..6) and scalar records (0) are not
-    accelerometers and are refused. The sensors are listed in the order of
+    (:mod:`rigidid.io.uff_systems`); the layout gets the global direction.
+    Rotations (4..6) and scalar records (0) are not accelerometers and are
+    refused. The sensors are listed in the order of
     their first record in the file.
 Sensor ids
     ``"<node>"`` (``"12"``) when the node carries one sensor, else
