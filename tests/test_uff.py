@@ -13,7 +13,7 @@ from rigidid.core.geometry import skew
 from rigidid.core.identify import identify
 from rigidid.core.simulate import Body, Mount, body_modes
 from rigidid.core.statespace import modal_from_poles, poles_from_modal
-from rigidid.errors import InputError, RigididWarning
+from rigidid.errors import InputError
 from rigidid.io.uff import UffContents, read_uff, write_uff, write_uff_test
 
 from .paper_sample import layout_arrays, paper_identification, paper_layout
@@ -352,15 +352,23 @@ def test_records_group_by_load_case_and_reference(tmp_path: Path) -> None:
     np.testing.assert_allclose(back.records[1].data, 3 * t[:, None], rtol=1e-11)
 
 
-def test_frequency_response_58_is_ignored_with_a_warning(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("func", "message"),
+    [
+        (4, r"dataset 58 #2, node 2: function type 4 is a frequency response function \(FRF\).*rigidid modes"),
+        (9, r"dataset 58 #2, node 2: function type 9 \(power spectral density \(PSD\)\) is not a time record"),
+        (3, r"function type 3 \(cross spectrum\) is not a time record"),
+    ],
+)
+def test_a_58_that_is_not_a_time_record_is_refused_by_its_function_type(
+    tmp_path: Path, func: int, message: str
+) -> None:
     t = 0.001 * np.arange(4)
     path = tmp_path / "frf.uff"
-    frf = record58(2, 1, t, t + 1j * t, func=4)
-    write_raw(path, [units164(), nodes15([1, 2], [(0, 0, 0), (1, 0, 0)]), record58(1, 3, t, t), frf])
-    with pytest.warns(RigididWarning, match="dataset 58 #2: function type 4 is not a time response"):
-        back = read_uff(path)
-    assert [s["id"] for s in back.layout["sensors"]] == ["1", "2"]  # its sensor is still a sensor
-    assert [r.sensor_ids for r in back.records] == [("1",)]
+    other = record58(2, 1, t, t + 1j * t, func=func)
+    write_raw(path, [units164(), nodes15([1, 2], [(0, 0, 0), (1, 0, 0)]), record58(1, 3, t, t), other])
+    with pytest.raises(InputError, match=message):
+        read_uff(path)
 
 
 # --------------------------------------------------------------------------- bad files

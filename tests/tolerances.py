@@ -75,3 +75,9 @@ Observed 0.35 % (ERA), 1.9 % (AR)."""
 TIMEDOMAIN_EXACT_REL = 1e-10
 """Relative error allowed on modes estimated from noise-free simulated records. Observed
 1.4e-11 (AR damping), 1.2e-12 (ERA)."""
+
+UFF_LOCAL_SYSTEMS_REL = 1e-9
+"""A UFF test with nodes in rotated and shifted local coordinate systems against the same
+test in global axes (samples/uff-local-systems), relative to the largest entry of each
+quantity: the figure issue 9 asks for; observed 0 (the same doubles;
+benchmarks/uff_local_systems.py). A bound set by the issue, not by the observed error."""

@@ -363,6 +363,8 @@ def plan(
     noise: Mapping[str, float] | None = None,
     draws: int = 1000,
     seed: int | None = 0,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -386,6 +388,10 @@ def plan(
         Monte Carlo draws of each prediction.
     seed : int, optional
         Seed of the draws.
+    units : dict, optional
+        ``{"length", "mass"}`` of a UFF layout without dataset 164.
+    geometry : path-like, optional
+        A UFF file completing a UFF layout (see :func:`load_uff`).
 
     Returns
     -------
@@ -402,16 +408,16 @@ def plan(
     if isinstance(layout, LayoutFile):
         lay = layout
     elif Path(layout).suffix.lower() in (".uff", ".unv"):
-        lay = load_uff(layout).layout
+        lay = load_uff(layout, units=units, geometry=geometry).layout
     else:
         lay = files.load_layout(layout, require_rank=False)
     ids, positions, directions = files.layout_arrays(lay)
-    units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length, names=ids)
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(units, report)
+        return PlanResult(layout_units, report)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -441,7 +447,7 @@ def plan(
             draws=min(draws, 300),
             seed=seed,
         )
-    return PlanResult(units, report, prediction, suggestions)
+    return PlanResult(layout_units, report, prediction, suggestions)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:
@@ -503,7 +509,7 @@ def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[ND
     return [read_record(p, ids) for p in paths]
 
 
-def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData:
+def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None) -> TestData:
     """Read a test from a universal file (datasets 15/2411, 58, 55, 164) through pyuff.
 
     Parameters
@@ -512,6 +518,9 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
         The ``.uff``/``.unv`` file.
     units : dict, optional
         ``{"length", "mass"}`` when the file has no dataset 164.
+    geometry : path-like, optional
+        A second UFF file with the nodes (15/2411), coordinate systems
+        (18/2420), units (164) and name (151) that `path` lacks.
 
     Returns
     -------
@@ -529,7 +538,7 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
     from rigidid.io.uff import read_uff
 
     src = str(path)
-    contents = read_uff(path, units=units)
+    contents = read_uff(path, units=units, geometry=geometry)
     try:
         layout = LayoutFile.model_validate(contents.layout)
     except ValidationError as exc:
@@ -676,7 +685,9 @@ def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
     return None
 
 
-def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None) -> list[Path]:
+def convert(
+    path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None
+) -> list[Path]:
     """Turn a universal file into ``layout.json``, ``modes.csv`` and ``record-<k>.csv`` files.
 
     Parameters
@@ -687,6 +698,8 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
         Folder to write into (created if needed).
     units : dict, optional
         ``{"length", "mass"}`` when the file has no dataset 164.
+    geometry : path-like, optional
+        A UFF file completing `path` (see :func:`load_uff`).
 
     Returns
     -------
@@ -697,14 +710,16 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
 
     from rigidid.io.records import write_record
 
-    data = load_uff(path, units=units)
+    data = load_uff(path, units=units, geometry=geometry)
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
     written = [folder / "layout.json"]
     write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
     if data.modes is not None:
         written.append(folder / "modes.csv")
-        write_text_atomic(written[-1], files.modes_csv_text(data.modes))
+        # 17 digits: the numbers the UFF file holds, unrounded (identify on the converted files
+        # then matches identify on the UFF file to rounding)
+        write_text_atomic(written[-1], files.modes_csv_text(data.modes, digits=17))
     ids = [s.id for s in data.layout.sensors]
     for k, (values, dt) in enumerate(data.records, start=1):
         written.append(folder / f"record-{k}.csv")

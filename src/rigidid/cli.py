@@ -125,6 +125,14 @@ Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
 ]
+Geometry = Annotated[
+    Path | None,
+    typer.Option(
+        help="A UFF file with the nodes (15/2411), coordinate systems (18/2420) and units (164) of a UFF input "
+        "that lacks them.",
+        metavar="UFF",
+    ),
+]
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -230,14 +238,18 @@ def _write_json(target: str, data: dict[str, Any]) -> None:
         write_text_atomic(target, text)
 
 
-def _test_data(layout: Path, inputs: list[Path], records: bool, units: str | None) -> TestData:
-    """The layout and its modes or records, from JSON/CSV files or one UFF file."""
+def _test_data(
+    layout: Path, inputs: list[Path], records: bool, units: str | None, geometry: Path | None = None
+) -> TestData:
+    """The layout and its modes or records, from JSON/CSV files or one UFF file (and its geometry file)."""
     from rigidid import api
 
+    if geometry is not None and layout.suffix.lower() not in UFF_SUFFIXES:
+        raise InputError("a geometry file completes a UFF input; the layout here is not UFF", source="--geometry")
     if layout.suffix.lower() in UFF_SUFFIXES:
         if inputs:
             raise InputError("with a UFF file, give no other input files", source=str(inputs[0]))
-        data = api.load_uff(layout, units=_parse_units(units))
+        data = api.load_uff(layout, units=_parse_units(units), geometry=geometry)
         if records and not data.records:
             raise InputError("no time records (dataset 58) in the file", source=str(layout))
         if not records and data.modes is None:
@@ -286,6 +298,7 @@ def _identify(
     noise: dict[str, float],
     seed: int,
     resample: int = 0,
+    geometry: Path | None = None,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
@@ -295,7 +308,7 @@ def _identify(
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
-    data = _test_data(layout, inputs or [], records, units)
+    data = _test_data(layout, inputs or [], records, units, geometry)
     modes, estimate = _estimate(data, **modal) if records else (data.modes, None)
     assert modes is not None
     result = api.identify(
@@ -362,6 +375,7 @@ def identify(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    geometry: Geometry = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
@@ -374,7 +388,7 @@ def identify(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample,
+            noise=noise, seed=seed, resample=resample, geometry=geometry,
         )  # fmt: skip
         if json_path is not None:
             out = result_to_dict(result)
@@ -415,6 +429,7 @@ def modes(
         typer.Option("--json", help="Write the estimation and stabilisation data as JSON to PATH.", metavar="PATH"),
     ] = None,
     units: Units = None,
+    geometry: Geometry = None,
 ) -> None:
     """Estimate modal parameters from impact records (free decays) and write modes.csv."""
     with _reported():
@@ -422,7 +437,7 @@ def modes(
         from rigidid.io.files import modes_csv_text
         from rigidid.jsonout import estimate_to_dict
 
-        data = _test_data(layout, records or [], True, units)
+        data = _test_data(layout, records or [], True, units, geometry)
         table, estimate = _estimate(data, method, n_modes, band, max_order, decimate)
         text = modes_csv_text(table)
         if json_path is not None:
@@ -541,6 +556,8 @@ def plan(
     angle_noise: AngleNoise = None,
     seed: Seed = 0,
     json_path: JsonPath = None,
+    units: Units = None,
+    geometry: Geometry = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
@@ -553,7 +570,10 @@ def plan(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
-        result = api.plan(layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed)
+        result = api.plan(
+            layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
+            units=_parse_units(units), geometry=geometry,
+        )  # fmt: skip
         if json_path is not None:
             _write_json(json_path, plan_to_dict(result))
         if json_path != "-":
@@ -590,6 +610,7 @@ def report(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    geometry: Geometry = None,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
@@ -604,7 +625,7 @@ def report(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample,
+            noise=noise, seed=seed, resample=resample, geometry=geometry,
         )  # fmt: skip
         mounts = None
         if body is not None:
@@ -628,12 +649,13 @@ def convert(
     uff_file: Annotated[Path, typer.Argument(help="A universal file (.uff, .unv).", show_default=False)],
     output: Annotated[Path, typer.Option("-o", "--output", help="Folder to write into.")] = Path("."),
     units: Units = None,
+    geometry: Geometry = None,
 ) -> None:
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""
     with _reported():
         from rigidid import api
 
-        for path in api.convert(uff_file, output, units=_parse_units(units)):
+        for path in api.convert(uff_file, output, units=_parse_units(units), geometry=geometry):
             sys.stderr.write(f"rigidid: wrote {path}\n")
 
 

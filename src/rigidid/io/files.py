@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ValidationError
 
 from rigidid.errors import InputError
+from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
 from rigidid.models import BodyFile, LayoutFile, ModeRow
 
 __all__ = [
@@ -199,6 +200,13 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
     -------
     ModeTable
 
+    Notes
+    -----
+    Dialects (:mod:`rigidid.io.dialect`): fields separated by ``,``, ``;``
+    or tabs; decimal commas with ``;`` or tabs; header names without case,
+    spaces or unit suffix (``Mode;Frequency (Hz);Damping ratio [-];...``);
+    a UTF-8 byte order mark and CRLF line ends.
+
     Raises
     ------
     InputError
@@ -210,11 +218,13 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
     """
     p = Path(path)
     src = str(p)
-    reader = csv.reader(io.StringIO(_read_text(p)))
+    text = _read_text(p)
+    dialect = sniff_dialect(text)
+    reader = csv.reader(io.StringIO(text), delimiter=dialect.delimiter)
     header = next(reader, None)
     if header is None:
         raise InputError("file is empty", source=src)
-    columns = [c.strip() for c in header]
+    columns = _modes_columns(header)
     for name in _REQUIRED:
         if name not in columns:
             raise InputError(
@@ -234,7 +244,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         where = f"row {line}"
         if len(row) != len(columns):
             raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
-        record: dict[str, Any] = {c: v.strip() for c, v in zip(columns, row, strict=True)}
+        record: dict[str, Any] = {c: _modes_cell(c, v, dialect) for c, v in zip(columns, row, strict=True)}
         if record.get("imag") == "":
             del record["imag"]
         try:
@@ -322,6 +332,16 @@ def mode_table_from_rows(rows: Sequence[ModeValue], sensor_ids: Sequence[str], s
         tuple(sensor_ids),
         shapes,
     )
+
+
+def _modes_columns(header: Sequence[str]) -> list[str]:
+    """Header names as ``modes.csv`` column names: without case, spaces or unit suffix (``Frequency (Hz)``)."""
+    return [column_key(c) for c in header]
+
+
+def _modes_cell(column: str, cell: str, dialect: Dialect) -> str:
+    """A cell, stripped; a number's decimal comma made a point when the file writes decimal commas."""
+    return cell.strip() if column == "sensor" else decimal_point(cell.strip(), dialect)
 
 
 def modes_csv_text(table: ModeTable, digits: int = 10) -> str:

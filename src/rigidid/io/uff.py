@@ -10,21 +10,30 @@ into :class:`~rigidid.errors.InputError` naming the data set.
 Datasets used
 -------------
 =====  ====================================================================
-15     nodes (coordinates, 6 significant digits); 2411 read as well (double)
-58     one time record per sensor and impact (``func_type`` 1)
+15     nodes, coordinates in their definition system (6 significant digits)
+2411   nodes, coordinates in the part (global) system (double precision)
+18     coordinate systems (origin, +x point, +xz point; 6 digits)
+2420   coordinate systems (axes and origin; double precision)
+58     one time record per sensor and impact (``func_type`` 1 only)
 55     mode shapes at nodes (normal, 2, or complex, 3 and 7)
 82     trace lines (written only, for animation)
 151    header: the model name becomes the layout's ``name``
 164    units
 =====  ====================================================================
 
+Other datasets (2412 elements, 2414 analysis results, ...) are not read; a
+file without 58 or 55 is refused saying so. A second file can give the
+geometry (``geometry=``: its 15, 2411, 18, 2420, 164 and 151).
+
 Conventions
 -----------
 Sensors
     A sensor is a (node, signed direction) pair of a dataset 58:
-    ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, in the
-    global axes. Rotations (4..6) and scalar records (0) are not
-    accelerometers and are refused. The sensors are listed in the order of
+    ``rsp_dir`` 1, 2, 3 = +x, +y, +z and -1, -2, -3 = -x, -y, -z, along
+    the axes of the node's displacement coordinate system
+    (:mod:`rigidid.io.uff_systems`); the layout gets the global direction.
+    Rotations (4..6) and scalar records (0) are not accelerometers and are
+    refused. The sensors are listed in the order of
     their first record in the file.
 Sensor ids
     ``"<node>"`` (``"12"``) when the node carries one sensor, else
@@ -38,13 +47,15 @@ Impacts
     appearance; every record of one impact must share one time axis. The
     writer gives impact ``i`` (from 1) load case ``i`` and reference node 0.
 Mode shapes
-    A 55 gives a 3-vector per node in global axes; a sensor reads its
-    component along the sensor's direction. When the file has no dataset
+    A 55 gives a 3-vector per node in the node's displacement system; a
+    sensor reads its component along the sensor's (local) axis. When the file has no dataset
     58, every node component that is non-zero in some mode becomes a
     sensor along +x, +y or +z (how modal software exports measured DOFs:
     unmeasured components are zero). Complex eigenvalues (analysis types 3
-    and 7) are poles in rad/s; normal modes (type 2) give the frequency in Hz
-    and the viscous damping ratio.
+    and 7) are read in the file's unit and sign convention
+    (:mod:`rigidid.io.uff_eigen`; the plain pole in rad/s by default);
+    normal modes (type 2) give the frequency in Hz and the viscous damping
+    ratio.
 Units
     Dataset 164's factors (UFF units per SI unit) decide: the length unit
     from the length factor, the mass unit as ``force / (length / s^2)``
@@ -82,6 +93,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError, RigididError, RigididWarning
 from rigidid.io.atomic import atomic_path
+from rigidid.io.uff_eigen import EigenConvention, eigen_convention, stated_frequency
+from rigidid.io.uff_systems import CoordinateSystemError, CoordinateSystems
 
 if TYPE_CHECKING:
     from rigidid.core.identify import Identification
@@ -369,22 +382,51 @@ class _Reader:
     units: dict[str, str] | None = None
     name: str | None = None
     node_defs: dict[int, list[tuple[tuple[float, float, float], str]]] = field(default_factory=dict)
+    node_cs: dict[int, tuple[int, int, str]] = field(default_factory=dict)
+    systems: CoordinateSystems = field(default_factory=CoordinateSystems)
     records: list[tuple[dict[str, Any], str]] = field(default_factory=list)
     modes: list[tuple[dict[str, Any], str]] = field(default_factory=list)
+    not_read: dict[int, int] = field(default_factory=dict)
     units_where: str = ""
 
     def error(self, message: str, where: str | None = None) -> InputError:
         return InputError(message, source=self.source, location=where)
 
-    def add_nodes(self, dset: dict[str, Any], where: str) -> None:
+    def add_nodes(self, dset: dict[str, Any], where: str, kind: int = 15) -> None:
+        """Nodes of a 15 (coordinates in the definition system) or 2411 (in the part, global, system)."""
         nums = np.asarray(dset.get("node_nums", []), dtype=float).reshape(-1)
         xyz = np.column_stack([np.asarray(dset.get(k, []), dtype=float).reshape(-1) for k in "xyz"])
         if xyz.shape[0] != nums.shape[0] or not np.all(np.isfinite(xyz)):
             raise self.error("node coordinates are incomplete or not finite", where)
-        for num, p in zip(nums, xyz, strict=True):
+        def_cs = np.asarray(dset.get("def_cs", np.zeros(nums.size)), dtype=int).reshape(-1)
+        if kind == 2411:  # field 2 is the export system, a label: 2411 coordinates are in the part system
+            def_cs = np.zeros(nums.size, dtype=int)
+        disp_cs = np.asarray(dset.get("disp_cs", np.zeros(nums.size)), dtype=int).reshape(-1)
+        if def_cs.size != nums.size or disp_cs.size != nums.size:
+            raise self.error("node coordinate system numbers are incomplete", where)
+        for num, p, dcs, ucs in zip(nums, xyz, def_cs, disp_cs, strict=True):
             if num != round(num) or num <= 0:
                 raise self.error(f"node label {num:g} is not a positive integer", where)
-            self.node_defs.setdefault(int(num), []).append(((float(p[0]), float(p[1]), float(p[2])), where))
+            node = int(num)
+            cs = (int(dcs), int(ucs), f"{where}, node {node}")
+            if node in self.node_cs and self.node_cs[node][:2] != cs[:2]:
+                first = self.node_cs[node]
+                raise self.error(
+                    f"node {node} has definition/displacement systems {cs[0]}/{cs[1]} here and "
+                    f"{first[0]}/{first[1]} in {first[2]}",
+                    cs[2],
+                )
+            self.node_cs.setdefault(node, cs)
+            self.node_defs.setdefault(node, []).append(((float(p[0]), float(p[1]), float(p[2])), where))
+
+    def add_systems(self, dset: dict[str, Any], kind: int, where: str) -> None:
+        try:
+            if kind == 18:
+                self.systems.add_18(dset, where)
+            else:
+                self.systems.add_2420(dset, where)
+        except CoordinateSystemError as exc:
+            raise self.error(str(exc), exc.where) from None
 
     def set_units(self, dset: dict[str, Any], where: str) -> None:
         units = _units_from_164(dset, self.source, where)
@@ -396,10 +438,16 @@ class _Reader:
             )
         self.units, self.units_where = units, where
 
-    def nodes(self) -> dict[int, tuple[float, float, float]]:
+    def nodes(self) -> tuple[dict[int, tuple[float, float, float]], dict[int, str]]:
+        """Global coordinates of every node, and why a node has none (an unusable definition system)."""
+        try:
+            self.systems.resolve()
+        except CoordinateSystemError as exc:
+            raise self.error(str(exc), exc.where) from None
         all_coords = [c for defs in self.node_defs.values() for c, _ in defs]
         scale = max([1.0, *(abs(v) for c in all_coords for v in c)])
         out: dict[int, tuple[float, float, float]] = {}
+        why: dict[int, str] = {}
         for node, defs in self.node_defs.items():
             first, first_where = defs[0]
             for coords, where in defs[1:]:
@@ -408,8 +456,26 @@ class _Reader:
                         f"node {node} has two coordinates: {list(first)} ({first_where}) and {list(coords)}",
                         f"{where}, node {node}",
                     )
-            out[node] = first
-        return out
+            def_cs = self.node_cs.get(node, (0, 0, ""))[0]
+            problem = self.systems.check(def_cs, f"node {node} is defined in coordinate system {def_cs}")
+            if problem is not None:
+                why[node] = problem
+                continue
+            g = self.systems.to_global(def_cs, np.array(first))
+            out[node] = (float(g[0]), float(g[1]), float(g[2]))
+        return out, why
+
+    def direction(self, node: int, code: int, where: str) -> str | list[float]:
+        """The global measuring direction of signed axis `code` of `node`'s displacement system."""
+        disp_cs = self.node_cs.get(node, (0, 0, ""))[1]
+        problem = self.systems.check(disp_cs, f"node {node} measures in coordinate system {disp_cs}")
+        if problem is not None:
+            raise self.error(problem, where)
+        v = self.systems.axis(disp_cs, code)
+        for i in range(3):  # an axis of the global system stays a name (+x, -z, ...)
+            if abs(abs(v[i]) - 1.0) <= 1e-15 and np.count_nonzero(v) == 1:
+                return ("+" if v[i] > 0 else "-") + _AXES[i]
+        return [float(c) for c in v]
 
 
 def _read_all(path: Path) -> list[dict[str, Any]]:
@@ -427,7 +493,7 @@ def _read_all(path: Path) -> list[dict[str, Any]]:
         raise InputError(f"not a readable UFF file: {exc}", source=src) from None
     if n == 0:
         raise InputError("no UFF datasets found (is it a universal file?)", source=src)
-    wanted = {15, 55, 58, 151, 164, 2411}
+    wanted = {15, 18, 55, 58, 151, 164, 2411, 2420}
     out: list[dict[str, Any]] = []
     for i, kind in enumerate(types):
         if kind not in wanted:
@@ -462,56 +528,78 @@ def _time_record(reader: _Reader, dset: dict[str, Any], where: str) -> tuple[Arr
     return x, data
 
 
-def read_uff(path: str | os.PathLike[str], *, units: dict[str, str] | None = None) -> UffContents:
-    """Read a test from a universal file: sensors, units, time records and modes.
+_FUNCTION_TYPES = {
+    0: "general or unknown",
+    1: "time response",
+    2: "auto spectrum",
+    3: "cross spectrum",
+    4: "frequency response function (FRF)",
+    5: "transmissibility",
+    6: "coherence",
+    7: "auto correlation",
+    8: "cross correlation",
+    9: "power spectral density (PSD)",
+    10: "energy spectral density",
+    11: "probability density function",
+    12: "spectrum",
+    13: "cumulative frequency distribution",
+    14: "peaks valley",
+    15: "stress/cycles",
+    16: "strain/cycles",
+    17: "orbit",
+    18: "mode indicator function",
+    19: "force pattern",
+    20: "partial power",
+    21: "partial coherence",
+    22: "eigenvalue",
+    23: "eigenvector",
+    24: "shock response spectrum",
+    25: "finite impulse response filter",
+    26: "multiple coherence",
+    27: "order function",
+    28: "phase compensation",
+}
+_NOT_READ = {2414: "analysis results", 2412: "elements", 82: "trace lines", 2400: "model header", 1858: "qualifiers"}
+_GEOMETRY_TYPES = (15, 18, 151, 164, 2411, 2420)
 
-    Parameters
-    ----------
-    path : path-like
-        The UFF file (ASCII or binary 58).
-    units : dict, optional
-        ``{"length": ..., "mass": ...}`` to use when the file has no dataset
-        164 (ignored when it has one).
 
-    Returns
-    -------
-    UffContents
-        ``layout`` (``layout.json`` dictionary), ``mode_rows``, ``records``
-        (one :class:`UffRecord` per impact), ``record_labels`` and ``nodes``.
-        Conventions (sensor ids, grouping into impacts, units) in the module
-        documentation.
+def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) -> InputError | None:
+    """Why a dataset 58 is not read as a time record (None when it is one: function type 1)."""
+    func = int(dset.get("func_type", 0))
+    if func == 1:
+        return None
+    node = int(dset.get("rsp_node", 0))
+    here = f"{where}, node {node}"
+    if func == 4:
+        # --- hook for FRFs (function type 4) -----------------------------------------------
+        # FRFs are not time records; they go to modal estimation from FRFs (a reader of its
+        # own). Until that reader is wired here, say where they belong.
+        return reader.error(
+            "function type 4 is a frequency response function (FRF), not a time record: "
+            "FRFs are read by `rigidid modes`, not as impact records",
+            here,
+        )
+    name = _FUNCTION_TYPES.get(func, "unknown")
+    return reader.error(
+        f"function type {func} ({name}) is not a time record; rigidid reads time responses (function type 1) "
+        "and mode shapes (dataset 55)",
+        here,
+    )
 
-    Raises
-    ------
-    InputError
-        Naming the file and the data set (``"dataset 58 #3, node 12"``, the
-        count of that type from 1) for: a file pyuff cannot read; a node with
-        two different coordinates; a 58 whose response node has no
-        coordinates, whose direction is a rotation or scalar, that repeats a
-        sensor of its impact, or whose time axis differs from the rest of its
-        impact; a 55 without a positive frequency, that is not 3D
-        translations, that repeats a mode number, or that lacks a sensor's
-        node; no dataset 164 and no `units`; unknown units; no sensors at all.
 
-    Warns
-    -----
-    RigididWarning
-        For a 58 that is not a time response (ignored, its sensor kept), a
-        55 that is not a mode (ignored), and sensors on nodes with a local
-        displacement coordinate system (directions taken as global).
-    """
-    p = Path(path)
-    reader = _Reader(str(p))
+def _read_into(reader: _Reader, path: Path, label: str, kinds: tuple[int, ...] | None) -> None:
+    """Read the datasets of `path` into `reader` (only `kinds` when given); `label` prefixes locations."""
     counts: dict[int, int] = {}
-    disp_cs: dict[int, int] = {}
-    for dset in _read_all(p):
+    for dset in _read_all(path):
         kind = int(dset["type"])
         counts[kind] = counts.get(kind, 0) + 1
-        where = f"dataset {kind} #{counts[kind]}"
+        where = f"{label}dataset {kind} #{counts[kind]}"
+        if kinds is not None and kind not in kinds:
+            continue
         if kind in (15, 2411):
-            reader.add_nodes(dset, where)
-            for num, cs in zip(dset.get("node_nums", []), dset.get("disp_cs", []), strict=False):
-                disp_cs[int(num)] = int(cs)
+            reader.add_nodes(dset, where, kind)
+        elif kind in (18, 2420):
+            reader.add_systems(dset, kind, where)
         elif kind == 58:
             reader.records.append((dset, where))
         elif kind == 55:
@@ -520,61 +608,122 @@ def read_uff(path: str | os.PathLike[str], *, units: dict[str, str] | None = Non
             reader.set_units(dset, where)
         elif kind == 151 and reader.name is None:
             reader.name = str(dset.get("model_name", "")).strip() or None
-    nodes = reader.nodes()
+        else:
+            reader.not_read[kind] = reader.not_read.get(kind, 0) + 1
+
+
+def read_uff(
+    path: str | os.PathLike[str],
+    *,
+    units: dict[str, str] | None = None,
+    geometry: str | os.PathLike[str] | None = None,
+) -> UffContents:
+    """Read a test from a universal file: sensors, units, time records and modes.
+
+    Parameters
+    ----------
+    path : path-like
+        The UFF file (ASCII or binary 58).
+    units : dict, optional
+        ``{"length": ..., "mass": ...}`` to use when neither file has a
+        dataset 164 (ignored when one has).
+    geometry : path-like, optional
+        A second UFF file whose nodes (15/2411), coordinate systems
+        (18/2420), units (164) and name (151) complete `path` (how several
+        exporters write a test: geometry in one file, modes or records in
+        another). Its 55 and 58 datasets are not read.
+
+    Returns
+    -------
+    UffContents
+        ``layout`` (``layout.json`` dictionary), ``mode_rows``, ``records``
+        (one :class:`UffRecord` per impact), ``record_labels`` and ``nodes``
+        (global coordinates). Conventions (sensor ids, coordinate systems,
+        grouping into impacts, units, eigenvalues) in the module
+        documentation.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the data set (``"dataset 58 #3, node 12"``, the
+        count of that type from 1; datasets of the geometry file are prefixed
+        with its name) for: a file pyuff cannot read; a node with two
+        different coordinates; a node defined or measuring in a coordinate
+        system that is missing, cylindrical or spherical; a 58 that is not a
+        time response (naming its function type), whose response node has no
+        coordinates, whose direction is a rotation or scalar, that repeats a
+        sensor of its impact, or whose time axis differs from the rest of its
+        impact; a 55 without a positive frequency, with eigenvalues of both
+        signs, that is not 3D translations, that repeats a mode number, or
+        that lacks a sensor's node; no sensors at all (then, datasets that
+        are not read, such as 2414); no dataset 164 and no `units`; unknown
+        units.
+
+    Warns
+    -----
+    RigididWarning
+        A 55 that is not a mode (ignored); complex eigenvalues read in a
+        convention other than rad/s with a negative real part (naming the
+        evidence).
+    """
+    p = Path(path)
+    reader = _Reader(str(p))
+    if geometry is not None:
+        g = Path(geometry)
+        _read_into(reader, g, f"{g.name}: ", _GEOMETRY_TYPES)
+    _read_into(reader, p, "", None)
+    nodes, no_position = reader.nodes()
+
+    # sensors from the 58s
+    sensors: list[tuple[int, int]] = []
+    time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]] = []
+    for dset, where in reader.records:
+        refusal = _function_type_refusal(reader, dset, where)
+        if refusal is not None:
+            raise refusal
+        node, code = int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0))
+        here = f"{where}, node {node}"
+        if node <= 0:
+            raise reader.error(
+                f"the record names no response node (node {node}, direction {code}): it carries no geometry; "
+                "rigidid needs the node and direction of every record (name them in the exporting tool)",
+                here,
+            )
+        if not 1 <= abs(code) <= 3:
+            what = "a rotation" if 4 <= abs(code) <= 6 else "not a direction"
+            raise reader.error(
+                f"response direction {code} is {what}; accelerometers read along +-x, +-y, +-z (1..3, -1..-3)", here
+            )
+        _require_node(reader, node, nodes, no_position, here, "response node")
+        if (node, code) not in sensors:
+            sensors.append((node, code))
+        time_sets.append((dset, where, (node, code)))
+    if not reader.records:
+        sensors = _sensors_from_modes(reader, nodes, no_position)
+    if not sensors:
+        raise reader.error(_no_sensors_message(reader, nodes))
     if reader.units is None:
         if units is None:
-            raise reader.error("no units: the file has no dataset 164; give the units")
+            raise reader.error(
+                "no units: the file has no dataset 164; give the units (--units LENGTH,MASS, e.g. mm,kg)"
+            )
         given = {"length": str(units.get("length")), "mass": str(units.get("mass"))}
         if given["length"] not in _LENGTH_PER_M or given["mass"] not in _MASS_PER_KG:
             raise InputError(
                 f"unknown units {given['length']}/{given['mass']}; length m/cm/mm/in/ft, mass kg/g/lb", source="units"
             )
         reader.units = given
-
-    # sensors from the 58s
-    sensors: list[tuple[int, int]] = []
-    time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]] = []
-    for dset, where in reader.records:
-        node, code = int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0))
-        if not 1 <= abs(code) <= 3:
-            what = "a rotation" if 4 <= abs(code) <= 6 else "not a direction"
-            raise reader.error(
-                f"response direction {code} is {what}; accelerometers read along +-x, +-y, +-z (1..3, -1..-3)",
-                f"{where}, node {node}",
-            )
-        if node not in nodes:
-            raise reader.error(
-                f"response node {node} has no coordinates (no dataset 15 or 2411 defines it)", f"{where}, node {node}"
-            )
-        if (node, code) not in sensors:
-            sensors.append((node, code))
-        if int(dset.get("func_type", 0)) == 1:
-            time_sets.append((dset, where, (node, code)))
-        else:
-            warnings.warn(
-                f"{reader.source}: {where}: function type {dset.get('func_type')} is not a time response; ignored",
-                RigididWarning,
-                stacklevel=2,
-            )
-    if not reader.records:
-        sensors = _sensors_from_modes(reader, nodes)
-    if not sensors:
-        raise reader.error("no sensors: the file has no dataset 58 (time records) or 55 (modes)")
-    for node, _ in sensors:
-        if disp_cs.get(node, 0) not in (0, 1):
-            warnings.warn(
-                f"{reader.source}: node {node} has displacement coordinate system {disp_cs[node]}; "
-                "its directions are taken in the global axes",
-                RigididWarning,
-                stacklevel=2,
-            )
     ids = _sensor_ids(sensors)
     id_of = dict(zip(sensors, ids, strict=True))
     layout: dict[str, Any] = {
         "name": reader.name or p.stem,
         "units": dict(reader.units),
         "sensors": [
-            {"id": sid, "position": list(nodes[node]), "direction": _dir_name(code)}
+            {
+                "id": sid,
+                "position": list(nodes[node]),
+                "direction": reader.direction(node, code, f"{reader.node_cs.get(node, (0, 0, ''))[2]}"),
+            }
             for (node, code), sid in zip(sensors, ids, strict=True)
         ],
     }
@@ -583,7 +732,41 @@ def read_uff(path: str | os.PathLike[str], *, units: dict[str, str] | None = Non
     return UffContents(layout, rows, records, labels, nodes)
 
 
-def _sensors_from_modes(reader: _Reader, nodes: dict[int, tuple[float, float, float]]) -> list[tuple[int, int]]:
+def _require_node(
+    reader: _Reader,
+    node: int,
+    nodes: dict[int, tuple[float, float, float]],
+    no_position: dict[int, str],
+    where: str,
+    what: str,
+) -> None:
+    if node in nodes:
+        return
+    if node in no_position:
+        raise reader.error(no_position[node], where)
+    raise reader.error(
+        f"{what} {node} has no coordinates: no dataset 15 or 2411 defines it "
+        "(give the geometry file with --geometry when it is separate)",
+        where,
+    )
+
+
+def _no_sensors_message(reader: _Reader, nodes: dict[int, tuple[float, float, float]]) -> str:
+    text = "no sensors: the file has no dataset 58 (time records) or 55 (mode shapes)"
+    if nodes:
+        text += f"; it holds geometry only ({len(nodes)} nodes): give it with --geometry beside a file of "
+        text += "modes or records"
+    not_read = [f"{kind} ({_NOT_READ[kind]})" for kind in sorted(reader.not_read) if kind in _NOT_READ]
+    if 2414 in reader.not_read:
+        text += "; dataset 2414 (analysis results) is not read"
+    elif not_read:
+        text += "; not read: datasets " + ", ".join(not_read)
+    return text
+
+
+def _sensors_from_modes(
+    reader: _Reader, nodes: dict[int, tuple[float, float, float]], no_position: dict[int, str]
+) -> list[tuple[int, int]]:
     sensors: list[tuple[int, int]] = []
     for dset, where in reader.modes:
         if int(dset.get("analysis_type", 0)) not in (2, 3, 7):
@@ -593,8 +776,7 @@ def _sensors_from_modes(reader: _Reader, nodes: dict[int, tuple[float, float, fl
             for axis in range(3):
                 key = (int(node), axis + 1)
                 if vec[axis] != 0 and key not in sensors:
-                    if key[0] not in nodes:
-                        raise reader.error(f"node {key[0]} has no coordinates", f"{where}, node {key[0]}")
+                    _require_node(reader, key[0], nodes, no_position, f"{where}, node {key[0]}", "node")
                     sensors.append(key)
     # order: node of first appearance, then x, y, z
     first = {node: i for i, (node, _) in reversed(list(enumerate(sensors)))}
@@ -638,9 +820,33 @@ def _group_records(
     return records, labels
 
 
+def _convention(reader: _Reader) -> EigenConvention:
+    """The eigenvalue convention of the file's complex modes (:mod:`rigidid.io.uff_eigen`)."""
+    evidence = []
+    for dset, where in reader.modes:
+        if int(dset.get("analysis_type", 0)) in (3, 7):
+            ids = [str(dset.get(f"id{k}", "")) for k in range(1, 6)]
+            evidence.append(
+                (
+                    f"{where}, mode {int(dset.get('mode_n', 0))}",
+                    complex(dset.get("eig", 0.0)),
+                    complex(dset.get("modal_a", 0.0)),
+                    stated_frequency(ids),
+                )
+            )
+    try:
+        convention = eigen_convention(evidence)
+    except ValueError as exc:
+        raise reader.error(str(exc), "dataset 55") from None
+    if convention.note:
+        warnings.warn(f"{reader.source}: {convention.note}", RigididWarning, stacklevel=4)
+    return convention
+
+
 def _mode_rows(reader: _Reader, sensors: list[tuple[int, int]], ids: list[str]) -> list[ModeRow]:
     rows: list[ModeRow] = []
     seen: dict[int, str] = {}
+    convention = _convention(reader) if reader.modes else EigenConvention(False, 1.0, "")
     for dset, where in reader.modes:
         analysis = int(dset.get("analysis_type", 0))
         if analysis not in (2, 3, 7):
@@ -661,8 +867,7 @@ def _mode_rows(reader: _Reader, sensors: list[tuple[int, int]], ids: list[str]) 
             f = float(dset.get("freq", 0.0))
             z = float(dset.get("modal_damp_vis", 0.0))
         else:
-            pole = complex(dset.get("eig", 0.0))
-            pole = pole.conjugate() if pole.imag < 0 else pole
+            pole = convention.pole(complex(dset.get("eig", 0.0)))
             f = abs(pole) / (2.0 * math.pi)
             z = -pole.real / abs(pole) if abs(pole) > 0.0 else 0.0
         if not (math.isfinite(f) and f > 0.0):
