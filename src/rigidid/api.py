@@ -241,9 +241,11 @@ def identify(
     t = sensor_matrix(frame.to_local(positions), directions)
     labels, selection, residuals = _choose_modes(table, t, modes_used, source)
     used = table.subset(labels)
+    notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
     result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+    result = _check_result(result, labels, lay.units.length, notes)
     intervals = None
     if uncertainty:
         from rigidid.core.uncertainty import estimate_noise, propagate
@@ -270,6 +272,63 @@ def identify(
         shapes=used.shapes,
         uncertainty=intervals,
     )
+
+
+def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -> list[str]:
+    """Refuse modes that are not rigid-body modes; warn of a misfitting sensor or damping in percent."""
+    import warnings
+
+    from rigidid.core.checks import nonrigid_modes, percent_damping, sensor_outliers
+    from rigidid.errors import DampingUnitWarning, IdentificationError, SensorFitWarning
+
+    if t.shape[0] > 6:
+        bad = nonrigid_modes(used.labels, rigid_fit_residuals(t, used.shapes))
+        if bad is not None:
+            many = len(bad.labels) > 1
+            labels = ", ".join(str(label) for label in bad.labels)
+            values = ", ".join(f"{r:.2f}" for r in bad.residuals)
+            raise IdentificationError(
+                f"mode{'s' if many else ''} {labels} {'are' if many else 'is'} not {'' if many else 'a '}rigid-body "
+                f"mode{'s' if many else ''}: {'their shapes fit' if many else 'its shape fits'} rigid-body motion "
+                f"with a residual of {values} (rigid-body modes fit to about 0.2 or better); choose the six "
+                "rigid-body modes with --modes"
+            )
+    notes: list[str] = []
+    for finding in sensor_outliers(t, used.shapes):
+        notes.append(
+            f"sensor {ids[finding.index]!r} does not move with the others as a rigid body: its readings are "
+            f"{100 * finding.misfit:.0f} % (RMS over the modes, of each mode's RMS reading) away from the rigid "
+            f"motion of the other sensors (median sensor {100 * finding.typical:.1f} %); check its position, "
+            "direction and sign in the layout"
+        )
+        warnings.warn(notes[-1], SensorFitWarning, stacklevel=3)
+    percent = percent_damping(used.damping_ratio)
+    if percent is not None:
+        shown = ", ".join(f"{z:.3g}" for z in percent.damping_ratio)
+        notes.append(
+            f"every damping ratio is above 10 % of critical ({shown}); damping_ratio is a fraction "
+            "(0.0039 for 0.39 %): were they given in percent?"
+        )
+        warnings.warn(notes[-1], DampingUnitWarning, stacklevel=3)
+    return notes
+
+
+def _check_result(result: Identification, labels: Sequence[int], length: str, notes: list[str]) -> Identification:
+    """Refuse an inertia that is not positive definite; add the data checks' notes to the diagnostics."""
+    from rigidid.core.checks import inertia_not_positive
+    from rigidid.errors import IdentificationError
+
+    bad = inertia_not_positive(result.inertia_per_mass)
+    if bad is not None:
+        moments = ", ".join(f"{v:.4g}" for v in bad.principal_moments_per_mass)
+        raise IdentificationError(
+            f"modes {', '.join(str(m) for m in labels)} determine no rigid body: the inertia tensor they give is "
+            f"not positive definite (principal moments per mass {moments} {length}^2); check that these are the "
+            "six rigid-body modes and that the layout matches the test"
+        )
+    if not notes:
+        return result
+    return replace(result, diagnostics=replace(result.diagnostics, warnings=(*result.diagnostics.warnings, *notes)))
 
 
 def body_from_file(body: BodyFile) -> Body:

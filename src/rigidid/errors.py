@@ -10,11 +10,13 @@ from __future__ import annotations
 
 __all__ = [
     "IdentificationError",
+    "DampingUnitWarning",
     "IllConditionedWarning",
     "InputError",
     "PhysicalPlausibilityWarning",
     "RigididError",
     "RigididWarning",
+    "SensorFitWarning",
 ]
 
 
@@ -60,3 +62,11 @@ class PhysicalPlausibilityWarning(RigididWarning):
 
 class IllConditionedWarning(RigididWarning):
     """A step of the computation is badly conditioned; results may be inaccurate."""
+
+
+class SensorFitWarning(RigididWarning):
+    """One sensor's readings fit rigid-body motion much worse than the others' (wrong position or direction?)."""
+
+
+class DampingUnitWarning(RigididWarning):
+    """Damping ratios that look like percentages (0.39 meant as 0.39 %)."""
