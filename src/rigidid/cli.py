@@ -65,24 +65,24 @@ Draws = Annotated[
 ]
 FrequencyNoise = Annotated[
     float | None,
-    typer.Option(help="Relative std of natural frequencies [default: 0.001].", rich_help_panel=_UNC),
+    typer.Option(help="Relative std of natural frequencies \\[default: 0.001].", rich_help_panel=_UNC),
 ]
 DampingNoise = Annotated[
-    float | None, typer.Option(help="Relative std of damping ratios [default: 0.05].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Relative std of damping ratios \\[default: 0.05].", rich_help_panel=_UNC)
 ]
 ShapeNoise = Annotated[
     float | None,
     typer.Option(
-        help="Std of shape values relative to each mode's RMS [default: from the rigid-body fit with more than "
+        help="Std of shape values relative to each mode's RMS \\[default: from the rigid-body fit with more than "
         "six sensors, else 0.01].",
         rich_help_panel=_UNC,
     ),
 ]
 PositionNoise = Annotated[
-    float | None, typer.Option(help="Std of sensor positions (length unit) [default: 0].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Std of sensor positions (length unit) \\[default: 0].", rich_help_panel=_UNC)
 ]
 AngleNoise = Annotated[
-    float | None, typer.Option(help="Std of sensor directions (degrees) [default: 0].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Std of sensor directions (degrees) \\[default: 0].", rich_help_panel=_UNC)
 ]
 Seed = Annotated[int, typer.Option(help="Seed of the random draws.")]
 Resample = Annotated[
@@ -107,7 +107,7 @@ RecordsFlag = Annotated[
     typer.Option("--records", help="The inputs are impact records: estimate the modes first.", rich_help_panel=_TIME),
 ]
 ModalMethod = Annotated[
-    str | None, typer.Option(help="Modal estimator for records: era or ar [default: era].", rich_help_panel=_TIME)
+    str | None, typer.Option(help="Modal estimator for records: era or ar \\[default: era].", rich_help_panel=_TIME)
 ]
 Band = Annotated[
     tuple[float, float] | None,
@@ -115,10 +115,23 @@ Band = Annotated[
 ]
 MaxOrder = Annotated[int | None, typer.Option(help="Highest model order of the sweep.", rich_help_panel=_TIME)]
 Decimate = Annotated[
-    int | None, typer.Option(help="Decimation factor [default: from the spectrum].", rich_help_panel=_TIME)
+    int | None, typer.Option(help="Decimation factor \\[default: from the spectrum].", rich_help_panel=_TIME)
 ]
 NModes = Annotated[
     int, typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).")
+]
+ForceUnit = Annotated[
+    str | None,
+    typer.Option(
+        help="Force unit of stiffness and damping: N, kN or lbf \\[default: N for kg, g, t; lbf for lb, slug].",
+        metavar="N|kN|lbf",
+    ),
+]
+CsvDir = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv", help="Also write each result matrix as a CSV file (for spreadsheets) into DIR.", metavar="DIR"
+    ),
 ]
 Units = Annotated[
     str | None,
@@ -157,7 +170,29 @@ def _reported() -> Iterator[None]:
 def _console() -> Any:
     from rich.console import Console
 
+    columns = os.environ.get("COLUMNS", "")
+    if columns.isdigit() and int(columns) > 0:
+        return Console(width=int(columns))
     return Console(width=None if sys.stdout.isatty() else 150)
+
+
+def _force_unit(text: str | None) -> str | None:
+    from rigidid.units import FORCE_UNITS
+
+    if text is not None and text not in FORCE_UNITS:
+        raise InputError(f"unknown force unit {text!r}; choose {', '.join(FORCE_UNITS)}", source="--force-unit")
+    return text
+
+
+def _write_csv(directory: Path, result: IdentifyResult, force_unit: str | None) -> None:
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.render import result_csv_files
+
+    directory.mkdir(parents=True, exist_ok=True)
+    files = result_csv_files(result, force_unit)
+    for name, text in files.items():
+        write_text_atomic(directory / name, text)
+    sys.stderr.write(f"rigidid: wrote {len(files)} CSV files to {directory}\n")
 
 
 def _parse_modes(text: str | None) -> list[int] | None:
@@ -304,7 +339,7 @@ def _version(value: bool) -> None:
 @app.callback()
 def _root(
     version: Annotated[
-        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
+        bool, typer.Option("--version", "-V", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
 ) -> None:
     """Rigid-body properties from the modes of an impact test."""
@@ -339,10 +374,14 @@ def identify(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    force_unit: ForceUnit = None,
+    csv: CsvDir = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
         from rigidid.render import result_to_dict
+
+        force_unit = _force_unit(force_unit)
 
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
@@ -354,7 +393,7 @@ def identify(
             noise=noise, seed=seed, resample=resample,
         )  # fmt: skip
         if json_path is not None:
-            out = result_to_dict(result)
+            out = result_to_dict(result, force_unit)
             if estimate is not None:
                 from rigidid.render import estimate_to_dict
 
@@ -372,7 +411,9 @@ def identify(
                 from rigidid.render import estimate_tables
 
                 console.print(estimate_tables(estimate))
-            console.print(result_tables(result))
+            console.print(result_tables(result, force_unit))
+        if csv is not None:
+            _write_csv(csv, result, force_unit)
 
 
 @app.command()
@@ -382,7 +423,10 @@ def modes(
         list[Path] | None, typer.Argument(help="One records.csv per impact.", show_default=False)
     ] = None,
     output: Annotated[str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).")] = "-",
-    method: Annotated[str | None, typer.Option(help="era or ar [default: era].")] = None,
+    modal_method: ModalMethod = None,
+    method: Annotated[
+        str | None, typer.Option("--method", hidden=True, help="Deprecated name of --modal-method.")
+    ] = None,
     n_modes: NModes = 6,
     band: Band = None,
     max_order: MaxOrder = None,
@@ -399,8 +443,13 @@ def modes(
         from rigidid.io.files import ModeTable, modes_csv_text
         from rigidid.render import estimate_to_dict
 
+        if method is not None:
+            if modal_method is not None and modal_method != method:
+                raise InputError("give --modal-method only (--method is its old name)", source="--method")
+            sys.stderr.write("rigidid: warning: modes --method is deprecated; use --modal-method\n")
+            modal_method = method
         data = _test_data(layout, records or [], True, units)
-        estimate = _estimate(data, method, n_modes, band, max_order, decimate)
+        estimate = _estimate(data, modal_method, n_modes, band, max_order, decimate)
         ids = tuple(s.id for s in data.layout.sensors)
         labels = tuple(range(1, len(estimate.frequency_hz) + 1))
         text = modes_csv_text(ModeTable(labels, estimate.frequency_hz, estimate.damping_ratio, ids, estimate.shapes))
@@ -436,7 +485,7 @@ def simulate(
         list[str] | None,
         typer.Option(
             help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
-            "[default: two impacts at the first sensors].",
+            "\\[default: two impacts at the first sensors].",
             rich_help_panel=_TIME,
         ),
     ] = None,
@@ -508,7 +557,7 @@ def plan(
     ] = None,
     candidates: Annotated[
         Path | None,
-        typer.Option(help="Candidate sensors, as a layout.json [default: a grid over the sensors' bounding box]."),
+        typer.Option(help="Candidate sensors, as a layout.json \\[default: a grid over the sensors' bounding box]."),
     ] = None,
     add: Annotated[int, typer.Option(help="Suggest this many sensors to add, one at a time (needs --body).")] = 0,
     draws: Annotated[int, typer.Option(help="Monte Carlo draws per prediction.", rich_help_panel=_UNC)] = 1000,
@@ -568,12 +617,15 @@ def report(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    force_unit: ForceUnit = None,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
         from rigidid import api
         from rigidid.io.atomic import write_text_atomic
         from rigidid.io.files import load_body
+
+        force_unit = _force_unit(force_unit)
 
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,

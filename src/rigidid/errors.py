@@ -9,8 +9,8 @@ only at its top level and turns it into one line on standard error.
 from __future__ import annotations
 
 __all__ = [
-    "IdentificationError",
     "DampingUnitWarning",
+    "IdentificationError",
     "IllConditionedWarning",
     "InputError",
     "PhysicalPlausibilityWarning",

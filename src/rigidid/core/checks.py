@@ -189,7 +189,8 @@ def sensor_outliers(
     order = np.argsort(-share)
     best, second = int(order[0]), int(order[1])
     typical = float(np.median(misfit[checkable]))
-    if share[best] >= share_needed and 1.0 - share[second] > 2.0 * (1.0 - share[best]) and misfit[best] > floor:
+    unique = 1.0 - share[second] > 2.0 * (1.0 - share[best]) + 1e-6  # with 7 sensors all shares are 1
+    if share[best] >= share_needed and unique and misfit[best] > floor:
         return (SensorFinding(best, float(misfit[best]), typical, float(share[best])),)
     return ()
 
