@@ -306,7 +306,7 @@ def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -
     if percent is not None:
         shown = ", ".join(f"{z:.3g}" for z in percent.damping_ratio)
         notes.append(
-            f"every damping ratio is above 10 % of critical ({shown}); damping_ratio is a fraction "
+            f"the damping ratios are mostly above 10 % of critical ({shown}); damping_ratio is a fraction "
             "(0.0039 for 0.39 %): were they given in percent?"
         )
         warnings.warn(notes[-1], DampingUnitWarning, stacklevel=3)
@@ -465,6 +465,7 @@ def plan(
     _, positions, directions = files.layout_arrays(lay)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length)
+    report = _findings_by_id(report, tuple(s.id for s in lay.sensors))
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="--add")
@@ -499,6 +500,14 @@ def plan(
             seed=seed,
         )
     return PlanResult(units, report, prediction, suggestions)
+
+
+def _findings_by_id(report: LayoutReport, ids: tuple[str, ...]) -> LayoutReport:
+    """The layout findings with sensors named by their ids instead of their numbers in the layout."""
+    from rigidid.naming import sensors_by_id
+
+    findings = tuple(replace(f, message=sensors_by_id(f.message, ids)) for f in report.findings)
+    return replace(report, findings=findings)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:

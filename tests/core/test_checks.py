@@ -65,7 +65,8 @@ def test_seven_sensors_cannot_tell_which(engine) -> None:  # type: ignore[no-unt
 
 def test_percent_damping() -> None:
     assert percent_damping([0.39, 0.5, 0.2]) is not None
-    assert percent_damping([0.0039, 0.5, 0.2]) is None
+    assert percent_damping([0.39, 0.395, 0.045, 0.111, 0.193, 0.133]) is not None  # the paper's, in percent
+    assert percent_damping([0.0039, 0.05, 0.2]) is None
     assert percent_damping([0.05, 0.077]) is None
 
 
