@@ -9,7 +9,7 @@ from rigidid.units import FORCE_UNITS, G0, KG_PER_MASS, LBF, default_force_unit,
 
 def test_definitions() -> None:
     assert G0 == 9.80665
-    assert LBF == pytest.approx(4.4482216152605, rel=1e-14)
+    assert pytest.approx(4.4482216152605, rel=1e-14) == LBF
     assert KG_PER_MASS["slug"] == pytest.approx(14.593902937206, rel=1e-12)  # lbf s^2 / ft
     assert KG_PER_MASS["t"] == 1000.0
     assert FORCE_UNITS == ("N", "kN", "lbf")

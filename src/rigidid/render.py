@@ -319,11 +319,11 @@ def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Tabl
             tables.append(_matrix_table(f"{name} of the supports at the CG, per unit mass", mat, DOF, caption))
         return tables
     fu = force_units(length, mass, force_unit)
-    for name, mat, u in (
-        ("Stiffness", ident.stiffness_matrix, fu.stiffness),
-        ("Damping", ident.damping_matrix, fu.damping),
+    for name, per_mass, u in (
+        ("Stiffness", ident.stiffness_per_mass, fu.stiffness),
+        ("Damping", ident.damping_per_mass, fu.damping),
     ):
-        assert mat is not None
+        mat = ident.mass * per_mass
         title = f"{name} of the supports at the CG ({u['translation']}, {u['rotation']})"
         caption = (
             f"x-z block {u['translation']}, rx-rz block {u['rotation']}, coupling blocks {u['coupling']}; "
