@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.uncertainty import NoiseLevels, Uncertainty
+    from rigidid.progress import ProgressCallback
 
 __all__ = [
     "Arrays",
@@ -51,6 +52,7 @@ __all__ = [
     "load_uff",
     "plan",
     "report",
+    "report_pngs",
     "simulate",
     "simulate_records",
     "with_record_spread",
@@ -88,6 +90,8 @@ class IdentifyResult:
     record_spread : RecordSpread or None
         Data-driven intervals from interleaved segments of the records
         (:func:`with_record_spread`).
+    layout_name : str or None
+        The layout's ``name``.
     """
 
     identification: Identification
@@ -102,6 +106,7 @@ class IdentifyResult:
     shapes: NDArray[np.complex128] | None = None
     uncertainty: Uncertainty | None = None
     record_spread: RecordSpread | None = None
+    layout_name: str | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -271,6 +276,7 @@ def identify(
         poles=poles,
         shapes=used.shapes,
         uncertainty=intervals,
+        layout_name=lay.name,
     )
 
 
@@ -722,7 +728,12 @@ def report(
     *,
     mounts: Sequence[Sequence[float]] | None = None,
     stabilisation: Sequence[Any] | None = None,
-    title: str = "rigidid report",
+    title: str | None = None,
+    inputs: Sequence[str] = (),
+    force_unit: str | None = None,
+    body: BodyFile | None = None,
+    records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> str:
     """A self-contained HTML report of an identification (tables and pictures).
 
@@ -733,8 +744,18 @@ def report(
         Mount positions to draw (e.g. from a body estimate).
     stabilisation : sequence, optional
         The stabilisation diagram of :func:`estimate_modes` (``estimate.diagram``).
-    title : str
-        Heading of the document.
+    title : str, optional
+        Heading of the document (default: the layout's name, else "rigidid report").
+    inputs : sequence of str
+        Input file names, listed under the title.
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of stiffness and damping (see :mod:`rigidid.units`).
+    body : BodyFile, optional
+        A body description whose mounts (positions and stiffness) to draw.
+    records : sequence of (ndarray, float), optional
+        The impact records, whose summed spectrum goes behind the stabilisation diagram.
+    progress : callable, optional
+        ``progress(task, done, total)`` while the figures are drawn.
 
     Returns
     -------
@@ -743,6 +764,12 @@ def report(
     """
     from rigidid.reporting import render_report
 
+    stiffness, spectrum = None, None
+    if body is not None:
+        mounts = [m.position for m in body.mounts]
+        stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
+    if records and stabilisation is not None:
+        spectrum = _spectrum(records)
     return render_report(
         result.identification,
         result.positions,
@@ -752,7 +779,58 @@ def report(
         mounts=None if mounts is None else [np.asarray(m, dtype=float) for m in mounts],
         stabilisation=stabilisation,
         uncertainty=_intervals_for_report(result),
-        title=title,
+        title=title or result.layout_name or "rigidid report",
+        mode_labels=result.modes_used,
+        inputs=inputs,
+        force_unit=force_unit,
+        mount_stiffness=stiffness,
+        spectrum=spectrum,
+        progress=progress,
+    )
+
+
+def _spectrum(records: Sequence[tuple[NDArray[np.float64], float]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    from rigidid.core.spectrum import summed_spectrum
+
+    return summed_spectrum([data for data, _ in records], records[0][1])
+
+
+def report_pngs(
+    result: IdentifyResult,
+    directory: PathLike,
+    *,
+    stabilisation: Sequence[Any] | None = None,
+    force_unit: str | None = None,
+    body: BodyFile | None = None,
+    records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
+    progress: ProgressCallback | None = None,
+) -> list[Path]:
+    """The figures of :func:`report` as PNG files in `directory` (see :func:`rigidid.reporting.save_pngs`).
+
+    Parameters are those of :func:`report`; returns the paths written.
+    """
+    from rigidid.reporting import _mount_labels, save_pngs
+
+    folder = Path(directory)
+    folder.mkdir(parents=True, exist_ok=True)
+    mounts, labels = None, []
+    if body is not None:
+        mounts = [np.asarray(m.position, dtype=float) for m in body.mounts]
+        stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
+        labels = _mount_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
+    return save_pngs(
+        folder,
+        result.identification,
+        result.positions,
+        result.directions,
+        result.sensor_ids,
+        result.units,
+        mounts=mounts,
+        stabilisation=stabilisation,
+        mode_labels=result.modes_used,
+        mount_labels=labels,
+        spectrum=_spectrum(records) if records and stabilisation is not None else None,
+        progress=progress,
     )
 
 

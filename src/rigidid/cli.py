@@ -292,8 +292,12 @@ def _identify(
     noise: dict[str, float],
     seed: int,
     resample: int = 0,
+    keep: dict[str, Any] | None = None,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
-    """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
+    """Load the test, estimate its modes from records if asked, identify: what identify and report share.
+
+    With `keep`, its ``"records"`` entry receives the records read (for the report's spectrum).
+    """
     from rigidid import api
     from rigidid.core.identify import METHODS
     from rigidid.io.files import ModeTable
@@ -303,6 +307,8 @@ def _identify(
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     data = _test_data(layout, inputs or [], records, units)
+    if keep is not None:
+        keep["records"] = data.records
     estimate = _estimate(data, **modal) if records else None
     modes = data.modes
     if estimate is not None:
@@ -597,8 +603,10 @@ def report(
     inputs: Inputs = None,
     output: Annotated[Path, typer.Option("-o", "--output", help="The HTML report to write.")] = Path("report.html"),
     png: Annotated[Path | None, typer.Option(help="Also write the figures as PNG files into DIR.")] = None,
-    body: Annotated[Path | None, typer.Option(help="body.json whose mounts to draw.")] = None,
-    title: Annotated[str, typer.Option(help="Title of the report.")] = "rigidid report",
+    body: Annotated[Path | None, typer.Option(help="body.json whose mounts (and their stiffness) to draw.")] = None,
+    title: Annotated[
+        str | None, typer.Option(help="Title of the report \\[default: the layout's name, else 'rigidid report'].")
+    ] = None,
     records: RecordsFlag = False,
     mass: Mass = None,
     modes_used: ModesUsed = None,
@@ -632,24 +640,28 @@ def report(
             angle_deg=angle_noise,
         )  # fmt: skip
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        kept: dict[str, Any] = {}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample,
+            noise=noise, seed=seed, resample=resample, keep=kept,
         )  # fmt: skip
-        mounts = None
-        if body is not None:
-            mounts = [m.position for m in load_body(body).mounts]
+        spec = None if body is None else load_body(body)
         diagram = None if estimate is None else estimate.diagram
-        write_text_atomic(output, api.report(result, mounts=mounts, stabilisation=diagram, title=title))
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            text = api.report(
+                result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
+                force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
+            )  # fmt: skip
+        write_text_atomic(output, text)
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:
-            from rigidid.reporting import save_pngs
-
-            png.mkdir(parents=True, exist_ok=True)
-            paths = save_pngs(
-                png, result.identification, result.positions, result.directions, result.sensor_ids, result.units,
-                mounts=mounts, stabilisation=diagram,
-            )  # fmt: skip
+            with terminal_progress() as progress:
+                paths = api.report_pngs(
+                    result, png, stabilisation=diagram, force_unit=force_unit, body=spec, records=kept.get("records"),
+                    progress=progress,
+                )  # fmt: skip
             sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
 
 
