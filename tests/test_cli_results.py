@@ -114,3 +114,14 @@ def test_sensors_named_by_id() -> None:
     )
     assert sensors_by_id("sensors 1, 2 and 3", ["a", "b", "c"]) == "sensors 'a', 'b' and 'c'"
     assert sensors_by_id("only 5 sensors; sensor 9", ["a"]) == "only 5 sensors; sensor 9"
+
+
+def test_simulate_records_reports_progress(tmp_path: Path) -> None:
+    seen: list[tuple[str, float, float | None]] = []
+    written = api.simulate_records(
+        ENGINE / "body.json", ENGINE / "layout.json", tmp_path, duration=1.0, progress=lambda *a: seen.append(a)
+    )
+    assert len(written) == 2
+    simulated = [(done, total) for task, done, total in seen if task == "simulating impulse responses"]
+    assert simulated[-1] == (1024.0, 1024.0)  # two impacts of 512 samples
+    assert [done for task, done, _ in seen if task == "writing records"] == [0, 1, 2]

@@ -28,6 +28,7 @@ from rigidid.io import files
 from rigidid.io.atomic import write_text_atomic
 from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
+from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
@@ -893,6 +894,7 @@ def simulate_records(
     pretrigger: float = 0.1,
     noise: float = 0.0,
     seed: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> list[Path]:
     """Write impulse-response records of a body on its mounts, one ``record-<k>.csv`` per impact.
 
@@ -912,6 +914,8 @@ def simulate_records(
     noise : float
         Gaussian noise relative to each channel's RMS.
     seed : int, optional
+    progress : callable, optional
+        ``progress(task, done, total)`` while the records are computed and written.
 
     Returns
     -------
@@ -943,13 +947,17 @@ def simulate_records(
         pretrigger=pretrigger,
         noise=noise,
         seed=seed,
+        progress=progress,
     )
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
+    step = progress or no_progress
     for k, values in enumerate(data, start=1):
+        step("writing records", k - 1, len(data))
         written.append(folder / f"record-{k}.csv")
         write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
+    step("writing records", len(data), len(data))
     return written
 
 

@@ -521,17 +521,21 @@ def simulate(
             seed=seed,
         )  # fmt: skip
         if records is not None:
-            written = api.simulate_records(
-                body,
-                layout,
-                records,
-                impacts=[_parse_impact(text) for text in impact] if impact else None,
-                sample_rate=sample_rate,
-                duration=duration,
-                pretrigger=pretrigger,
-                noise=record_noise,
-                seed=seed,
-            )
+            from rigidid.progress import terminal_progress
+
+            with terminal_progress() as progress:
+                written = api.simulate_records(
+                    body,
+                    layout,
+                    records,
+                    impacts=[_parse_impact(text) for text in impact] if impact else None,
+                    sample_rate=sample_rate,
+                    duration=duration,
+                    pretrigger=pretrigger,
+                    noise=record_noise,
+                    seed=seed,
+                    progress=progress,
+                )
             sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
         text = modes_csv_text(table)
         if output == "-":
