@@ -125,3 +125,19 @@ def test_simulate_records_reports_progress(tmp_path: Path) -> None:
     simulated = [(done, total) for task, done, total in seen if task == "simulating impulse responses"]
     assert simulated[-1] == (1024.0, 1024.0)  # two impacts of 512 samples
     assert [done for task, done, _ in seen if task == "writing records"] == [0, 1, 2]
+
+
+def test_inertia_not_positive_definite_exits_1_naming_the_modes(tmp_path: Path) -> None:
+    # six sensors: the elastic mode 7 fits "rigid motion" exactly, and the inertia comes out impossible
+    keep = ("A+x", "A+y", "A+z", "B+x", "B+y", "C+x")
+    layout = json.loads((ENGINE / "layout.json").read_text())
+    layout["sensors"] = [s for s in layout["sensors"] if s["id"] in keep]
+    (tmp_path / "layout.json").write_text(json.dumps(layout))
+    lines = (ENGINE / "modes.csv").read_text().splitlines()
+    (tmp_path / "modes.csv").write_text("\n".join([lines[0], *(r for r in lines[1:] if r.split(",")[3] in keep)]))
+    args = (tmp_path / "layout.json", tmp_path / "modes.csv", "--modes", "1,2,3,5,6,7")
+    ident, rep = run("identify", *args), run("report", *args, "-o", tmp_path / "r.html")
+    assert ident.returncode == rep.returncode == 1
+    error = next(line for line in ident.stderr.splitlines() if line.startswith("rigidid: error:"))
+    assert "modes 1, 2, 3, 5, 6, 7 determine no rigid body" in error and "not positive definite" in error
+    assert error in rep.stderr
