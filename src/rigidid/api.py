@@ -194,6 +194,7 @@ def identify(
     uncertainty: int = 0,
     noise: NoiseLevels | Mapping[str, float] | None = None,
     seed: int | None = 0,
+    progress: ProgressCallback | None = None,
 ) -> IdentifyResult:
     """Identify CG, inertia, stiffness and damping from a layout and its modes.
 
@@ -223,6 +224,9 @@ def identify(
         defaults field by field.
     seed : int, optional
         Seed of the Monte Carlo draws.
+    progress : callable, optional
+        ``progress(task, done, total)`` around the Monte Carlo draws (total
+        unknown while they run).
 
     Returns
     -------
@@ -262,9 +266,12 @@ def identify(
             levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
         else:
             levels = noise
+        task = f"{uncertainty} Monte Carlo draws"
+        (progress or no_progress)(task, 0, None)
         intervals = propagate(
             positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed
         )
+        (progress or no_progress)(task, uncertainty, uncertainty)
     return IdentifyResult(
         identification=result,
         units={"length": lay.units.length, "mass": lay.units.mass},
@@ -427,6 +434,7 @@ def plan(
     noise: Mapping[str, float] | None = None,
     draws: int = 1000,
     seed: int | None = 0,
+    progress: ProgressCallback | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -450,6 +458,9 @@ def plan(
         Monte Carlo draws of each prediction.
     seed : int, optional
         Seed of the draws.
+    progress : callable, optional
+        ``progress(task, done, total)`` around the predictions and the search
+        for sensors (total unknown while they run).
 
     Returns
     -------
@@ -483,7 +494,9 @@ def plan(
     levels = replace(DEFAULT_NOISE, **dict(noise or {}))
     prediction = None
     if report.rank == 6:
+        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 0, None)
         prediction = predict_uncertainty(core_body, positions, directions, noise=levels, draws=draws, seed=seed)
+        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 1, 1)
     suggestions = None
     if add:
         if add < 0:
@@ -495,6 +508,7 @@ def plan(
             )
             _same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
             _, cand_pos, cand_dir = files.layout_arrays(cand)
+        (progress or no_progress)(f"choosing {add} sensors to add", 0, None)
         suggestions = suggest_sensors(
             core_body,
             positions,
@@ -506,6 +520,8 @@ def plan(
             draws=min(draws, 300),
             seed=seed,
         )
+    if suggestions is not None:
+        (progress or no_progress)(f"choosing {add} sensors to add", add, add)
     return PlanResult(units, report, prediction, suggestions)
 
 

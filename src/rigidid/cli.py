@@ -316,16 +316,20 @@ def _identify(
         labels = tuple(range(1, len(estimate.frequency_hz) + 1))
         modes = ModeTable(labels, estimate.frequency_hz, estimate.damping_ratio, ids, estimate.shapes)
     assert modes is not None
-    result = api.identify(
-        data.layout,
-        modes,
-        mass=mass,
-        modes_used=_parse_modes(modes_used),
-        method=method,  # type: ignore[arg-type]
-        uncertainty=draws,
-        noise=noise,
-        seed=seed,
-    )
+    from rigidid.progress import terminal_progress
+
+    with terminal_progress() as progress:
+        result = api.identify(
+            data.layout,
+            modes,
+            mass=mass,
+            modes_used=_parse_modes(modes_used),
+            method=method,  # type: ignore[arg-type]
+            uncertainty=draws,
+            noise=noise,
+            seed=seed,
+            progress=progress,
+        )
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
@@ -590,7 +594,13 @@ def plan(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
-        result = api.plan(layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed)
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            result = api.plan(
+                layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
+                progress=progress,
+            )  # fmt: skip
         if json_path is not None:
             _write_json(json_path, plan_to_dict(result))
         if json_path != "-":
