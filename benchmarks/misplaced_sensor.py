@@ -74,7 +74,7 @@ def main() -> None:
                     if seed == 0:
                         print(f"{sid:>6} {'xyz'[axis]:>4} {noise:5.2f} {cg:9.1f} {moment:12.1f}  {' '.join(named)}")
     print(
-        f"named correctly {right}, named wrongly {wrong}, missed {missed}; false alarms on the true layout {false_alarms}"
+    print(f"named correctly {right}, wrongly {wrong}, missed {missed}; false alarms on the true layout {false_alarms}")
     )
 
 
