@@ -73,9 +73,7 @@ def main() -> None:
                     missed += not named
                     if seed == 0:
                         print(f"{sid:>6} {'xyz'[axis]:>4} {noise:5.2f} {cg:9.1f} {moment:12.1f}  {' '.join(named)}")
-    print(
     print(f"named correctly {right}, wrongly {wrong}, missed {missed}; false alarms on the true layout {false_alarms}")
-    )
 
 
 if __name__ == "__main__":
