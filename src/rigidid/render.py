@@ -153,7 +153,8 @@ def _force_keys(result: IdentifyResult, force_unit: str | None) -> dict[str, Any
 def _fmt(v: float) -> str:
     """Five significant digits in at most 10 characters: plain from 0.01 to 99999, else engineering notation.
 
-    ``245410 -> 245.41e3``, ``1.70996e7 -> 17.100e6``, ``0.00043617 -> 436.17e-6``.
+    ``245410 -> 245.41e3``, ``1.70996e7 -> 17.100e6``, ``0.00043617 -> 436.17e-6``; four digits
+    with a two-digit exponent (``-4.0635e-11 -> -40.64e-12``).
     """
     if v == 0.0 or not np.isfinite(v):
         return "0" if v == 0.0 else str(v)
@@ -161,19 +162,30 @@ def _fmt(v: float) -> str:
     if -2 <= e < 5:
         return f"{v:.{max(0, 4 - e)}f}"
     e3 = 3 * (e // 3)
+    digits = 5 if -10 < e3 < 10 else 4  # a two-digit exponent costs a digit of the mantissa
     mantissa = v / 10.0**e3
-    if abs(round(mantissa, 4 - (e - e3))) >= 1000.0:  # rounding carried to the next power of 1000
+    if abs(round(mantissa, digits - 1 - (e - e3))) >= 1000.0:  # rounding carried to the next power of 1000
         e3 += 3
         e = e3
+        digits = 5 if -10 < e3 < 10 else 4
         mantissa /= 1000.0
-    return f"{mantissa:.{max(0, 4 - (e - e3))}f}e{e3}"
+    return f"{mantissa:.{max(0, digits - 1 - (e - e3))}f}e{e3}"
 
 
 def _matrix_table(title: str, a: NDArray[np.float64], labels: Sequence[str], caption: str | None = None) -> Table:
     from rich import box
     from rich.table import Table
 
-    table = Table(title=title, caption=caption, title_justify="left", caption_justify="left", box=box.SIMPLE_HEAD)
+    table = Table(
+        title=title,
+        caption=caption,
+        title_justify="left",
+        caption_justify="left",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        collapse_padding=True,
+        pad_edge=False,
+    )
     table.add_column("")
     for name in labels:
         table.add_column(name, justify="right")
@@ -330,7 +342,29 @@ def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Tabl
             "rotations in rad"
         )
         tables.append(_matrix_table(title, fu.factor * mat, DOF, caption))
+    tables.append(_diagonal_table(result, force_unit))
     return tables
+
+
+def _diagonal_table(result: IdentifyResult, force_unit: str | None) -> Table:
+    """The diagonals of stiffness and damping in the units of mount data sheets (N/mm and N m/rad...)."""
+    from rich.table import Table
+
+    from rigidid.units import diagonal_units
+
+    ident = result.identification
+    assert ident.mass is not None
+    (t_unit, t_factor), (r_unit, r_factor) = diagonal_units(result.units["length"], result.units["mass"], force_unit)
+    table = Table(title="Supports at the CG, diagonal terms", title_justify="left")
+    for name in ("dof", "stiffness", "unit", "damping", "unit "):
+        table.add_column(name, justify="left" if name.startswith(("dof", "unit")) else "right")
+    for i, dof in enumerate(DOF):
+        factor, unit = (t_factor, t_unit) if i < 3 else (r_factor, r_unit)
+        k = ident.mass * factor * float(ident.stiffness_per_mass[i, i])
+        c = ident.mass * factor * float(ident.damping_per_mass[i, i])
+        damping_unit = unit.replace("/", " s/", 1)
+        table.add_row(dof, _fmt(k), unit, _fmt(c), damping_unit)
+    return table
 
 
 def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str, force_unit: str | None = None) -> Table:
