@@ -43,6 +43,29 @@ def test_paper_vertical_stiffness_in_lbf_per_inch_fits_80_columns(tmp_path: Path
     assert data["quantity_units"]["center_of_gravity"] == "in"
 
 
+def test_engine_tables_fit_80_columns_without_cutting_cells() -> None:
+    out = run("identify", ENGINE / "layout.json", ENGINE / "modes.csv", columns=80)
+    assert out.returncode == 0, out.stderr
+    assert max(len(line) for line in out.stdout.splitlines()) <= 80
+    assert "…" not in out.stdout
+    assert "N/mm" in out.stdout and "N m/rad" in out.stdout  # diagonal terms as mount data sheets give them
+
+
+def test_slug_layout_gives_the_same_lbf_per_inch() -> None:
+    from rigidid.models import LayoutFile
+    from rigidid.render import result_to_dict
+    from rigidid.units import KG_PER_MASS, LB
+
+    data = json.loads((PAPER / "layout.json").read_text())
+    data["units"]["mass"] = "slug"
+    data["mass"] = 136.0 * LB / KG_PER_MASS["slug"]
+    layout = LayoutFile.model_validate(data)
+    with pytest.warns(UserWarning, match="damping matrix"):
+        out = result_to_dict(api.identify(layout, api.load_modes(PAPER / "modes.csv", layout)))
+    assert out["force_units"]["stiffness"]["translation"] == "lbf/in"
+    assert out["stiffness_force"][2][2] == pytest.approx(580.65, abs=0.01)
+
+
 def test_force_unit_option_and_csv(tmp_path: Path) -> None:
     out = run("identify", PAPER / "layout.json", PAPER / "modes.csv", "--force-unit", "N", "--csv", tmp_path / "c")
     assert out.returncode == 0, out.stderr
