@@ -15,15 +15,19 @@ Figures
     sensor-to-CG distance long) and the mounts when given: a 3D view and the
     top (x-y), front (x-z) and side (y-z) projections, equal scales.
 ``modes``
-    The six rigid-body modes of the identified model, a 2 x 3 grid of 3D
-    views: the sensor points and the CG at rest (grey) and displaced by the
-    mode (coloured), joined by the sensor outline (:func:`sensor_outline`)
-    and spokes to the CG.
+    The six measured modes used, each as the rigid-body motion of the CG that
+    best fits its readings (``Identification.mode_shapes_cg``), a 2 x 3 grid
+    of 3D views: the sensor points and the CG at rest (grey) and displaced by
+    the mode (coloured), joined by the sensor outline (:func:`sensor_outline`)
+    and spokes to the CG; titled by mode label.
 ``decoupling``
     Heat maps of the modal kinetic-energy distribution
-    (:mod:`rigidid.core.energy`) in the test axes and in the principal axes.
+    (:mod:`rigidid.core.energy`) of the same motions, in the test axes and in
+    the principal axes, in %: one definition with the terminal table and the
+    result JSON's ``energy_distribution``.
 ``stabilisation``
-    Only when a stabilisation diagram is given.
+    Only when a stabilisation diagram is given; over the summed spectrum of
+    the records when given.
 """
 
 from __future__ import annotations
