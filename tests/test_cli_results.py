@@ -164,3 +164,11 @@ def test_inertia_not_positive_definite_exits_1_naming_the_modes(tmp_path: Path) 
     error = next(line for line in ident.stderr.splitlines() if line.startswith("rigidid: error:"))
     assert "modes 1, 2, 3, 5, 6, 7 determine no rigid body" in error and "not positive definite" in error
     assert error in rep.stderr
+
+
+def test_modes_method_is_a_deprecated_alias_of_modal_method(tmp_path: Path) -> None:
+    api.simulate_records(ENGINE / "body.json", ENGINE / "layout.json", tmp_path, duration=1.0)
+    out = run("modes", ENGINE / "layout.json", tmp_path / "record-1.csv", "--method", "bogus")
+    assert out.returncode == 2
+    assert "--method is deprecated; use --modal-method" in out.stderr
+    assert "--modal-method: unknown method 'bogus'" in out.stderr  # the value went where --modal-method goes
