@@ -28,6 +28,7 @@ from rigidid.io import files
 from rigidid.io.atomic import write_text_atomic
 from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
+from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
     from rigidid.core.noise import NoiseLevels
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.uncertainty import Uncertainty
+    from rigidid.progress import ProgressCallback
 
 __all__ = [
     "Arrays",
@@ -52,6 +54,7 @@ __all__ = [
     "load_uff",
     "plan",
     "report",
+    "report_pngs",
     "simulate",
     "simulate_records",
     "with_record_spread",
@@ -89,6 +92,8 @@ class IdentifyResult:
     record_spread : RecordSpread or None
         Data-driven intervals from interleaved segments of the records
         (:func:`with_record_spread`).
+    layout_name : str or None
+        The layout's ``name``.
     """
 
     identification: Identification
@@ -103,6 +108,7 @@ class IdentifyResult:
     shapes: NDArray[np.complex128] | None = None
     uncertainty: Uncertainty | None = None
     record_spread: RecordSpread | None = None
+    layout_name: str | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -189,6 +195,7 @@ def identify(
     uncertainty: int = 0,
     noise: NoiseLevels | Mapping[str, float] | None = None,
     seed: int | None = 0,
+    progress: ProgressCallback | None = None,
 ) -> IdentifyResult:
     """Identify CG, inertia, stiffness and damping from a layout and its modes.
 
@@ -218,6 +225,9 @@ def identify(
         defaults field by field.
     seed : int, optional
         Seed of the Monte Carlo draws.
+    progress : callable, optional
+        ``progress(task, done, total)`` around the Monte Carlo draws (total
+        unknown while they run).
 
     Returns
     -------
@@ -244,9 +254,11 @@ def identify(
     t = sensor_matrix(frame.to_local(positions), directions)
     labels, selection, residuals = _choose_modes(table, t, modes_used, source)
     used = table.subset(labels)
+    notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
     result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+    result = _check_result(result, labels, lay.units.length, notes)
     intervals = None
     if uncertainty:
         from rigidid.core.noise import estimate_noise
@@ -256,9 +268,12 @@ def identify(
             levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
         else:
             levels = noise
+        task = f"{uncertainty} Monte Carlo draws"
+        (progress or no_progress)(task, 0, None)
         intervals = propagate(
             positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed
         )
+        (progress or no_progress)(task, uncertainty, uncertainty)
     return IdentifyResult(
         identification=result,
         units={"length": lay.units.length, "mass": lay.units.mass},
@@ -271,7 +286,65 @@ def identify(
         poles=poles,
         shapes=used.shapes,
         uncertainty=intervals,
+        layout_name=lay.name,
     )
+
+
+def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -> list[str]:
+    """Refuse modes that are not rigid-body modes; warn of a misfitting sensor or damping in percent."""
+    import warnings
+
+    from rigidid.core.checks import nonrigid_modes, percent_damping, sensor_outliers
+    from rigidid.errors import DampingUnitWarning, IdentificationError, SensorFitWarning
+
+    if t.shape[0] > 6:
+        bad = nonrigid_modes(used.labels, rigid_fit_residuals(t, used.shapes))
+        if bad is not None:
+            many = len(bad.labels) > 1
+            labels = ", ".join(str(label) for label in bad.labels)
+            values = ", ".join(f"{r:.2f}" for r in bad.residuals)
+            raise IdentificationError(
+                f"mode{'s' if many else ''} {labels} {'are' if many else 'is'} not {'' if many else 'a '}rigid-body "
+                f"mode{'s' if many else ''}: {'their shapes fit' if many else 'its shape fits'} rigid-body motion "
+                f"with a residual of {values} (rigid-body modes fit to about 0.2 or better); choose the six "
+                "rigid-body modes with --modes"
+            )
+    notes: list[str] = []
+    for finding in sensor_outliers(t, used.shapes):
+        notes.append(
+            f"sensor {ids[finding.index]!r} does not move with the others as a rigid body: its readings are "
+            f"{100 * finding.misfit:.0f} % (RMS over the modes, of each mode's RMS reading) away from the rigid "
+            f"motion of the other sensors (median sensor {100 * finding.typical:.1f} %); check its position, "
+            "direction and sign in the layout"
+        )
+        warnings.warn(notes[-1], SensorFitWarning, stacklevel=3)
+    percent = percent_damping(used.damping_ratio)
+    if percent is not None:
+        shown = ", ".join(f"{z:.3g}" for z in percent.damping_ratio)
+        notes.append(
+            f"the damping ratios are mostly above 10 % of critical ({shown}); damping_ratio is a fraction "
+            "(0.0039 for 0.39 %): were they given in percent?"
+        )
+        warnings.warn(notes[-1], DampingUnitWarning, stacklevel=3)
+    return notes
+
+
+def _check_result(result: Identification, labels: Sequence[int], length: str, notes: list[str]) -> Identification:
+    """Refuse an inertia that is not positive definite; add the data checks' notes to the diagnostics."""
+    from rigidid.core.checks import inertia_not_positive
+    from rigidid.errors import IdentificationError
+
+    bad = inertia_not_positive(result.inertia_per_mass)
+    if bad is not None:
+        moments = ", ".join(f"{v:.4g}" for v in bad.principal_moments_per_mass)
+        raise IdentificationError(
+            f"modes {', '.join(str(m) for m in labels)} determine no rigid body: the inertia tensor they give is "
+            f"not positive definite (principal moments per mass {moments} {length}^2); check that these are the "
+            "six rigid-body modes and that the layout matches the test"
+        )
+    if not notes:
+        return result
+    return replace(result, diagnostics=replace(result.diagnostics, warnings=(*result.diagnostics.warnings, *notes)))
 
 
 def body_from_file(body: BodyFile) -> Body:
@@ -365,6 +438,7 @@ def plan(
     seed: int | None = 0,
     units: dict[str, str] | None = None,
     geometry: PathLike | None = None,
+    progress: ProgressCallback | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -392,6 +466,9 @@ def plan(
         ``{"length", "mass"}`` of a UFF layout without dataset 164.
     geometry : path-like, optional
         A UFF file completing a UFF layout (see :func:`load_uff`).
+    progress : callable, optional
+        ``progress(task, done, total)`` around the predictions and the search
+        for sensors (total unknown while they run).
 
     Returns
     -------
@@ -424,7 +501,9 @@ def plan(
     levels = replace(DEFAULT_NOISE, **dict(noise or {}))
     prediction = None
     if report.rank == 6:
+        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 0, None)
         prediction = predict_uncertainty(core_body, positions, directions, noise=levels, draws=draws, seed=seed)
+        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 1, 1)
     suggestions = None
     if add:
         if add < 0:
@@ -436,6 +515,7 @@ def plan(
             )
             _same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
             _, cand_pos, cand_dir = files.layout_arrays(cand)
+        (progress or no_progress)(f"choosing {add} sensors to add", 0, None)
         suggestions = suggest_sensors(
             core_body,
             positions,
@@ -447,6 +527,8 @@ def plan(
             draws=min(draws, 300),
             seed=seed,
         )
+    if suggestions is not None:
+        (progress or no_progress)(f"choosing {add} sensors to add", add, add)
     return PlanResult(layout_units, report, prediction, suggestions)
 
 
@@ -640,7 +722,12 @@ def report(
     *,
     mounts: Sequence[Sequence[float]] | None = None,
     stabilisation: Sequence[Any] | None = None,
-    title: str = "rigidid report",
+    title: str | None = None,
+    inputs: Sequence[str] = (),
+    force_unit: str | None = None,
+    body: BodyFile | None = None,
+    records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> str:
     """A self-contained HTML report of an identification (tables and pictures).
 
@@ -651,8 +738,18 @@ def report(
         Mount positions to draw (e.g. from a body estimate).
     stabilisation : sequence, optional
         The stabilisation diagram of :func:`estimate_modes` (``estimate.diagram``).
-    title : str
-        Heading of the document.
+    title : str, optional
+        Heading of the document (default: the layout's name, else "rigidid report").
+    inputs : sequence of str
+        Input file names, listed under the title.
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of stiffness and damping (see :mod:`rigidid.units`).
+    body : BodyFile, optional
+        A body description whose mounts (positions and stiffness) to draw.
+    records : sequence of (ndarray, float), optional
+        The impact records, whose summed spectrum goes behind the stabilisation diagram.
+    progress : callable, optional
+        ``progress(task, done, total)`` while the figures are drawn.
 
     Returns
     -------
@@ -661,6 +758,12 @@ def report(
     """
     from rigidid.reporting import render_report
 
+    stiffness, spectrum = None, None
+    if body is not None:
+        mounts = [m.position for m in body.mounts]
+        stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
+    if records and stabilisation is not None:
+        spectrum = _spectrum(records)
     return render_report(
         result.identification,
         result.positions,
@@ -670,7 +773,58 @@ def report(
         mounts=None if mounts is None else [np.asarray(m, dtype=float) for m in mounts],
         stabilisation=stabilisation,
         uncertainty=_intervals_for_report(result),
-        title=title,
+        title=title or result.layout_name or "rigidid report",
+        mode_labels=result.modes_used,
+        inputs=inputs,
+        force_unit=force_unit,
+        mount_stiffness=stiffness,
+        spectrum=spectrum,
+        progress=progress,
+    )
+
+
+def _spectrum(records: Sequence[tuple[NDArray[np.float64], float]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    from rigidid.core.spectrum import summed_spectrum
+
+    return summed_spectrum([data for data, _ in records], records[0][1])
+
+
+def report_pngs(
+    result: IdentifyResult,
+    directory: PathLike,
+    *,
+    stabilisation: Sequence[Any] | None = None,
+    force_unit: str | None = None,
+    body: BodyFile | None = None,
+    records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
+    progress: ProgressCallback | None = None,
+) -> list[Path]:
+    """The figures of :func:`report` as PNG files in `directory` (see :func:`rigidid.reporting.save_pngs`).
+
+    Parameters are those of :func:`report`; returns the paths written.
+    """
+    from rigidid.reporting import _mount_labels, save_pngs
+
+    folder = Path(directory)
+    folder.mkdir(parents=True, exist_ok=True)
+    mounts, labels = None, []
+    if body is not None:
+        mounts = [np.asarray(m.position, dtype=float) for m in body.mounts]
+        stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
+        labels = _mount_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
+    return save_pngs(
+        folder,
+        result.identification,
+        result.positions,
+        result.directions,
+        result.sensor_ids,
+        result.units,
+        mounts=mounts,
+        stabilisation=stabilisation,
+        mode_labels=result.modes_used,
+        mount_labels=labels,
+        spectrum=_spectrum(records) if records and stabilisation is not None else None,
+        progress=progress,
     )
 
 
@@ -738,6 +892,7 @@ def simulate_records(
     pretrigger: float = 0.1,
     noise: float = 0.0,
     seed: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> list[Path]:
     """Write impulse-response records of a body on its mounts, one ``record-<k>.csv`` per impact.
 
@@ -757,6 +912,8 @@ def simulate_records(
     noise : float
         Gaussian noise relative to each channel's RMS.
     seed : int, optional
+    progress : callable, optional
+        ``progress(task, done, total)`` while the records are computed and written.
 
     Returns
     -------
@@ -788,13 +945,17 @@ def simulate_records(
         pretrigger=pretrigger,
         noise=noise,
         seed=seed,
+        progress=progress,
     )
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
+    step = progress or no_progress
     for k, values in enumerate(data, start=1):
+        step("writing records", k - 1, len(data))
         written.append(folder / f"record-{k}.csv")
         write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
+    step("writing records", len(data), len(data))
     return written
 
 

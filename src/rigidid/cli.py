@@ -66,24 +66,24 @@ Draws = Annotated[
 ]
 FrequencyNoise = Annotated[
     float | None,
-    typer.Option(help="Relative std of natural frequencies [default: 0.001].", rich_help_panel=_UNC),
+    typer.Option(help="Relative std of natural frequencies \\[default: 0.001].", rich_help_panel=_UNC),
 ]
 DampingNoise = Annotated[
-    float | None, typer.Option(help="Relative std of damping ratios [default: 0.05].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Relative std of damping ratios \\[default: 0.05].", rich_help_panel=_UNC)
 ]
 ShapeNoise = Annotated[
     float | None,
     typer.Option(
-        help="Std of shape values relative to each mode's RMS [default: from the rigid-body fit with more than "
+        help="Std of shape values relative to each mode's RMS \\[default: from the rigid-body fit with more than "
         "six sensors, else 0.01].",
         rich_help_panel=_UNC,
     ),
 ]
 PositionNoise = Annotated[
-    float | None, typer.Option(help="Std of sensor positions (length unit) [default: 0].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Std of sensor positions (length unit) \\[default: 0].", rich_help_panel=_UNC)
 ]
 AngleNoise = Annotated[
-    float | None, typer.Option(help="Std of sensor directions (degrees) [default: 0].", rich_help_panel=_UNC)
+    float | None, typer.Option(help="Std of sensor directions (degrees) \\[default: 0].", rich_help_panel=_UNC)
 ]
 Seed = Annotated[int, typer.Option(help="Seed of the random draws.")]
 Resample = Annotated[
@@ -108,7 +108,7 @@ RecordsFlag = Annotated[
     typer.Option("--records", help="The inputs are impact records: estimate the modes first.", rich_help_panel=_TIME),
 ]
 ModalMethod = Annotated[
-    str | None, typer.Option(help="Modal estimator for records: era or ar [default: era].", rich_help_panel=_TIME)
+    str | None, typer.Option(help="Modal estimator for records: era or ar \\[default: era].", rich_help_panel=_TIME)
 ]
 Band = Annotated[
     tuple[float, float] | None,
@@ -116,10 +116,23 @@ Band = Annotated[
 ]
 MaxOrder = Annotated[int | None, typer.Option(help="Highest model order of the sweep.", rich_help_panel=_TIME)]
 Decimate = Annotated[
-    int | None, typer.Option(help="Decimation factor [default: from the spectrum].", rich_help_panel=_TIME)
+    int | None, typer.Option(help="Decimation factor \\[default: from the spectrum].", rich_help_panel=_TIME)
 ]
 NModes = Annotated[
     int, typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).")
+]
+ForceUnit = Annotated[
+    str | None,
+    typer.Option(
+        help="Force unit of stiffness and damping: N, kN or lbf \\[default: N for kg, g, t; lbf for lb, slug].",
+        metavar="N|kN|lbf",
+    ),
+]
+CsvDir = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv", help="Also write each result matrix as a CSV file (for spreadsheets) into DIR.", metavar="DIR"
+    ),
 ]
 Units = Annotated[
     str | None,
@@ -195,7 +208,29 @@ def _reported() -> Iterator[None]:
 def _console() -> Any:
     from rich.console import Console
 
+    columns = os.environ.get("COLUMNS", "")
+    if columns.isdigit() and int(columns) > 0:
+        return Console(width=int(columns))
     return Console(width=None if sys.stdout.isatty() else 150)
+
+
+def _force_unit(text: str | None) -> str | None:
+    from rigidid.units import FORCE_UNITS
+
+    if text is not None and text not in FORCE_UNITS:
+        raise InputError(f"unknown force unit {text!r}; choose {', '.join(FORCE_UNITS)}", source="--force-unit")
+    return text
+
+
+def _write_csv(directory: Path, result: IdentifyResult, force_unit: str | None) -> None:
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.render import result_csv_files
+
+    directory.mkdir(parents=True, exist_ok=True)
+    files = result_csv_files(result, force_unit)
+    for name, text in files.items():
+        write_text_atomic(directory / name, text)
+    sys.stderr.write(f"rigidid: wrote {len(files)} CSV files to {directory}\n")
 
 
 def _parse_modes(text: str | None) -> list[int] | None:
@@ -299,8 +334,12 @@ def _identify(
     seed: int,
     resample: int = 0,
     geometry: Path | None = None,
+    keep: dict[str, Any] | None = None,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
-    """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
+    """Load the test, estimate its modes from records if asked, identify: what identify and report share.
+
+    With `keep`, its ``"records"`` entry receives the records read (for the report's spectrum).
+    """
     from rigidid import api
     from rigidid.core.identify import METHODS
 
@@ -309,18 +348,24 @@ def _identify(
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     data = _test_data(layout, inputs or [], records, units, geometry)
+    if keep is not None:
+        keep["records"] = data.records
     modes, estimate = _estimate(data, **modal) if records else (data.modes, None)
     assert modes is not None
-    result = api.identify(
-        data.layout,
-        modes,
-        mass=mass,
-        modes_used=_parse_modes(modes_used),
-        method=method,  # type: ignore[arg-type]
-        uncertainty=draws,
-        noise=noise,
-        seed=seed,
-    )
+    from rigidid.progress import terminal_progress
+
+    with terminal_progress() as progress:
+        result = api.identify(
+            data.layout,
+            modes,
+            mass=mass,
+            modes_used=_parse_modes(modes_used),
+            method=method,  # type: ignore[arg-type]
+            uncertainty=draws,
+            noise=noise,
+            seed=seed,
+            progress=progress,
+        )
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
@@ -340,7 +385,7 @@ def _version(value: bool) -> None:
 @app.callback()
 def _root(
     version: Annotated[
-        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
+        bool, typer.Option("--version", "-V", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
 ) -> None:
     """Rigid-body properties from the modes of an impact test."""
@@ -376,10 +421,14 @@ def identify(
     decimate: Decimate = None,
     units: Units = None,
     geometry: Geometry = None,
+    force_unit: ForceUnit = None,
+    csv: CsvDir = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
         from rigidid.jsonout import result_to_dict
+
+        force_unit = _force_unit(force_unit)
 
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
@@ -391,7 +440,7 @@ def identify(
             noise=noise, seed=seed, resample=resample, geometry=geometry,
         )  # fmt: skip
         if json_path is not None:
-            out = result_to_dict(result)
+            out = result_to_dict(result, force_unit)
             if estimate is not None:
                 from rigidid.jsonout import estimate_to_dict
 
@@ -409,7 +458,9 @@ def identify(
                 from rigidid.render import estimate_tables
 
                 console.print(estimate_tables(estimate))
-            console.print(result_tables(result))
+            console.print(result_tables(result, force_unit))
+        if csv is not None:
+            _write_csv(csv, result, force_unit)
 
 
 @app.command()
@@ -419,7 +470,10 @@ def modes(
         list[Path] | None, typer.Argument(help="One records.csv per impact.", show_default=False)
     ] = None,
     output: Annotated[str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).")] = "-",
-    method: Annotated[str | None, typer.Option(help="era or ar [default: era].")] = None,
+    modal_method: ModalMethod = None,
+    method: Annotated[
+        str | None, typer.Option("--method", hidden=True, help="Deprecated name of --modal-method.")
+    ] = None,
     n_modes: NModes = 6,
     band: Band = None,
     max_order: MaxOrder = None,
@@ -437,8 +491,13 @@ def modes(
         from rigidid.io.files import modes_csv_text
         from rigidid.jsonout import estimate_to_dict
 
+        if method is not None:
+            if modal_method is not None and modal_method != method:
+                raise InputError("give --modal-method only (--method is its old name)", source="--method")
+            sys.stderr.write("rigidid: warning: modes --method is deprecated; use --modal-method\n")
+            modal_method = method
         data = _test_data(layout, records or [], True, units, geometry)
-        table, estimate = _estimate(data, method, n_modes, band, max_order, decimate)
+        table, estimate = _estimate(data, modal_method, n_modes, band, max_order, decimate)
         text = modes_csv_text(table)
         if json_path is not None:
             _write_json(json_path, estimate_to_dict(estimate))
@@ -473,7 +532,7 @@ def simulate(
         list[str] | None,
         typer.Option(
             help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
-            "[default: two impacts at the first sensors].",
+            "\\[default: two impacts at the first sensors].",
             rich_help_panel=_TIME,
         ),
     ] = None,
@@ -503,17 +562,21 @@ def simulate(
             seed=seed,
         )  # fmt: skip
         if records is not None:
-            written = api.simulate_records(
-                body,
-                layout,
-                records,
-                impacts=[_parse_impact(text) for text in impact] if impact else None,
-                sample_rate=sample_rate,
-                duration=duration,
-                pretrigger=pretrigger,
-                noise=record_noise,
-                seed=seed,
-            )
+            from rigidid.progress import terminal_progress
+
+            with terminal_progress() as progress:
+                written = api.simulate_records(
+                    body,
+                    layout,
+                    records,
+                    impacts=[_parse_impact(text) for text in impact] if impact else None,
+                    sample_rate=sample_rate,
+                    duration=duration,
+                    pretrigger=pretrigger,
+                    noise=record_noise,
+                    seed=seed,
+                    progress=progress,
+                )
             sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
         text = modes_csv_text(table)
         if output == "-":
@@ -545,7 +608,7 @@ def plan(
     ] = None,
     candidates: Annotated[
         Path | None,
-        typer.Option(help="Candidate sensors, as a layout.json [default: a grid over the sensors' bounding box]."),
+        typer.Option(help="Candidate sensors, as a layout.json \\[default: a grid over the sensors' bounding box]."),
     ] = None,
     add: Annotated[int, typer.Option(help="Suggest this many sensors to add, one at a time (needs --body).")] = 0,
     draws: Annotated[int, typer.Option(help="Monte Carlo draws per prediction.", rich_help_panel=_UNC)] = 1000,
@@ -570,10 +633,13 @@ def plan(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
-        result = api.plan(
-            layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
-            units=_parse_units(units), geometry=geometry,
-        )  # fmt: skip
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            result = api.plan(
+                layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
+                units=_parse_units(units), geometry=geometry, progress=progress,
+            )  # fmt: skip
         if json_path is not None:
             _write_json(json_path, plan_to_dict(result))
         if json_path != "-":
@@ -590,8 +656,10 @@ def report(
     inputs: Inputs = None,
     output: Annotated[Path, typer.Option("-o", "--output", help="The HTML report to write.")] = Path("report.html"),
     png: Annotated[Path | None, typer.Option(help="Also write the figures as PNG files into DIR.")] = None,
-    body: Annotated[Path | None, typer.Option(help="body.json whose mounts to draw.")] = None,
-    title: Annotated[str, typer.Option(help="Title of the report.")] = "rigidid report",
+    body: Annotated[Path | None, typer.Option(help="body.json whose mounts (and their stiffness) to draw.")] = None,
+    title: Annotated[
+        str | None, typer.Option(help="Title of the report \\[default: the layout's name, else 'rigidid report'].")
+    ] = None,
     records: RecordsFlag = False,
     mass: Mass = None,
     modes_used: ModesUsed = None,
@@ -611,6 +679,7 @@ def report(
     decimate: Decimate = None,
     units: Units = None,
     geometry: Geometry = None,
+    force_unit: ForceUnit = None,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
@@ -618,29 +687,35 @@ def report(
         from rigidid.io.atomic import write_text_atomic
         from rigidid.io.files import load_body
 
+        force_unit = _force_unit(force_unit)
+
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        kept: dict[str, Any] = {}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept,
         )  # fmt: skip
-        mounts = None
-        if body is not None:
-            mounts = [m.position for m in load_body(body).mounts]
+        spec = None if body is None else load_body(body)
         diagram = None if estimate is None else estimate.diagram
-        write_text_atomic(output, api.report(result, mounts=mounts, stabilisation=diagram, title=title))
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            text = api.report(
+                result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
+                force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
+            )  # fmt: skip
+        write_text_atomic(output, text)
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:
-            from rigidid.reporting import save_pngs
-
-            png.mkdir(parents=True, exist_ok=True)
-            paths = save_pngs(
-                png, result.identification, result.positions, result.directions, result.sensor_ids, result.units,
-                mounts=mounts, stabilisation=diagram,
-            )  # fmt: skip
+            with terminal_progress() as progress:
+                paths = api.report_pngs(
+                    result, png, stabilisation=diagram, force_unit=force_unit, body=spec, records=kept.get("records"),
+                    progress=progress,
+                )  # fmt: skip
             sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
 
 

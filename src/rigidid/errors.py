@@ -13,6 +13,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 __all__ = [
+    "DampingUnitWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -20,6 +21,7 @@ __all__ = [
     "PhysicalPlausibilityWarning",
     "RigididError",
     "RigididWarning",
+    "SensorFitWarning",
     "emit",
 ]
 
@@ -88,3 +90,9 @@ def emit(notices: Iterable[Notice], stacklevel: int = 3) -> None:
     """Issue collected notices as warnings (the caller's caller is named as their origin by default)."""
     for notice in notices:
         warnings.warn(notice.message, notice.category, stacklevel=stacklevel)
+class SensorFitWarning(RigididWarning):
+    """One sensor's readings fit rigid-body motion much worse than the others' (wrong position or direction?)."""
+
+
+class DampingUnitWarning(RigididWarning):
+    """Damping ratios that look like percentages (0.39 meant as 0.39 %)."""

@@ -64,12 +64,15 @@ def _vec(a: NDArray[np.float64] | None) -> list[float] | None:
     return None if a is None else [float(v) for v in a]
 
 
-def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
+def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
     """The result JSON of FORMATS.md (validated by :class:`rigidid.models.ResultFile`).
 
     Parameters
     ----------
     result : IdentifyResult
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of ``stiffness_force`` and ``damping_force`` (default N for
+        kg, g and t, lbf for lb and slug).
 
     Returns
     -------
@@ -130,11 +133,51 @@ def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
             "warnings": list(diag.warnings),
         },
     }
+    out.update(_force_keys(result, force_unit))
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
     if result.record_spread is not None:
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
     return out
+
+
+def _force_keys(result: IdentifyResult, force_unit: str | None) -> dict[str, Any]:
+    """``force_units``, ``stiffness_force``, ``damping_force`` and ``quantity_units`` of the result JSON."""
+    from rigidid.units import force_units
+
+    ident = result.identification
+    length, mass = result.units["length"], result.units["mass"]
+    fu = force_units(length, mass, force_unit)
+    units = {
+        "mass": mass,
+        "center_of_gravity": length,
+        "inertia_per_mass": f"{length}^2",
+        "inertia_tensor": f"{mass} {length}^2",
+        "principal_moments": f"{mass} {length}^2",
+        "principal_moments_per_mass": f"{length}^2",
+        "principal_axes": "1",
+        "stiffness_per_mass": f"1/s^2, {length}/s^2, {length}^2/s^2 (translation, coupling, rotation blocks)",
+        "stiffness_matrix": f"{mass}/s^2, {mass} {length}/s^2, {mass} {length}^2/s^2 (translation, coupling, rotation)",
+        "damping_per_mass": f"1/s, {length}/s, {length}^2/s (translation, coupling, rotation blocks)",
+        "damping_matrix": f"{mass}/s, {mass} {length}/s, {mass} {length}^2/s (translation, coupling, rotation)",
+        "energy_distribution": "1 (fractions)",
+        "frequency_hz": "Hz",
+        "damping_ratio": "1 (fraction of critical)",
+        "rigid_fit_residual": "1",
+        "layout_condition": "1",
+        "inertia_observability": "1",
+    }
+    if ident.mass is None:
+        return {"force_units": None, "stiffness_force": None, "damping_force": None, "quantity_units": units}
+    units["stiffness_force"] = ", ".join(fu.stiffness.values()) + " (translation, coupling, rotation)"
+    units["damping_force"] = ", ".join(fu.damping.values()) + " (translation, coupling, rotation)"
+    assert ident.stiffness_matrix is not None and ident.damping_matrix is not None
+    return {
+        "force_units": {"force": fu.force, "factor": fu.factor, "stiffness": fu.stiffness, "damping": fu.damping},
+        "stiffness_force": _rows(fu.factor * ident.stiffness_matrix),
+        "damping_force": _rows(fu.factor * ident.damping_matrix),
+        "quantity_units": units,
+    }
 
 
 def noise_to_dict(noise: NoiseLevels) -> dict[str, float]:

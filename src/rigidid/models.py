@@ -24,7 +24,7 @@ __all__ = [
 ]
 
 LengthUnit = Literal["m", "cm", "mm", "in", "ft"]
-MassUnit = Literal["kg", "g", "lb"]
+MassUnit = Literal["kg", "g", "t", "lb", "slug"]
 
 AXIS_DIRECTIONS: dict[str, tuple[float, float, float]] = {
     "+x": (1.0, 0.0, 0.0),
@@ -263,6 +263,15 @@ class RecordSpreadResult(BaseModel):
     center_of_gravity: Interval
 
 
+class ForceUnitsResult(_Strict):
+    """Stiffness and damping in force units: ``*_force = factor * *_matrix``."""
+
+    force: Literal["N", "kN", "lbf"]
+    factor: float = Field(description="kg per mass unit * m per length unit / N per force unit")
+    stiffness: dict[str, str] = Field(description="units of the translation, coupling and rotation blocks")
+    damping: dict[str, str] = Field(description="units of the translation, coupling and rotation blocks")
+
+
 class ResultFile(_Strict):
     """The result JSON of ``rigidid identify`` (FORMATS.md); matrices are lists of rows, DOF x, y, z, rx, ry, rz."""
 
@@ -290,6 +299,18 @@ class ResultFile(_Strict):
     uncertainty_records: RecordSpreadResult | None = None
     modal_estimation: dict[str, Any] | None = Field(
         default=None, description="with --records: estimator, impacts found, modes and stabilisation diagram"
+    )
+    force_units: ForceUnitsResult | None = Field(
+        default=None, description="unit strings and factor of stiffness_force and damping_force (null without mass)"
+    )
+    stiffness_force: Matrix6 | None = Field(
+        default=None, description="stiffness_matrix in force units (force_units.stiffness), null without mass"
+    )
+    damping_force: Matrix6 | None = Field(
+        default=None, description="damping_matrix in force units (force_units.damping), null without mass"
+    )
+    quantity_units: dict[str, str] | None = Field(
+        default=None, description="the unit of every numeric key of the result (a text such as 'lb in^2')"
     )
 
 

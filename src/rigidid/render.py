@@ -17,19 +17,47 @@ if TYPE_CHECKING:
 
     from rigidid.core.timedomain import ModalEstimate
 
-__all__ = ["estimate_tables", "plan_tables", "result_tables"]
+__all__ = ["estimate_tables", "plan_tables", "result_csv_files", "result_tables"]
 
 DOF = ("x", "y", "z", "rx", "ry", "rz")
 
 
 def _fmt(v: float) -> str:
-    return f"{v:.6g}" if abs(v) >= 1e-3 or v == 0.0 else f"{v:.3e}"
+    """Five significant digits in at most 10 characters: plain from 0.01 to 99999, else engineering notation.
+
+    ``245410 -> 245.41e3``, ``1.70996e7 -> 17.100e6``, ``0.00043617 -> 436.17e-6``; four digits
+    with a two-digit exponent (``-4.0635e-11 -> -40.64e-12``).
+    """
+    if v == 0.0 or not np.isfinite(v):
+        return "0" if v == 0.0 else str(v)
+    e = int(np.floor(np.log10(abs(v))))
+    if -2 <= e < 5:
+        return f"{v:.{max(0, 4 - e)}f}"
+    e3 = 3 * (e // 3)
+    digits = 5 if -10 < e3 < 10 else 4  # a two-digit exponent costs a digit of the mantissa
+    mantissa = v / 10.0**e3
+    if abs(round(mantissa, digits - 1 - (e - e3))) >= 1000.0:  # rounding carried to the next power of 1000
+        e3 += 3
+        e = e3
+        digits = 5 if -10 < e3 < 10 else 4
+        mantissa /= 1000.0
+    return f"{mantissa:.{max(0, digits - 1 - (e - e3))}f}e{e3}"
 
 
 def _matrix_table(title: str, a: NDArray[np.float64], labels: Sequence[str], caption: str | None = None) -> Table:
+    from rich import box
     from rich.table import Table
 
-    table = Table(title=title, caption=caption, title_justify="left", caption_justify="left")
+    table = Table(
+        title=title,
+        caption=caption,
+        title_justify="left",
+        caption_justify="left",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        collapse_padding=True,
+        pad_edge=False,
+    )
     table.add_column("")
     for name in labels:
         table.add_column(name, justify="right")
@@ -38,12 +66,15 @@ def _matrix_table(title: str, a: NDArray[np.float64], labels: Sequence[str], cap
     return table
 
 
-def result_tables(result: IdentifyResult) -> Group:
+def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Group:
     """Rich tables of CG, inertia, principal axes, stiffness, damping and diagnostics.
 
     Parameters
     ----------
     result : IdentifyResult
+    force_unit : {"N", "kN", "lbf"}, optional
+        Stiffness and damping in this force unit (default N for kg, g and t,
+        lbf for lb and slug); without a mass they stay per unit mass.
 
     Returns
     -------
@@ -84,12 +115,7 @@ def result_tables(result: IdentifyResult) -> Group:
         principal.add_row(_fmt(float(moments[k])), *(f"{float(v):+.4f}" for v in ident.principal_axes[:, k]))
     parts.append(principal)
 
-    for name, mat, t in (("Stiffness", ident.stiffness_per_mass, "s^2"), ("Damping", ident.damping_per_mass, "s")):
-        caption = (
-            f"units{per}: {mass}/{t} (x-z rows and columns), {mass} {length}/{t} (coupling), "
-            f"{mass} {length}^2/{t} (rx-rz block); rotations in rad"
-        )
-        parts.append(_matrix_table(f"{name} of the supports at the CG", m * mat, DOF, caption))
+    parts.extend(_support_tables(result, force_unit))
 
     from rigidid.core.energy import kinetic_energy_distribution
 
@@ -116,18 +142,18 @@ def result_tables(result: IdentifyResult) -> Group:
         caption += f"; {unc.failed} draws failed" if unc.failed else ""
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
-        parts.append(_interval_table(result, unc, title, caption))
+        parts.append(_interval_table(result, unc, title, caption, force_unit))
     if result.record_spread is not None:
         spread = result.record_spread
         title = (
             f"Uncertainty from the records ({spread.used} of {spread.segments} interleaved segments, 95 % intervals)"
         )
         caption = "spread of the segment estimates scaled to all the data; noise only, not sensor placement errors"
-        parts.append(_interval_table(result, spread, title, caption))
+        parts.append(_interval_table(result, spread, title, caption, force_unit))
 
     diag = ident.diagnostics
     modes = Table(title="Modes used", title_justify="left")
-    for name in ("mode", "f (Hz)", "zeta", "rigid fit", "model f (Hz)", "model zeta", "MAC"):
+    for name in ("mode", "f (Hz)", "zeta (-)", "rigid fit (-)", "model f (Hz)", "model zeta (-)", "MAC (-)"):
         modes.add_column(name, justify="right")
     for k, label in enumerate(result.modes_used):
         modes.add_row(
@@ -161,9 +187,63 @@ def result_tables(result: IdentifyResult) -> Group:
     return Group(*parts)
 
 
-def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str) -> Table:
+def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]:
+    """Stiffness and damping at the CG: in force units with a mass, else per unit mass."""
+    from rigidid.units import force_units
+
+    ident = result.identification
+    length, mass = result.units["length"], result.units["mass"]
+    tables = []
+    if ident.mass is None:
+        for name, mat, t in (("Stiffness", ident.stiffness_per_mass, "s^2"), ("Damping", ident.damping_per_mass, "s")):
+            caption = (
+                f"units / {mass}: {mass}/{t} (x-z rows and columns), {mass} {length}/{t} (coupling), "
+                f"{mass} {length}^2/{t} (rx-rz block); rotations in rad"
+            )
+            tables.append(_matrix_table(f"{name} of the supports at the CG, per unit mass", mat, DOF, caption))
+        return tables
+    fu = force_units(length, mass, force_unit)
+    for name, per_mass, u in (
+        ("Stiffness", ident.stiffness_per_mass, fu.stiffness),
+        ("Damping", ident.damping_per_mass, fu.damping),
+    ):
+        mat = ident.mass * per_mass
+        title = f"{name} of the supports at the CG ({u['translation']}, {u['rotation']})"
+        caption = (
+            f"x-z block {u['translation']}, rx-rz block {u['rotation']}, coupling blocks {u['coupling']}; "
+            "rotations in rad"
+        )
+        tables.append(_matrix_table(title, fu.factor * mat, DOF, caption))
+    tables.append(_diagonal_table(result, force_unit))
+    return tables
+
+
+def _diagonal_table(result: IdentifyResult, force_unit: str | None) -> Table:
+    """The diagonals of stiffness and damping in the units of mount data sheets (N/mm and N m/rad...)."""
+    from rich.table import Table
+
+    from rigidid.units import diagonal_units
+
+    ident = result.identification
+    assert ident.mass is not None
+    (t_unit, t_factor), (r_unit, r_factor) = diagonal_units(result.units["length"], result.units["mass"], force_unit)
+    table = Table(title="Supports at the CG, diagonal terms", title_justify="left")
+    for name in ("dof", "stiffness", "unit", "damping", "unit "):
+        table.add_column(name, justify="left" if name.startswith(("dof", "unit")) else "right")
+    for i, dof in enumerate(DOF):
+        factor, unit = (t_factor, t_unit) if i < 3 else (r_factor, r_unit)
+        k = ident.mass * factor * float(ident.stiffness_per_mass[i, i])
+        c = ident.mass * factor * float(ident.damping_per_mass[i, i])
+        damping_unit = unit.replace("/", " s/", 1)
+        table.add_row(dof, _fmt(k), unit, _fmt(c), damping_unit)
+    return table
+
+
+def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str, force_unit: str | None = None) -> Table:
     """Estimate, standard deviation and 95 % interval of the main results."""
     from rich.table import Table
+
+    from rigidid.units import force_units
 
     length, mass = result.units["length"], result.units["mass"]
     per = f" / {mass}" if unc.per_mass else ""
@@ -171,8 +251,15 @@ def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str) 
     for name in ("quantity", "estimate", "std", "95 % interval"):
         table.add_column(name, justify="left" if name == "quantity" else "right")
 
-    def rows(name: str, unit: str, interval: Any, labels: Sequence[str], flat: Sequence[int] | None = None) -> None:
-        values = [np.ravel(getattr(interval, key)) for key in ("estimate", "std", "low", "high")]
+    def rows(
+        name: str,
+        unit: str,
+        interval: Any,
+        labels: Sequence[str],
+        flat: Sequence[int] | None = None,
+        scale: float = 1.0,
+    ) -> None:
+        values = [scale * np.ravel(getattr(interval, key)) for key in ("estimate", "std", "low", "high")]
         for label, i in zip(labels, flat if flat is not None else range(len(labels)), strict=True):
             est, std, low, high = (float(v[i]) for v in values)
             table.add_row(f"{name}{label} ({unit})", _fmt(est), _fmt(std), f"{_fmt(low)} .. {_fmt(high)}")
@@ -181,8 +268,13 @@ def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str) 
     # upper triangle of the symmetric tensor, flat indices into the 3x3 entries
     rows("J_", f"{mass} {length}^2{per}", unc.inertia, ("xx", "yy", "zz", "xy", "xz", "yz"), (0, 4, 8, 1, 2, 5))
     rows("principal moment ", f"{mass} {length}^2{per}", unc.principal_moments, ("1", "2", "3"))
-    rows("stiffness ", f"{mass}/s^2{per}", unc.stiffness_diagonal, DOF[:3])
-    rows("stiffness ", f"{mass} {length}^2/s^2{per}", unc.stiffness_diagonal, DOF[3:], (3, 4, 5))
+    if unc.per_mass:
+        rows("stiffness ", f"{mass}/s^2{per}", unc.stiffness_diagonal, DOF[:3])
+        rows("stiffness ", f"{mass} {length}^2/s^2{per}", unc.stiffness_diagonal, DOF[3:], (3, 4, 5))
+    else:
+        fu = force_units(length, mass, force_unit)
+        rows("stiffness ", fu.stiffness["translation"], unc.stiffness_diagonal, DOF[:3], scale=fu.factor)
+        rows("stiffness ", fu.stiffness["rotation"], unc.stiffness_diagonal, DOF[3:], (3, 4, 5), scale=fu.factor)
     return table
 
 
@@ -308,3 +400,69 @@ def estimate_tables(estimate: ModalEstimate) -> Group:
     for entry in estimate.diagram:
         sweep.add_row(str(entry.order), str(len(entry.poles)), str(int(np.sum(entry.stable))))
     return Group(modes, sweep)
+
+
+def result_csv_files(result: IdentifyResult, force_unit: str | None = None) -> dict[str, str]:
+    """Each result matrix as CSV text for spreadsheets: file name -> text.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of ``stiffness.csv`` and ``damping.csv`` (as :func:`result_tables`).
+
+    Returns
+    -------
+    dict
+        ``center_of_gravity.csv``, ``inertia.csv``, ``principal.csv``,
+        ``stiffness.csv``, ``damping.csv``, ``energy_distribution.csv``: a header
+        row naming the columns (with units), then one row per matrix row with
+        its label first; numbers with 17 significant digits (``repr``).
+    """
+    from rigidid.core.energy import kinetic_energy_distribution
+    from rigidid.units import force_units
+
+    ident = result.identification
+    length, mass = result.units["length"], result.units["mass"]
+    has_mass = ident.mass is not None
+
+    def text(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+        lines = [",".join(header)]
+        lines += [",".join(v if isinstance(v, str) else repr(float(v)) for v in row) for row in rows]  # type: ignore[arg-type]
+        return "\n".join(lines) + "\n"
+
+    inertia = ident.inertia_tensor if ident.inertia_tensor is not None else ident.inertia_per_mass
+    j_unit = f"{mass} {length}^2" if has_mass else f"{length}^2 per {mass}"
+    moments = ident.principal_moments if ident.principal_moments is not None else ident.principal_moments_per_mass
+    out = {
+        "center_of_gravity.csv": text(
+            ["axis", f"cg ({length})"], [[a, v] for a, v in zip("xyz", ident.center_of_gravity, strict=True)]
+        ),
+        "inertia.csv": text([f"({j_unit})", "x", "y", "z"], [[a, *row] for a, row in zip("xyz", inertia, strict=True)]),
+        "principal.csv": text(
+            ["axis", f"moment ({j_unit})", "x", "y", "z"],
+            [[str(k + 1), moments[k], *ident.principal_axes[:, k]] for k in range(3)],
+        ),
+    }
+    if has_mass:
+        fu = force_units(length, mass, force_unit)
+        assert ident.stiffness_matrix is not None and ident.damping_matrix is not None
+        pairs = (
+            ("stiffness.csv", fu.factor * ident.stiffness_matrix, fu.stiffness),
+            ("damping.csv", fu.factor * ident.damping_matrix, fu.damping),
+        )
+        for name, mat, u in pairs:
+            corner = f"({u['translation']}; {u['coupling']}; {u['rotation']})"
+            out[name] = text([corner, *DOF], [[d, *row] for d, row in zip(DOF, mat, strict=True)])
+    else:
+        for name, mat, t in (
+            ("stiffness.csv", ident.stiffness_per_mass, "s^2"),
+            ("damping.csv", ident.damping_per_mass, "s"),
+        ):
+            corner = f"(per {mass}: 1/{t}; {length}/{t}; {length}^2/{t})"
+            out[name] = text([corner, *DOF], [[d, *row] for d, row in zip(DOF, mat, strict=True)])
+    energy = kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)
+    out["energy_distribution.csv"] = text(
+        ["mode (fractions)", *DOF], [[str(label), *row] for label, row in zip(result.modes_used, energy, strict=True)]
+    )
+    return out

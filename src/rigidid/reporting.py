@@ -15,15 +15,19 @@ Figures
     sensor-to-CG distance long) and the mounts when given: a 3D view and the
     top (x-y), front (x-z) and side (y-z) projections, equal scales.
 ``modes``
-    The six rigid-body modes of the identified model, a 2 x 3 grid of 3D
-    views: the sensor points and the CG at rest (grey) and displaced by the
-    mode (coloured), joined by the sensor outline (:func:`sensor_outline`)
-    and spokes to the CG.
+    The six measured modes used, each as the rigid-body motion of the CG that
+    best fits its readings (``Identification.mode_shapes_cg``), a 2 x 3 grid
+    of 3D views: the sensor points and the CG at rest (grey) and displaced by
+    the mode (coloured), joined by the sensor outline (:func:`sensor_outline`)
+    and spokes to the CG; titled by mode label.
 ``decoupling``
     Heat maps of the modal kinetic-energy distribution
-    (:mod:`rigidid.core.energy`) in the test axes and in the principal axes.
+    (:mod:`rigidid.core.energy`) of the same motions, in the test axes and in
+    the principal axes, in %: one definition with the terminal table and the
+    result JSON's ``energy_distribution``.
 ``stabilisation``
-    Only when a stabilisation diagram is given.
+    Only when a stabilisation diagram is given; over the summed spectrum of
+    the records when given.
 """
 
 from __future__ import annotations
@@ -33,7 +37,8 @@ import html
 import io
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -50,6 +55,7 @@ from rigidid.core.energy import (
 from rigidid.core.geometry import sensor_outline
 from rigidid.errors import InputError, RigididError
 from rigidid.io.atomic import write_bytes_atomic
+from rigidid.progress import ProgressCallback, no_progress
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -162,6 +168,151 @@ def _equal_3d(ax: Any, points: Array, zoom: float = 1.0) -> None:
         axis.set_major_locator(MaxNLocator(nbins=5, steps=[1, 2, 2.5, 5, 10]))
 
 
+@dataclass(frozen=True)
+class _Scene:
+    """What the layout figure draws, in the layout's axes (length unit)."""
+
+    positions: Array
+    directions: Array
+    labels: list[tuple[Array, str]]  # one label per distinct position: triaxial sets share one
+    g: Array
+    axes: Array
+    tips: Array
+    mounts: Array
+    mount_labels: list[str]
+    outline: list[int]
+    arrow: float
+    size: float
+
+
+def _sensor_labels(positions: Array, sensor_ids: Sequence[str], size: float) -> list[tuple[Array, str]]:
+    """One label per distinct sensor position: ``A+x/A+y/A+z`` for a triaxial set, not three on top of each other."""
+    groups: list[tuple[Array, list[str]]] = []
+    for sid, p in zip(sensor_ids, positions, strict=True):
+        for q, names in groups:
+            if float(np.linalg.norm(p - q)) <= 1e-6 * size:
+                names.append(sid)
+                break
+        else:
+            groups.append((p, [sid]))
+    return [(q, "/".join(names)) for q, names in groups]
+
+
+def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
+    pos, g = scene.positions, scene.g
+    ring = pos[scene.outline]
+    ax3.plot(ring[:, 0], ring[:, 1], ring[:, 2], color="#9aa7b5", lw=1.0)
+    ax3.scatter(*pos.T, color=_SENSOR_COLOUR, s=28, depthshade=False)
+    ax3.quiver(*pos.T, *(scene.arrow * scene.directions).T, color=_SENSOR_COLOUR, lw=1.6, arrow_length_ratio=0.3)
+    for p, text in scene.labels:
+        ax3.text(*(p + 0.025 * scene.size), text, fontsize=9, color=_SENSOR_COLOUR)
+    ax3.scatter(*g, color=_CG_COLOUR, s=120, marker="*", depthshade=False, zorder=5)
+    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * scene.size])), "CG", fontsize=10, color=_CG_COLOUR, fontweight="bold")
+    for k in range(3):
+        ax3.quiver(*g, *(scene.tips[k] - g), color=_AXIS_COLOURS[k], lw=2.2, arrow_length_ratio=0.15)
+        ax3.text(*scene.tips[k], f" {k + 1}", fontsize=11, color=_AXIS_COLOURS[k], fontweight="bold")
+    if scene.mounts.size:
+        ax3.scatter(*scene.mounts.T, color=_MOUNT_COLOUR, marker="^", s=60, depthshade=False)
+    _equal_3d(ax3, everything, zoom=1.2)
+    ax3.set_xlabel(f"x [{length}]")
+    ax3.set_ylabel(f"y [{length}]")
+    ax3.set_zlabel(f"z [{length}]")
+    ax3.view_init(elev=18, azim=-60)
+
+
+def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tuple[Array, Array], length: str) -> None:
+    """One orthographic view onto the plane of axes `a` and `b`, at the shared scale `limits` (centre, half)."""
+    pos, dirs, g, arrow = scene.positions, scene.directions, scene.g, scene.arrow
+    ring = pos[scene.outline]
+    ax.plot(ring[:, a], ring[:, b], color="#9aa7b5", lw=1.0, zorder=1)
+    ax.scatter(pos[:, a], pos[:, b], color=_SENSOR_COLOUR, s=24, zorder=3)
+    towards = np.cross(np.eye(3)[a], np.eye(3)[b])  # the axis pointing at the viewer
+    for p, d in zip(pos, dirs, strict=True):
+        if abs(d[a]) + abs(d[b]) > 1e-9:
+            ax.annotate(
+                "",
+                xy=(p[a] + arrow * d[a], p[b] + arrow * d[b]),
+                xytext=(p[a], p[b]),
+                arrowprops={"arrowstyle": "-|>", "color": _SENSOR_COLOUR, "lw": 1.4},
+                zorder=3,
+            )
+        else:  # along the line of sight: a dot (towards the viewer) or a cross (away) in a circle
+            ax.scatter([p[a]], [p[b]], s=130, facecolors="none", edgecolors=_SENSOR_COLOUR, zorder=2)
+            if float(towards @ d) < 0.0:
+                ax.scatter([p[a]], [p[b]], s=60, marker="x", color=_SENSOR_COLOUR, zorder=4)
+    for p, text in scene.labels:
+        ax.annotate(text, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=9, color=_SENSOR_COLOUR)
+    for k in range(3):
+        tip = scene.tips[k]
+        if np.hypot(tip[a] - g[a], tip[b] - g[b]) > 0.05 * float(np.linalg.norm(tip - g)):
+            ax.annotate(
+                "",
+                xy=(tip[a], tip[b]),
+                xytext=(g[a], g[b]),
+                arrowprops={"arrowstyle": "-|>", "color": _AXIS_COLOURS[k], "lw": 2.0},
+                zorder=4,
+            )
+            ax.annotate(
+                str(k + 1),
+                (tip[a], tip[b]),
+                xytext=(3, 3),
+                textcoords="offset points",
+                fontsize=11,
+                color=_AXIS_COLOURS[k],
+                fontweight="bold",
+            )
+    ax.scatter([g[a]], [g[b]], color=_CG_COLOUR, marker="*", s=180, zorder=5)
+    ax.annotate(
+        "CG",
+        (g[a], g[b]),
+        xytext=(7, -14),
+        textcoords="offset points",
+        fontsize=10,
+        color=_CG_COLOUR,
+        fontweight="bold",
+    )
+    if scene.mounts.size:
+        ax.scatter(scene.mounts[:, a], scene.mounts[:, b], color=_MOUNT_COLOUR, marker="^", s=60, zorder=2)
+        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
+            ax.annotate(
+                text, (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=8, color=_MOUNT_COLOUR
+            )
+    centre, half = limits
+    ax.set_xlim(centre[a] - half[a], centre[a] + half[a])
+    ax.set_ylim(centre[b] - half[b], centre[b] + half[b])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel(f"{'xyz'[a]} [{length}]")
+    ax.set_ylabel(f"{'xyz'[b]} [{length}]")
+    ax.grid(True, color="#e3e7ec", lw=0.8)
+    ax.set_title(title, fontsize=11)
+
+
+def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, length: str) -> None:
+    """The legend of the layout figure and its numbers (CG, principal moments)."""
+    from matplotlib.lines import Line2D
+
+    notes.axis("off")
+    handles = [
+        Line2D([], [], color=_SENSOR_COLOUR, marker="o", lw=1.4, label="sensor → measuring direction"),
+        Line2D(
+            [], [], color=_SENSOR_COLOUR, marker="o", mfc="none", ms=10, lw=0,
+            label="⊙ / ⊗ direction towards / away from viewer",
+        ),
+        Line2D([], [], color=_CG_COLOUR, marker="*", ms=13, lw=0, label="centre of gravity (CG)"),
+        *(Line2D([], [], color=_AXIS_COLOURS[k], lw=2.2, label=f"principal axis {k + 1}") for k in range(3)),
+    ]  # fmt: skip
+    if scene.mounts.size:
+        label = "mount (stiffness per axis)" if scene.mount_labels else "mount"
+        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label=label))
+    notes.legend(handles=handles, loc="upper left", fontsize=10, frameon=False)
+    text = (
+        f"CG = ({', '.join(_num(float(v), 4) for v in scene.g)}) {length}\n"
+        f"principal moments [{moment_unit}]:\n  "
+        + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
+    )
+    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=10, va="bottom", family="DejaVu Sans")
+
+
 def _layout_figure(
     ident: Identification,
     positions: Array,
@@ -170,19 +321,31 @@ def _layout_figure(
     length: str,
     mass: str,
     mounts: Array,
+    mount_labels: Sequence[str] = (),
 ) -> Figure:
     """3D view above a third-angle drawing: top view over front view, side view right of it."""
     g = ident.center_of_gravity
-    axes = ident.principal_axes
     has_mass = ident.principal_moments is not None
     moments = ident.principal_moments if ident.principal_moments is not None else ident.principal_moments_per_mass
     moment_unit = f"{mass}·{length}²" if has_mass else f"{length}² (per unit mass)"
     size = _scene_size(positions, g[None, :], mounts)
-    arrow = 0.12 * size
     axis_len = 0.5 * float(np.max(np.linalg.norm(positions - g, axis=1))) or 0.2 * size
-    outline = sensor_outline(positions)
-    tips = g[None, :] + axis_len * axes.T
-    everything = np.vstack([positions, positions + arrow * directions, g[None, :], tips, mounts.reshape(-1, 3)])
+    scene = _Scene(
+        positions=positions,
+        directions=directions,
+        labels=_sensor_labels(positions, sensor_ids, size),
+        g=g,
+        axes=ident.principal_axes,
+        tips=g[None, :] + axis_len * ident.principal_axes.T,
+        mounts=mounts,
+        mount_labels=list(mount_labels),
+        outline=sensor_outline(positions),
+        arrow=0.12 * size,
+        size=size,
+    )
+    everything = np.vstack(
+        [positions, positions + scene.arrow * directions, g[None, :], scene.tips, mounts.reshape(-1, 3)]
+    )
     lo, hi = everything.min(axis=0), everything.max(axis=0)
     centre = 0.5 * (lo + hi)
     half = 0.5 * np.maximum(hi - lo, 0.25 * float(np.max(hi - lo))) + 0.08 * float(np.max(hi - lo))
@@ -191,140 +354,66 @@ def _layout_figure(
     grid = fig.add_gridspec(
         3, 2, width_ratios=[half[0], half[1]], height_ratios=[1.15 * (half[0] + half[1]) / 2.0, half[1], half[2]]
     )
-    ax3 = fig.add_subplot(grid[0, :], projection="3d")
+    _layout_3d(fig.add_subplot(grid[0, :], projection="3d"), scene, everything, length)
     top = fig.add_subplot(grid[1, 0])
     front = fig.add_subplot(grid[2, 0], sharex=top)
     side = fig.add_subplot(grid[2, 1], sharey=front)
-    notes = fig.add_subplot(grid[1, 1])
-    views = [(top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"), (side, (1, 2), "side view (y-z)")]
-    names = "xyz"
-
-    # 3D view
-    ring = positions[outline]
-    ax3.plot(ring[:, 0], ring[:, 1], ring[:, 2], color="#9aa7b5", lw=1.0)
-    ax3.scatter(*positions.T, color=_SENSOR_COLOUR, s=28, depthshade=False)
-    ax3.quiver(*positions.T, *(arrow * directions).T, color=_SENSOR_COLOUR, lw=1.6, arrow_length_ratio=0.3)
-    for sid, p in zip(sensor_ids, positions, strict=True):
-        ax3.text(*(p + 0.025 * size), sid, fontsize=10, color=_SENSOR_COLOUR)
-    ax3.scatter(*g, color=_CG_COLOUR, s=120, marker="*", depthshade=False, zorder=5)
-    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * size])), "CG", fontsize=10, color=_CG_COLOUR, fontweight="bold")
-    for k in range(3):
-        ax3.quiver(*g, *(axis_len * axes[:, k]), color=_AXIS_COLOURS[k], lw=2.2, arrow_length_ratio=0.15)
-        ax3.text(*tips[k], f" {k + 1}", fontsize=11, color=_AXIS_COLOURS[k], fontweight="bold")
-    if mounts.size:
-        ax3.scatter(*mounts.T, color=_MOUNT_COLOUR, marker="^", s=60, depthshade=False)
-    _equal_3d(ax3, everything, zoom=1.2)
-    ax3.set_xlabel(f"x [{length}]")
-    ax3.set_ylabel(f"y [{length}]")
-    ax3.set_zlabel(f"z [{length}]")
-    ax3.view_init(elev=18, azim=-60)
-
-    # projections, all at one scale
-    for ax, (a, b), label in views:
-        ax.plot(ring[:, a], ring[:, b], color="#9aa7b5", lw=1.0, zorder=1)
-        ax.scatter(positions[:, a], positions[:, b], color=_SENSOR_COLOUR, s=24, zorder=3)
-        towards = np.cross(np.eye(3)[a], np.eye(3)[b])  # the axis pointing at the viewer
-        for sid, p, d in zip(sensor_ids, positions, directions, strict=True):
-            if abs(d[a]) + abs(d[b]) > 1e-9:
-                ax.annotate(
-                    "",
-                    xy=(p[a] + arrow * d[a], p[b] + arrow * d[b]),
-                    xytext=(p[a], p[b]),
-                    arrowprops={"arrowstyle": "-|>", "color": _SENSOR_COLOUR, "lw": 1.4},
-                    zorder=3,
-                )
-            else:  # along the line of sight: a dot (towards the viewer) or a cross (away) in a circle
-                ax.scatter([p[a]], [p[b]], s=130, facecolors="none", edgecolors=_SENSOR_COLOUR, zorder=2)
-                if float(towards @ d) < 0.0:
-                    ax.scatter([p[a]], [p[b]], s=60, marker="x", color=_SENSOR_COLOUR, zorder=4)
-            ax.annotate(sid, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=10, color=_SENSOR_COLOUR)
-        for k in range(3):
-            if np.hypot(axes[a, k], axes[b, k]) > 0.05:
-                ax.annotate(
-                    "",
-                    xy=(tips[k, a], tips[k, b]),
-                    xytext=(g[a], g[b]),
-                    arrowprops={"arrowstyle": "-|>", "color": _AXIS_COLOURS[k], "lw": 2.0},
-                    zorder=4,
-                )
-                ax.annotate(
-                    str(k + 1),
-                    (tips[k, a], tips[k, b]),
-                    xytext=(3, 3),
-                    textcoords="offset points",
-                    fontsize=11,
-                    color=_AXIS_COLOURS[k],
-                    fontweight="bold",
-                )
-        ax.scatter([g[a]], [g[b]], color=_CG_COLOUR, marker="*", s=180, zorder=5)
-        ax.annotate(
-            "CG",
-            (g[a], g[b]),
-            xytext=(7, -14),
-            textcoords="offset points",
-            fontsize=10,
-            color=_CG_COLOUR,
-            fontweight="bold",
-        )
-        if mounts.size:
-            ax.scatter(mounts[:, a], mounts[:, b], color=_MOUNT_COLOUR, marker="^", s=60, zorder=2)
-        ax.set_xlim(centre[a] - half[a], centre[a] + half[a])
-        ax.set_ylim(centre[b] - half[b], centre[b] + half[b])
-        ax.set_aspect("equal", adjustable="box")
-        ax.set_xlabel(f"{names[a]} [{length}]")
-        ax.set_ylabel(f"{names[b]} [{length}]")
-        ax.grid(True, color="#e3e7ec", lw=0.8)
-        ax.set_title(label, fontsize=11)
-
-    # key and numbers
-    notes.axis("off")
-    from matplotlib.lines import Line2D
-
-    handles = [
-        Line2D([], [], color=_SENSOR_COLOUR, marker="o", lw=1.4, label="sensor → measuring direction"),
-        Line2D(
-            [],
-            [],
-            color=_SENSOR_COLOUR,
-            marker="o",
-            mfc="none",
-            ms=10,
-            lw=0,
-            label="⊙ / ⊗ direction towards / away from viewer",
-        ),
-        Line2D([], [], color=_CG_COLOUR, marker="*", ms=13, lw=0, label="centre of gravity (CG)"),
-        *(Line2D([], [], color=_AXIS_COLOURS[k], lw=2.2, label=f"principal axis {k + 1}") for k in range(3)),
-    ]
-    if mounts.size:
-        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label="mount"))
-    notes.legend(handles=handles, loc="upper left", fontsize=10, frameon=False)
-    text = (
-        f"CG = ({', '.join(_num(float(v), 4) for v in g)}) {length}\n"
-        f"principal moments [{moment_unit}]:\n  "
-        + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
-    )
-    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=10, va="bottom", family="DejaVu Sans")
+    for ax, (a, b), label in ((top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"),
+                              (side, (1, 2), "side view (y-z)")):  # fmt: skip
+        _projection(ax, scene, a, b, label, (centre, half), length)
+    _layout_key(fig.add_subplot(grid[1, 1]), scene, moments, moment_unit, length)
     fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=12)
     return fig
 
 
-def _mode_title(k: int, pole: complex, fractions: Array) -> str:
-    f = abs(pole) / (2.0 * math.pi)
-    z = -pole.real / abs(pole)
+@dataclass(frozen=True)
+class _Decoupling:
+    """The decoupling table: ONE definition for the report's heat map, its numbers and the mode titles.
+
+    The modes are the measured modes used, in the order given, each as the rigid
+    motion of the CG that best explains it (``Identification.mode_shapes_cg``),
+    the same rows as the terminal table and ``energy_distribution`` of the
+    result JSON.
+    """
+
+    labels: list[str]
+    frequency_hz: Array
+    damping_ratio: Array
+    shapes: CArray
+    plain: Array
+    principal: Array
+
+
+def _decoupling(ident: Identification, mode_labels: Sequence[int] | None) -> _Decoupling:
+    n = ident.frequency_hz.shape[0]
+    labels = [str(m) for m in mode_labels] if mode_labels is not None else [str(k + 1) for k in range(n)]
+    if len(labels) != n:
+        raise InputError(f"{len(labels)} mode labels for {n} modes", source="mode_labels")
+    shapes = ident.mode_shapes_cg
+    return _Decoupling(
+        labels=labels,
+        frequency_hz=ident.frequency_hz,
+        damping_ratio=ident.damping_ratio,
+        shapes=shapes,
+        plain=kinetic_energy_distribution(ident.inertia_per_mass, shapes),
+        principal=kinetic_energy_distribution_principal(ident.inertia_per_mass, shapes),
+    )
+
+
+def _mode_title(label: str, f: float, z: float, fractions: Array) -> str:
     top = np.argsort(-fractions)[:2]
-    parts = ", ".join(f"{DOF_LABELS[i]} {100 * fractions[i]:.0f} %" for i in top if fractions[i] >= 0.05)
-    return f"Mode {k + 1}: {f:#.4g} Hz, ζ {100 * z:.2g} %\n{parts}"
+    parts = ", ".join(f"{DOF_LABELS[i]} {100 * fractions[i]:.1f} %" for i in top if fractions[i] >= 0.05)
+    return f"Mode {label}: {f:#.4g} Hz, ζ {100 * z:.2g} %\n{parts}"
 
 
-def _modes_figure(ident: Identification, positions: Array, length: str) -> Figure:
-    poles, shapes = ident.model_modes()
+def _modes_figure(ident: Identification, positions: Array, length: str, table: _Decoupling) -> Figure:
     g = ident.center_of_gravity
-    table = kinetic_energy_distribution(ident.inertia_per_mass, shapes)
+    shapes = table.shapes
     outline = sensor_outline(positions)
     size = _scene_size(positions, g[None, :])
     fig = _new_figure(13.0, 7.4)
     points = np.vstack([positions, g[None, :]])
-    for k in range(poles.shape[0]):
+    for k in range(shapes.shape[1]):
         ax = fig.add_subplot(2, 3, k + 1, projection="3d")
         motion = _point_motion(shapes[:, k], points, g)
         peak = motion.reshape(-1)[np.argmax(np.abs(motion).reshape(-1))]
@@ -339,59 +428,52 @@ def _modes_figure(ident: Identification, positions: Array, length: str) -> Figur
         for p, q in zip(points, moved, strict=True):  # the path of every point
             ax.plot([p[0], q[0]], [p[1], q[1]], [p[2], q[2]], color=_MODE_COLOUR, lw=0.7, ls=":")
         _equal_3d(ax, np.vstack([points, moved]), zoom=1.1)
-        ax.set_title(_mode_title(k, complex(poles[k]), table[k]), fontsize=10)
+        title = _mode_title(
+            table.labels[k], float(table.frequency_hz[k]), float(table.damping_ratio[k]), table.plain[k]
+        )
+        ax.set_title(title, fontsize=10)
         ax.set_xlabel(f"x [{length}]", fontsize=8, labelpad=-2)
         ax.set_ylabel(f"y [{length}]", fontsize=8, labelpad=-2)
         ax.set_zlabel(f"z [{length}]", fontsize=8, labelpad=-2)
         ax.tick_params(labelsize=7, pad=0)
         ax.view_init(elev=22, azim=-60)
     fig.suptitle(
-        "Rigid-body modes of the identified model: sensor outline at rest (grey, dashed) and displaced (red), "
+        "Rigid-body motion of each measured mode used: sensor outline at rest (grey, dashed) and displaced (red), "
         "dotted: path of each sensor; ★ = CG",
         fontsize=11,
     )
     return fig
 
 
-def _decoupling_tables(ident: Identification) -> tuple[CArray, Array, Array]:
-    poles, shapes = ident.model_modes()
-    return (
-        poles,
-        kinetic_energy_distribution(ident.inertia_per_mass, shapes),
-        kinetic_energy_distribution_principal(ident.inertia_per_mass, shapes),
-    )
-
-
-def _decoupling_figure(ident: Identification) -> Figure:
-    poles, plain, principal = _decoupling_tables(ident)
-    rows = [f"{k + 1}: {abs(p) / (2 * math.pi):#.4g} Hz" for k, p in enumerate(poles)]
+def _decoupling_figure(table: _Decoupling) -> Figure:
+    rows = [f"{label}: {f:#.4g} Hz" for label, f in zip(table.labels, table.frequency_hz, strict=True)]
     fig = _new_figure(11.0, 4.4)
     panels = (
-        (plain, DOF_LABELS, "test axes"),
-        (principal, ("x", "y", "z", "r1", "r2", "r3"), "rotations about the principal axes"),
+        (table.plain, DOF_LABELS, "test axes"),
+        (table.principal, PRINCIPAL_DOF_LABELS, "rotations about the principal axes"),
     )
     image = None
-    for i, (table, columns, label) in enumerate(panels):
+    for i, (shares, columns, label) in enumerate(panels):
         ax = fig.add_subplot(1, 2, i + 1)
-        image = ax.imshow(np.clip(table, 0.0, 1.0), cmap="Blues", vmin=0.0, vmax=1.0, aspect="auto")
-        for r in range(table.shape[0]):
-            for c in range(table.shape[1]):
-                v = 100.0 * table[r, c]
+        percent = 100.0 * shares
+        image = ax.imshow(np.clip(percent, 0.0, 100.0), cmap="Blues", vmin=0.0, vmax=100.0, aspect="auto")
+        for r in range(percent.shape[0]):
+            for c in range(percent.shape[1]):
                 ax.text(
                     c,
                     r,
-                    f"{v:.0f}",
+                    f"{percent[r, c]:.1f}",
                     ha="center",
                     va="center",
-                    fontsize=10,
-                    color="white" if table[r, c] > 0.55 else "#1a1a1a",
+                    fontsize=9,
+                    color="white" if percent[r, c] > 55.0 else "#1a1a1a",
                 )
         ax.set_xticks(range(6), columns, fontsize=10)
         ax.set_yticks(range(len(rows)), rows if i == 0 else [""] * len(rows), fontsize=10)
         ax.set_title(f"Kinetic energy per DOF [%], {label}", fontsize=11)
         ax.tick_params(length=0)
     if image is not None:
-        fig.colorbar(image, ax=fig.axes, shrink=0.9, label="fraction of the mode's kinetic energy")
+        fig.colorbar(image, ax=fig.axes, shrink=0.9, label="% of the mode's kinetic energy")
     return fig
 
 
@@ -422,40 +504,53 @@ def _check_stabilisation(stabilisation: Stabilisation) -> list[tuple[int, Array,
     return out
 
 
-def _stabilisation_figure(ident: Identification, entries: list[tuple[int, Array, NDArray[np.bool_]]]) -> Figure:
-    fig = _new_figure(11.0, 5.0)
+def _stabilisation_figure(
+    ident: Identification,
+    entries: list[tuple[int, Array, NDArray[np.bool_]]],
+    spectrum: tuple[Array, Array] | None = None,
+) -> Figure:
+    """Poles per model order over the summed spectrum of the records; the legend below the axes."""
+    fig = _new_figure(11.0, 5.4)
     ax = fig.add_subplot(1, 1, 1)
+    handles: list[Any] = []
+    top = max([float(np.max(f)) for _, f, _ in entries if f.size] + [float(np.max(ident.frequency_hz))])
+    ax.set_xlim(0.0, 1.1 * top)
+    if spectrum is not None:
+        freq, power = spectrum
+        back = ax.twinx()
+        shown = (power > 0.0) & (freq <= 1.1 * top)
+        back.fill_between(freq[shown], power[shown], color="#d9dee5", lw=0.0, zorder=0)
+        (line,) = back.plot(freq[shown], power[shown], color="#9aa7b5", lw=0.8, label="sum of the records' spectra")
+        back.set_yscale("log")
+        back.set_ylabel("power spectral density (sum over channels and records)", color="#6b7886", fontsize=9)
+        back.tick_params(axis="y", colors="#6b7886", labelsize=8)
+        ax.set_zorder(back.get_zorder() + 1)  # poles in front of the spectrum
+        ax.patch.set_visible(False)
+        handles.append(line)
     for f in ident.frequency_hz:
         ax.axvline(float(f), color=_CG_COLOUR, lw=0.9, alpha=0.6, zorder=1)
     first = [True, True]
     for order, f, s in entries:
         if np.any(~s):
-            ax.scatter(
-                f[~s],
-                np.full(int(np.sum(~s)), order),
-                marker="x",
-                s=14,
-                color="#9aa7b5",
-                label="not stable" if first[0] else None,
-                zorder=2,
+            handle = ax.scatter(
+                f[~s], np.full(int(np.sum(~s)), order), marker="x", s=14, color="#7d8a98", label="not stable", zorder=2
             )
+            if first[0]:
+                handles.append(handle)
             first[0] = False
         if np.any(s):
-            ax.scatter(
-                f[s],
-                np.full(int(np.sum(s)), order),
-                marker="o",
-                s=22,
-                color=_SENSOR_COLOUR,
-                label="stable" if first[1] else None,
-                zorder=3,
+            handle = ax.scatter(
+                f[s], np.full(int(np.sum(s)), order), marker="o", s=22, color=_SENSOR_COLOUR, label="stable", zorder=3
             )
+            if first[1]:
+                handles.append(handle)
             first[1] = False
-    ax.plot([], [], color=_CG_COLOUR, lw=0.9, label="modes used")
+    (used,) = ax.plot([], [], color=_CG_COLOUR, lw=0.9, label="modes used")
+    handles.append(used)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("model order")
     ax.grid(True, color="#e3e7ec", lw=0.8)
-    ax.legend(loc="upper right", fontsize=9)
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=9, frameon=False)
     ax.set_title("Stabilisation diagram", fontsize=11)
     return fig
 
@@ -483,17 +578,34 @@ def _figures(
     units: Mapping[str, str],
     mounts: Sequence[ArrayLike] | None,
     stabilisation: Stabilisation | None,
+    *,
+    mode_labels: Sequence[int] | None = None,
+    mount_labels: Sequence[str] = (),
+    spectrum: tuple[ArrayLike, ArrayLike] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> dict[str, Figure]:
     length, mass = _units(units)
     pos, dirs, ids, m = _as_arrays(positions, directions, sensor_ids, mounts)
     entries = None if stabilisation is None else _check_stabilisation(stabilisation)  # check before drawing
-    figures = {
-        "layout": _layout_figure(ident, pos, dirs, ids, length, mass, m),
-        "modes": _modes_figure(ident, pos, length),
-        "decoupling": _decoupling_figure(ident),
-    }
+    table = _decoupling(ident, mode_labels)
+    back = None
+    if spectrum is not None:
+        back = (np.asarray(spectrum[0], dtype=float).ravel(), np.asarray(spectrum[1], dtype=float).ravel())
+        if back[0].shape != back[1].shape:
+            raise InputError("frequencies and spectrum differ in length", source="spectrum")
+    step = progress or no_progress
+    drawers: list[tuple[str, Callable[[], Figure]]] = [
+        ("layout", lambda: _layout_figure(ident, pos, dirs, ids, length, mass, m, mount_labels)),
+        ("modes", lambda: _modes_figure(ident, pos, length, table)),
+        ("decoupling", lambda: _decoupling_figure(table)),
+    ]
     if entries is not None:
-        figures["stabilisation"] = _stabilisation_figure(ident, entries)
+        drawers.append(("stabilisation", lambda: _stabilisation_figure(ident, entries, back)))
+    figures = {}
+    for k, (name, draw) in enumerate(drawers):
+        step("drawing the report's figures", k, len(drawers))
+        figures[name] = draw()
+    step("drawing the report's figures", len(drawers), len(drawers))
     return figures
 
 
@@ -640,6 +752,13 @@ def render_report(
     stabilisation: Stabilisation | None = None,
     uncertainty: Mapping[str, Any] | None = None,
     title: str = "rigidid report",
+    mode_labels: Sequence[int] | None = None,
+    inputs: Sequence[str] = (),
+    force_unit: str | None = None,
+    mount_stiffness: Sequence[ArrayLike] | None = None,
+    spectrum: tuple[ArrayLike, ArrayLike] | None = None,
+    created: str | None = None,
+    progress: ProgressCallback | None = None,
 ) -> str:
     """One self-contained HTML document reporting an identification.
 
@@ -672,6 +791,23 @@ def render_report(
         (``draws``, ``failed``, ``noise`` ...) are shown as a caption.
     title : str
         Heading and ``<title>`` of the document.
+    mode_labels : sequence of int, optional
+        Labels of the modes used (default 1..6), shown wherever a mode is named.
+    inputs : sequence of str
+        Names of the input files, listed under the title.
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of stiffness and damping when the mass is known (default N
+        for kg, g, t; lbf for lb, slug; see :mod:`rigidid.units`).
+    mount_stiffness : sequence of array_like of shape (3, 3), optional
+        Stiffness of each mount (mass/s^2), written beside its marker in the
+        force unit.
+    spectrum : (array_like, array_like), optional
+        Frequencies (Hz) and the summed power spectrum of the records, drawn
+        behind the stabilisation diagram.
+    created : str, optional
+        Date and time shown under the title (default: now, UTC).
+    progress : callable, optional
+        ``progress(task, done, total)`` while the figures are drawn.
 
     Returns
     -------
@@ -690,41 +826,91 @@ def render_report(
         If matplotlib is not installed.
     """
     length, mass_unit = _units(units)
-    pos, dirs, ids, _ = _as_arrays(positions, directions, sensor_ids, mounts)
+    pos, dirs, ids, mount_pos = _as_arrays(positions, directions, sensor_ids, mounts)
     uncertainty_table = None if uncertainty is None else _uncertainty_html(uncertainty, length, mass_unit)
-    figures = _figures(identification, pos, dirs, ids, units, mounts, stabilisation)
-    pngs = {name: _png(fig) for name, fig in figures.items()}
     ident = identification
-    diag = ident.diagnostics
-    has_mass = ident.mass is not None
-    mass_text = f"{_num(ident.mass)} {mass_unit}" if has_mass else "not given (results per unit mass)"
-    g = ident.center_of_gravity
-    parts: list[str] = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
-        f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">rigidid {_esc(__version__)} · method {_esc(ident.method)} · units: length {_esc(length)}, '
-        f"mass {_esc(mass_unit)}, time s · mass {_esc(mass_text)} · {len(ids)} sensors</p>",
+    table = _decoupling(ident, mode_labels)
+    mount_labels = _mount_labels(mount_stiffness, length, mass_unit, force_unit)
+    figures = _figures(
+        ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=mount_labels,
+        spectrum=spectrum, progress=progress,
+    )  # fmt: skip
+    pngs = {name: _png(fig) for name, fig in figures.items()}
+    parts = [
+        _head_html(title, ident, ids, length, mass_unit, inputs, created),
+        *(f'<div class="warn">⚠ {_esc(message)}</div>' for message in ident.diagnostics.warnings),
+        _mass_properties_html(ident, length, mass_unit),
+        _modes_html(ident, table),
+        _supports_html(ident, length, mass_unit, force_unit),
+        _decoupling_html(table, pngs["decoupling"]),
+        _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, mount_labels),
+        "<h2>Mode shapes</h2>",
+        _figure_html(
+            pngs["modes"],
+            "rigid-body mode shapes",
+            "Each measured mode used, as the rigid-body motion that best fits its sensor readings (the rows of the "
+            "decoupling table); the largest sensor displacement is drawn as a quarter of the layout size. Complex "
+            "modes are shown at the phase of their largest motion.",
+        ),
     ]
-    for message in diag.warnings:
-        parts.append(f'<div class="warn">⚠ {_esc(message)}</div>')
+    if "stabilisation" in pngs:
+        parts.append("<h2>Stabilisation diagram</h2>")
+        behind = "; grey: the sum of the records' power spectra (right axis)" if spectrum is not None else ""
+        parts.append(
+            _figure_html(
+                pngs["stabilisation"],
+                "stabilisation diagram",
+                f"Poles per model order; vertical lines: the measured modes used{behind}.",
+            )
+        )
+    if uncertainty_table is not None:
+        parts += ["<h2>Uncertainty</h2>", uncertainty_table]
+    parts += [_diagnostics_html(ident), "</body></html>"]
+    return "\n".join(parts)
 
-    # mass properties
-    parts.append("<h2>Centre of gravity and inertia</h2>")
-    parts.append('<div class="flex"><div><h3>Centre of gravity</h3>')
+
+def _head_html(
+    title: str,
+    ident: Identification,
+    ids: Sequence[str],
+    length: str,
+    mass_unit: str,
+    inputs: Sequence[str],
+    created: str | None,
+) -> str:
+    """Document head, title, and the line of what this is: version, date, inputs, units, mass."""
+    import datetime
+
+    when = created or datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    mass_text = f"{_num(ident.mass)} {mass_unit}" if ident.mass is not None else "not given (results per unit mass)"
+    files = f'<p class="meta">input: {_esc(", ".join(inputs))}</p>' if inputs else ""
+    return "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html lang="en"><head><meta charset="utf-8">',
+            '<meta name="viewport" content="width=device-width, initial-scale=1">',
+            f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
+            f"<h1>{_esc(title)}</h1>",
+            f'<p class="meta">rigidid {_esc(__version__)} · {_esc(when)} · method {_esc(ident.method)} · units: '
+            f"length {_esc(length)}, mass {_esc(mass_unit)}, time s · mass {_esc(mass_text)} · {len(ids)} sensors</p>",
+            files,
+        ]
+    )
+
+
+def _mass_properties_html(ident: Identification, length: str, mass_unit: str) -> str:
+    has_mass = ident.mass is not None
+    parts = ["<h2>Centre of gravity and inertia</h2>", '<div class="flex"><div><h3>Centre of gravity</h3>']
     parts.append(
         _table(
             ["", f"[{length}]"],
-            [[a, _num(float(v))] for a, v in zip("xyz", g, strict=True)],
+            [[a, _num(float(v))] for a, v in zip("xyz", ident.center_of_gravity, strict=True)],
             caption="in the layout's axes",
         )
     )
-    inertia = ident.inertia_tensor if has_mass else ident.inertia_per_mass
+    inertia = ident.inertia_tensor if ident.inertia_tensor is not None else ident.inertia_per_mass
     inertia_unit = f"{mass_unit}·{length}²" if has_mass else f"{length}² (per unit mass)"
     parts.append("</div><div><h3>Inertia tensor about the CG</h3>")
-    assert inertia is not None
     parts.append(
         _matrix_html(
             inertia,
@@ -732,8 +918,7 @@ def render_report(
             caption=f"[{inertia_unit}]; off-diagonal entries are tensor entries (minus the products of inertia)",
         )
     )
-    moments = ident.principal_moments if has_mass else ident.principal_moments_per_mass
-    assert moments is not None
+    moments = ident.principal_moments if ident.principal_moments is not None else ident.principal_moments_per_mass
     axes = ident.principal_axes
     parts.append("</div><div><h3>Principal moments and axes</h3>")
     parts.append(
@@ -744,12 +929,14 @@ def render_report(
         )
     )
     parts.append("</div></div>")
+    return "\n".join(parts)
 
-    # modes
-    parts.append("<h2>Modes</h2>")
-    mode_rows = [
+
+def _modes_html(ident: Identification, table: _Decoupling) -> str:
+    diag = ident.diagnostics
+    rows = [
         [
-            str(k + 1),
+            _esc(table.labels[k]),
             _num(float(ident.frequency_hz[k])),
             _num(100 * float(ident.damping_ratio[k]), 4),
             _num(float(diag.model_frequency_hz[k])),
@@ -759,47 +946,69 @@ def render_report(
         ]
         for k in range(ident.frequency_hz.shape[0])
     ]
-    parts.append(
-        _table(
-            ["mode", "measured f [Hz]", "measured ζ [%]", "model f [Hz]", "model ζ [%]", "MAC", "rigid-fit residual"],
-            mode_rows,
-            caption="measured modes used, in order, and the matching modes of the identified model",
-        )
+    return "<h2>Modes</h2>" + _table(
+        [
+            "mode",
+            "measured f [Hz]",
+            "measured ζ [%]",
+            "model f [Hz]",
+            "model ζ [%]",
+            "MAC [-]",
+            "rigid-fit residual [-]",
+        ],
+        rows,
+        caption="measured modes used, by label, and the matching modes of the identified model",
     )
 
-    # stiffness and damping
-    for name, per_mass, absolute, power in (
-        ("Stiffness", ident.stiffness_per_mass, ident.stiffness_matrix, 2),
-        ("Damping", ident.damping_per_mass, ident.damping_matrix, 1),
-    ):
-        matrix = absolute if absolute is not None else per_mass
-        blocks = _block_units(length, mass_unit if has_mass else None, power)
-        scope = "" if has_mass else " per unit mass"
-        parts.append(f"<h2>{name} matrix at the CG{_esc(scope)}</h2>")
-        parts.append(
-            _matrix_html(
-                matrix,
-                DOF_LABELS,
-                caption=f"units: x-z block [{blocks[0]}], coupling blocks [{blocks[1]}], rx-rz block [{blocks[2]}]",
-            )
-        )
 
-    # decoupling
-    poles, plain, principal = _decoupling_tables(ident)
-    parts.append("<h2>Decoupling: kinetic energy distribution</h2>")
+def _supports_html(ident: Identification, length: str, mass_unit: str, force_unit: str | None) -> str:
+    """Stiffness and damping at the CG: in force units with a mass, else per unit mass."""
+    from rigidid.units import force_units
+
+    parts = []
+    fu = force_units(length, mass_unit, force_unit) if ident.mass is not None else None
+    for name, per_mass, power in (
+        ("Stiffness", ident.stiffness_per_mass, 2),
+        ("Damping", ident.damping_per_mass, 1),
+    ):
+        if fu is None or ident.mass is None:
+            blocks = _block_units(length, None, power)
+            parts.append(f"<h2>{name} matrix at the CG per unit mass</h2>")
+            caption = f"units: x-z block [{blocks[0]}], coupling blocks [{blocks[1]}], rx-rz block [{blocks[2]}]"
+            parts.append(_matrix_html(per_mass, DOF_LABELS, caption=caption))
+            continue
+        u = fu.stiffness if power == 2 else fu.damping
+        blocks_mass = _block_units(length, mass_unit, power)
+        parts.append(f"<h2>{name} matrix at the CG</h2>")
+        caption = (
+            f"units: x-z block [{u['translation']}], coupling blocks [{u['coupling']}], rx-rz block "
+            f"[{u['rotation']}]; rotations in rad. In the layout's units (result JSON {name.lower()}_matrix): "
+            f"x-z block [{blocks_mass[0]}], coupling blocks [{blocks_mass[1]}], rx-rz block [{blocks_mass[2]}]; "
+            f"multiplied by {_num(fu.factor, 6)} they give the force units."
+        )
+        parts.append(_matrix_html(fu.factor * ident.mass * per_mass, DOF_LABELS, caption=caption))
+    return "\n".join(parts)
+
+
+def _decoupling_html(table: _Decoupling, png: bytes) -> str:
+    parts = ["<h2>Decoupling: kinetic energy distribution</h2>"]
     parts.append(
         _figure_html(
-            pngs["decoupling"],
+            png,
             "kinetic energy distribution heat map",
-            "Share of each model mode's kinetic energy in each DOF at the CG (cycle-averaged for complex modes); "
-            "rows sum to 100 %. Left: test axes (entries can be negative with products of inertia; shown as 0 in "
-            "colour). Right: rotations about the principal axes 1, 2, 3.",
+            "Share of each measured mode's kinetic energy in each DOF at the CG (cycle-averaged for complex modes); "
+            "rows sum to 100 %; the same numbers as the terminal table and energy_distribution in the result JSON. "
+            "Left: test axes (entries can be negative with products of inertia; shown as 0 in colour). Right: "
+            "rotations about the principal axes 1, 2, 3.",
         )
     )
-    labels = [f"{k + 1} ({abs(p) / (2 * math.pi):#.4g} Hz)" for k, p in enumerate(poles)]
     numbers = [
-        [_esc(labels[k]), *(f"{100 * v:.1f}" for v in plain[k]), *(f"{100 * v:.1f}" for v in principal[k])]
-        for k in range(len(labels))
+        [
+            _esc(f"{label} ({f:#.4g} Hz)"),
+            *(f"{100 * v:.1f}" for v in table.plain[k]),
+            *(f"{100 * v:.1f}" for v in table.principal[k]),
+        ]
+        for k, (label, f) in enumerate(zip(table.labels, table.frequency_hz, strict=True))
     ]
     parts.append("<details><summary>the numbers [%]</summary>")
     parts.append(
@@ -810,16 +1019,39 @@ def render_report(
         )
     )
     parts.append("</details>")
+    return "\n".join(parts)
 
-    # figures
-    parts.append("<h2>Layout</h2>")
+
+def _mount_labels(
+    stiffness: Sequence[ArrayLike] | None, length: str, mass_unit: str, force_unit: str | None
+) -> list[str]:
+    """``k 180/160/420 N/mm`` per mount: the diagonal of its stiffness in the force unit."""
+    if not stiffness:
+        return []
+    from rigidid.units import force_units
+
+    fu = force_units(length, mass_unit, force_unit)
+    labels = []
+    for k in stiffness:
+        diag = fu.factor * np.diag(np.asarray(k, dtype=float).reshape(3, 3))
+        labels.append("k " + "/".join(_num(float(v), 3) for v in diag) + f" {fu.stiffness['translation']}")
+    return labels
+
+
+def _layout_html(
+    png: bytes, pos: Array, dirs: Array, ids: Sequence[str], length: str, mounts: Array, mount_labels: Sequence[str]
+) -> str:
+    parts = ["<h2>Layout</h2>"]
+    mount_text = ""
+    if mounts.size:
+        mount_text = " Mounts: black triangles" + (", with their stiffness along x/y/z." if mount_labels else ".")
     parts.append(
         _figure_html(
-            pngs["layout"],
+            png,
             "sensor layout with CG and principal axes",
             f"Sensors (blue, arrows along the measuring directions; in the projections ⊙ points towards, ⊗ away "
-            f"from the viewer), CG (red star) and principal axes 1, 2, 3 from the CG; lengths in {length}."
-            + (" Mounts: black triangles." if mounts else ""),
+            f"from the viewer; sensors at one point share one label), CG (red star) and principal axes 1, 2, 3 "
+            f"from the CG; lengths in {length}.{mount_text}",
         )
     )
     parts.append(
@@ -831,45 +1063,33 @@ def render_report(
             ],
         )
     )
-    parts.append("<h2>Mode shapes</h2>")
-    parts.append(
-        _figure_html(
-            pngs["modes"],
-            "rigid-body mode shapes",
-            "Each model mode displaces the sensor points and the CG; the largest sensor displacement is drawn as a "
-            "quarter of the layout size. Complex modes are shown at the phase of their largest motion.",
-        )
-    )
-    if "stabilisation" in pngs:
-        parts.append("<h2>Stabilisation diagram</h2>")
+    if mount_labels:
         parts.append(
-            _figure_html(
-                pngs["stabilisation"],
-                "stabilisation diagram",
-                "Poles per model order; vertical lines: the measured modes used.",
+            _table(
+                ["mount", f"x [{length}]", f"y [{length}]", f"z [{length}]", "stiffness x/y/z"],
+                [
+                    [str(k + 1), *(_num(float(v)) for v in m), _esc(text.removeprefix("k "))]
+                    for k, (m, text) in enumerate(zip(mounts, mount_labels, strict=False))
+                ],
+                caption="from the body description",
             )
         )
-    if uncertainty_table is not None:
-        parts.append("<h2>Uncertainty</h2>")
-        parts.append(uncertainty_table)
-
-    # diagnostics
-    parts.append("<h2>Diagnostics</h2>")
-    parts.append(
-        _table(
-            ["quantity", "value"],
-            [
-                ["layout condition number", _num(diag.layout_condition, 4)],
-                ["layout rank", str(diag.layout_rank)],
-                ["structure residual |DQ - (DQ)ᵀ| / |DQ|", _residual(diag.structure_residual)],
-                ["largest rigid-fit residual", _residual(float(np.max(diag.rigid_fit_residual)))],
-                ["smallest model MAC", f"{float(np.min(diag.model_mac)):.4f}"],
-                ["warnings", f"{len(diag.warnings)} (listed at the top)" if diag.warnings else "none"],
-            ],
-        )
-    )
-    parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _diagnostics_html(ident: Identification) -> str:
+    diag = ident.diagnostics
+    return "<h2>Diagnostics</h2>" + _table(
+        ["quantity", "value"],
+        [
+            ["layout condition number", _num(diag.layout_condition, 4)],
+            ["layout rank", str(diag.layout_rank)],
+            ["structure residual |DQ - (DQ)ᵀ| / |DQ|", _residual(diag.structure_residual)],
+            ["largest rigid-fit residual", _residual(float(np.max(diag.rigid_fit_residual)))],
+            ["smallest model MAC", f"{float(np.min(diag.model_mac)):.4f}"],
+            ["warnings", f"{len(diag.warnings)} (listed at the top)" if diag.warnings else "none"],
+        ],
+    )
 
 
 def _direction_text(d: Array) -> str:
@@ -892,6 +1112,7 @@ def save_pngs(
     *,
     mounts: Sequence[ArrayLike] | None = None,
     stabilisation: Stabilisation | None = None,
+    **extras: Any,
 ) -> list[Path]:
     """Write the report's figures as PNG files.
 
@@ -901,6 +1122,9 @@ def save_pngs(
         An existing folder.
     identification, positions, directions, sensor_ids, units, mounts, stabilisation
         As :func:`render_report`.
+    **extras
+        ``mode_labels``, ``mount_labels``, ``spectrum``, ``progress`` as for
+        the figures of :func:`render_report`.
 
     Returns
     -------
@@ -918,7 +1142,7 @@ def save_pngs(
     folder = Path(directory)
     if not folder.is_dir():
         raise InputError("not an existing folder", source=str(folder))
-    figures = _figures(identification, positions, directions, sensor_ids, units, mounts, stabilisation)
+    figures = _figures(identification, positions, directions, sensor_ids, units, mounts, stabilisation, **extras)
     paths = []
     for name in FIGURE_NAMES:
         if name in figures:

@@ -409,8 +409,8 @@ def check_layout(
     same_tolerance : float
         Two sensors this close (same fraction) share one position.
     names : sequence of str, optional
-        Sensor ids for the messages; default ``"1"``, ``"2"``... in the
-        layout's order.
+        Sensor ids for the messages (quoted there: ``sensor 'A+x'``); default
+        the numbers 1, 2... in the layout's order.
 
     Returns
     -------
@@ -472,7 +472,7 @@ def check_layout(
     dirs = normalise_directions(directions)
     if dirs.shape != pos.shape:
         raise InputError(f"directions must match positions {pos.shape}, got {dirs.shape}")
-    labels = [str(i + 1) for i in range(pos.shape[0])] if names is None else [str(n) for n in names]
+    labels = [str(i + 1) for i in range(pos.shape[0])] if names is None else [repr(str(n)) for n in names]
     if len(labels) != pos.shape[0]:
         raise InputError(f"names must match positions ({pos.shape[0]}), got {len(labels)}")
     frame = layout_frame(pos)

@@ -17,6 +17,7 @@ from rigidid.core.geometry import normalise_directions, sensor_matrix
 from rigidid.core.simulate import Body, system_matrices
 from rigidid.core.statespace import state_matrix
 from rigidid.errors import InputError
+from rigidid.progress import ProgressCallback, no_progress
 
 __all__ = ["impulse_records", "record_time"]
 
@@ -59,6 +60,7 @@ def impulse_records(
     pretrigger: float = 0.0,
     noise: float = 0.0,
     seed: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> list[Array]:
     """Sensor accelerations after a unit impulse at each impact, exact.
 
@@ -88,6 +90,9 @@ def impulse_records(
     seed : int, optional
         Seed of the noise generator (one generator for all records, drawn in
         impact order).
+    progress : callable, optional
+        ``progress(task, done, total)``, called with the samples computed
+        across all impacts (see :mod:`rigidid.progress`).
 
     Returns
     -------
@@ -145,6 +150,8 @@ def impulse_records(
     if n_decay < 1:
         raise InputError("duration is shorter than one sample")
     rng = np.random.default_rng(seed)
+    step = progress or no_progress
+    total = float(n_decay * len(impacts))
     records: list[Array] = []
     for i, (where, along) in enumerate(impacts):
         r_f = np.asarray(where, dtype=float).reshape(3)
@@ -164,6 +171,7 @@ def impulse_records(
             stop = min(start + _CHUNK, n_decay)
             t = np.arange(start, stop) / sample_rate
             record[n_pre + start : n_pre + stop] = (np.exp(np.outer(t, mu)) @ weights.T).real
+            step("simulating impulse responses", float(i * n_decay + stop), total)
         if noise > 0.0:
             rms = np.sqrt(np.mean(record[n_pre:] ** 2, axis=0))
             record += rng.standard_normal(record.shape) * (noise * rms)
