@@ -268,12 +268,13 @@ def identify(
             levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
         else:
             levels = noise
+        step = progress or no_progress
         task = f"{uncertainty} Monte Carlo draws"
-        (progress or no_progress)(task, 0, None)
+        step(task, 0, uncertainty)
         intervals = propagate(
-            positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed
-        )
-        (progress or no_progress)(task, uncertainty, uncertainty)
+            positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed,
+            progress=lambda _, done, total: step(task, done, total),
+        )  # fmt: skip
     return IdentifyResult(
         identification=result,
         units={"length": lay.units.length, "mass": lay.units.mass},
@@ -500,10 +501,13 @@ def plan(
     core_body = body_from_file(spec)
     levels = replace(DEFAULT_NOISE, **dict(noise or {}))
     prediction = None
+    step = progress or no_progress
     if report.rank == 6:
-        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 0, None)
-        prediction = predict_uncertainty(core_body, positions, directions, noise=levels, draws=draws, seed=seed)
-        (progress or no_progress)(f"predicting the uncertainty ({draws} draws)", 1, 1)
+        task = f"predicting the uncertainty ({draws} draws)"
+        prediction = predict_uncertainty(
+            core_body, positions, directions, noise=levels, draws=draws, seed=seed,
+            progress=lambda _, done, total: step(task, done, total),
+        )  # fmt: skip
     suggestions = None
     if add:
         if add < 0:
@@ -515,7 +519,7 @@ def plan(
             )
             _same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
             _, cand_pos, cand_dir = files.layout_arrays(cand)
-        (progress or no_progress)(f"choosing {add} sensors to add", 0, None)
+        step(f"choosing {add} sensors to add", 0, add)
         suggestions = suggest_sensors(
             core_body,
             positions,
@@ -526,9 +530,8 @@ def plan(
             noise=levels,
             draws=min(draws, 300),
             seed=seed,
+            progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
         )
-    if suggestions is not None:
-        (progress or no_progress)(f"choosing {add} sensors to add", add, add)
     return PlanResult(layout_units, report, prediction, suggestions)
 
 

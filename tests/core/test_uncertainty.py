@@ -307,3 +307,11 @@ def test_calibration_of_95_percent_intervals(record_property: Callable[[str, obj
     assert COVERAGE_MIN <= mom_cov.mean() <= COVERAGE_MAX
     # no single coordinate far off either (binomial sd at 200 tests is 1.5 %)
     assert np.all(cg_cov >= COVERAGE_MIN - 0.03) and np.all(mom_cov >= COVERAGE_MIN - 0.03)
+
+
+def test_progress_counts_the_draws_identified() -> None:
+    pos, dirs, poles, shapes, mass = paper_sample()
+    calls: list[tuple[str, float, float | None]] = []
+    propagate(pos, dirs, poles, shapes, mass=mass, draws=50, seed=1, progress=lambda *a: calls.append(a))
+    assert calls and calls[-1][1:] == (50, 50)
+    assert all(0 < done <= 50 for _, done, _ in calls)

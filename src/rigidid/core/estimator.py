@@ -31,6 +31,7 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -647,6 +648,7 @@ def estimate(
     shapes: CArray,
     *,
     damping_weight: float = DAMPING_WEIGHT,
+    progress: Callable[[str, float, float | None], None] | None = None,
 ) -> Estimates:
     """Identify a stack of tests: :func:`prepare`, :func:`solve_cg`, :func:`at_cg`, in chunks.
 
@@ -662,6 +664,8 @@ def estimate(
         Mode shapes as the sensors read them.
     damping_weight : float
         Weight of the damping twin of eq. (18).
+    progress : callable, optional
+        ``progress("identifying", done, total)`` after each chunk of tests.
 
     Returns
     -------
@@ -679,6 +683,8 @@ def estimate(
                                    prepared.status))  # fmt: skip
             continue
         parts.append(_estimate_chunk(prepared, damping_weight))
+        if progress is not None:
+            progress("identifying", min(i + _CHUNK, positions.shape[0]), positions.shape[0])
     if len(parts) == 1:
         return parts[0]
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")

@@ -18,6 +18,7 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,6 +49,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
+Progress = Callable[[str, float, "float | None"], None]
 
 
 # --------------------------------------------------------------------------- predicted uncertainty
@@ -145,6 +147,7 @@ def predict_uncertainty(
     draws: int = 1000,
     seed: int | None = 0,
     damping_weight: float = DAMPING_WEIGHT,
+    progress: Progress | None = None,
 ) -> Prediction:
     """Predicted standard deviation of the CG and inertia for a planned test.
 
@@ -164,6 +167,8 @@ def predict_uncertainty(
         Seed (fixed by default so that repeated plans agree).
     damping_weight : float
         As in :func:`~rigidid.core.identify.identify`.
+    progress : callable, optional
+        ``progress(task, done, total)`` as the draws are identified.
 
     Returns
     -------
@@ -190,7 +195,7 @@ def predict_uncertainty(
     modes = body_modes(body, pos, dirs)
     result = propagate(
         pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=draws, seed=seed,
-        damping_weight=damping_weight,
+        damping_weight=damping_weight, progress=progress,
     )  # fmt: skip
     moments = np.linalg.eigvalsh(body.inertia_tensor)
     cg_std = result.center_of_gravity.std
@@ -372,6 +377,7 @@ def suggest_sensors(
     draws: int = 300,
     seed: int | None = 0,
     damping_weight: float = DAMPING_WEIGHT,
+    progress: Progress | None = None,
 ) -> SensorPlan:
     """Greedy choice of sensors to add, each the one that most reduces the predicted uncertainty.
 
@@ -400,6 +406,8 @@ def suggest_sensors(
         random numbers), so comparisons are much less noisy than the figures.
     damping_weight : float
         As in :func:`~rigidid.core.identify.identify`.
+    progress : callable, optional
+        ``progress("choosing sensors", step, add)`` after each step.
 
     Returns
     -------
@@ -495,5 +503,7 @@ def suggest_sensors(
         chosen.append(c_best)
         ranking = tuple((int(remaining[i]), float(scores[i])) for i in order)
         steps.append(SuggestedSensor(step, c_best, c_pos[c_best].copy(), c_dir[c_best].copy(), figs[best], ranking))
+        if progress is not None:
+            progress("choosing sensors", step, add)
     emit(notices)
     return SensorPlan(baseline, tuple(steps), c_pos, c_dir, noise, draws)

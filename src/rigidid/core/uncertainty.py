@@ -19,6 +19,7 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,7 @@ def identify_batch(
     shapes: ArrayLike,
     *,
     damping_weight: float = DAMPING_WEIGHT,
+    progress: Callable[[str, float, float | None], None] | None = None,
 ) -> Estimates:
     """Identify many tests at once with the kernel of :func:`rigidid.core.identify.identify`.
 
@@ -67,6 +69,8 @@ def identify_batch(
         Mode shapes as the sensors read them.
     damping_weight : float
         As in :func:`~rigidid.core.identify.identify`.
+    progress : callable, optional
+        ``progress(task, done, total)`` as the draws are identified.
 
     Returns
     -------
@@ -101,7 +105,7 @@ def identify_batch(
     norms = np.linalg.norm(dirs_in, axis=2, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         dirs = np.where(norms > 0.0, dirs_in / norms, np.nan)
-    return estimator.estimate(pos, dirs, lam, psi, damping_weight=damping_weight)
+    return estimator.estimate(pos, dirs, lam, psi, damping_weight=damping_weight, progress=progress)
 
 
 # --------------------------------------------------------------------------- propagation
@@ -202,6 +206,7 @@ def propagate(
     draws: int = 1000,
     seed: int | None = None,
     damping_weight: float = DAMPING_WEIGHT,
+    progress: Callable[[str, float, float | None], None] | None = None,
 ) -> Uncertainty:
     """Monte Carlo uncertainty of the CG, inertia and mount stiffness/damping.
 
@@ -226,6 +231,8 @@ def propagate(
         Seed of the random generator, for reproducible intervals.
     damping_weight : float
         As in :func:`~rigidid.core.identify.identify`.
+    progress : callable, optional
+        ``progress(task, done, total)`` as the draws are identified.
 
     Returns
     -------
@@ -286,7 +293,9 @@ def propagate(
         raise InputError(f"the number of draws must be a positive integer, got {draws!r}", source="draws")
     base = identify(pos, dirs, lam, psi, mass=mass, method="structured", damping_weight=damping_weight, warn=False)
     data = perturb(pos, dirs, lam, psi, noise, int(draws), mass=mass, seed=seed)
-    batch = identify_batch(data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight)
+    batch = identify_batch(
+        data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight, progress=progress
+    )
     return summarise(base_estimate(base), batch, data.mass, noise=noise, seed=seed)
 
 
