@@ -82,6 +82,19 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
         Render it with a rich console; nothing is printed here.
     """
     from rich.console import Group
+
+    return Group(
+        *_mass_tables(result),
+        *_support_tables(result, force_unit),
+        _energy_table(result),
+        *_uncertainty_tables(result, force_unit),
+        _modes_table(result),
+        _diagnostics_table(result),
+    )
+
+
+def _mass_tables(result: IdentifyResult) -> list[Table]:
+    """Centre of gravity, inertia tensor, principal moments and axes."""
     from rich.table import Table
 
     ident = result.identification
@@ -89,22 +102,16 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
     absolute = ident.mass is not None
     per = "" if absolute else f" / {mass}"
     m = ident.mass if ident.mass is not None else 1.0
-    parts: list[Any] = []
-
     head = Table(title="Centre of gravity", title_justify="left")
     for axis in ("x", "y", "z"):
         head.add_column(f"{axis} ({length})", justify="right")
     head.add_row(*(_fmt(float(v)) for v in ident.center_of_gravity))
-    parts.append(head)
-
     note = None if absolute else "no mass given: values per unit mass (pass --mass or set mass in the layout)"
-    parts.append(
-        _matrix_table(
-            f"Inertia tensor about the CG ({mass} {length}^2{per})",
-            m * ident.inertia_per_mass,
-            ("x", "y", "z"),
-            "off-diagonal entries are minus the products of inertia" + (f"; {note}" if note else ""),
-        )
+    inertia = _matrix_table(
+        f"Inertia tensor about the CG ({mass} {length}^2{per})",
+        m * ident.inertia_per_mass,
+        ("x", "y", "z"),
+        "off-diagonal entries are minus the products of inertia" + (f"; {note}" if note else ""),
     )
     principal = Table(title="Principal moments and axes", title_justify="left")
     principal.add_column(f"moment ({mass} {length}^2{per})", justify="right")
@@ -113,12 +120,16 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
     moments = m * ident.principal_moments_per_mass
     for k in range(3):
         principal.add_row(_fmt(float(moments[k])), *(f"{float(v):+.4f}" for v in ident.principal_axes[:, k]))
-    parts.append(principal)
+    return [head, inertia, principal]
 
-    parts.extend(_support_tables(result, force_unit))
+
+def _energy_table(result: IdentifyResult) -> Table:
+    """The decoupling table: each mode's kinetic energy per motion at the CG."""
+    from rich.table import Table
 
     from rigidid.core.energy import kinetic_energy_distribution
 
+    ident = result.identification
     energy = Table(
         title="Kinetic energy distribution at the CG (%)",
         caption="decoupling table: share of each mode's kinetic energy per motion; rows sum to 100",
@@ -134,23 +145,35 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
         energy.add_row(
             str(label), *(f"[bold]{100 * v:.1f}[/bold]" if i == top else f"{100 * v:.1f}" for i, v in enumerate(row))
         )
-    parts.append(energy)
+    return energy
 
+
+def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]:
+    """Monte Carlo intervals and record-segment intervals, when computed."""
+    length = result.units["length"]
+    tables = []
     if result.uncertainty is not None:
         unc = result.uncertainty
         caption = _noise_caption(noise_to_dict(unc.noise), length)
         caption += f"; {unc.failed} draws failed" if unc.failed else ""
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
-        parts.append(_interval_table(result, unc, title, caption, force_unit))
+        tables.append(_interval_table(result, unc, title, caption, force_unit))
     if result.record_spread is not None:
         spread = result.record_spread
         title = (
             f"Uncertainty from the records ({spread.used} of {spread.segments} interleaved segments, 95 % intervals)"
         )
         caption = "spread of the segment estimates scaled to all the data; noise only, not sensor placement errors"
-        parts.append(_interval_table(result, spread, title, caption, force_unit))
+        tables.append(_interval_table(result, spread, title, caption, force_unit))
+    return tables
 
+
+def _modes_table(result: IdentifyResult) -> Table:
+    """The modes used against the identified model's modes."""
+    from rich.table import Table
+
+    ident = result.identification
     diag = ident.diagnostics
     modes = Table(title="Modes used", title_justify="left")
     for name in ("mode", "f (Hz)", "zeta (-)", "rigid fit (-)", "model f (Hz)", "model zeta (-)", "MAC (-)"):
@@ -165,8 +188,15 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
             f"{diag.model_damping_ratio[k]:.5f}",
             f"{diag.model_mac[k]:.4f}",
         )
-    parts.append(modes)
+    return modes
 
+
+def _diagnostics_table(result: IdentifyResult) -> Table:
+    """Method, mode choice, conditioning, structure residual, observability and the warnings."""
+    from rich.table import Table
+
+    ident = result.identification
+    diag = ident.diagnostics
     summary = Table(title="Diagnostics", title_justify="left", show_header=False)
     summary.add_column("item")
     summary.add_column("value")
@@ -183,8 +213,7 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
         summary.add_row("rigid fit of every mode", text)
     for message in diag.warnings:
         summary.add_row("[yellow]warning[/yellow]", message)
-    parts.append(summary)
-    return Group(*parts)
+    return summary
 
 
 def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]:
