@@ -721,18 +721,21 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
 
     from rigidid.io.records import write_record
 
+    from rigidid.io.atomic import check_folder, transaction
+
+    check_folder(directory)
     data = load_uff(path, units=units)
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = [folder / "layout.json"]
-    write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
-    if data.modes is not None:
-        written.append(folder / "modes.csv")
-        write_text_atomic(written[-1], files.modes_csv_text(data.modes))
-    ids = [s.id for s in data.layout.sensors]
-    for k, (values, dt) in enumerate(data.records, start=1):
-        written.append(folder / f"record-{k}.csv")
-        write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+    with transaction() as outs:  # all files or none
+        folder = outs.folder(directory)
+        written = [folder / "layout.json"]
+        write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
+        if data.modes is not None:
+            written.append(folder / "modes.csv")
+            write_text_atomic(written[-1], files.modes_csv_text(data.modes))
+        ids = [s.id for s in data.layout.sensors]
+        for k, (values, dt) in enumerate(data.records, start=1):
+            written.append(folder / f"record-{k}.csv")
+            write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
     return written
 
 
@@ -785,8 +788,11 @@ def simulate_records(
     for _, direction in impacts:
         if not np.any(np.asarray(direction, dtype=float)):
             raise InputError("an impact direction is the zero vector", source="--impact")
-    if sample_rate <= 0 or duration <= 0 or pretrigger < 0:
+    if not (sample_rate > 0 and duration > 0 and pretrigger >= 0):
         raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
+    from rigidid.limits import check_record_size
+
+    check_record_size(sample_rate, duration + pretrigger, len(ids), len(impacts))
     data = impulse_records(
         body_from_file(spec),
         positions,
@@ -798,12 +804,14 @@ def simulate_records(
         noise=noise,
         seed=seed,
     )
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-    for k, values in enumerate(data, start=1):
-        written.append(folder / f"record-{k}.csv")
-        write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
+    from rigidid.io.atomic import transaction
+
+    with transaction() as outs:  # all records or none
+        folder = outs.folder(directory)
+        written = []
+        for k, values in enumerate(data, start=1):
+            written.append(folder / f"record-{k}.csv")
+            write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
     return written
 
 
