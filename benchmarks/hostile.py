@@ -10,7 +10,6 @@ the first stderr line (and how many lines), and what was left behind.
 from __future__ import annotations
 
 import os
-import shutil
 import stat
 import subprocess
 import sys
@@ -74,7 +73,7 @@ def main() -> None:
     case("identify --json DEVNODE (a char device like /dev/null)", ["identify", L, M, "--json", "null"],
          setup=chardev, check=lambda d: "null is " + kind(d / "null"))
     case("identify --uff SYMLINK (-> real.uff)", ["identify", L, M, "--uff", "link.uff"],
-         setup=lambda d: (d / "real.uff").write_text("old") or os.symlink("real.uff", d / "link.uff"),
+         setup=lambda d: ((d / "real.uff").write_text("old"), os.symlink("real.uff", d / "link.uff")),
          check=lambda d: f"link.uff is {kind(d / 'link.uff')}, real.uff {(d / 'real.uff').stat().st_size} bytes")
     case("simulate -o FIFO (reader: cat)", shell=f"mkfifo p; (cat p > got &) ; {{py}} simulate {B} {FL} -o p; sleep 0.3",
          check=lambda d: f"p is {kind(d / 'p')}, reader got {(d / 'got').stat().st_size if (d / 'got').exists() else 0} bytes")
@@ -123,10 +122,21 @@ def main() -> None:
     case("--json newdir/", ["identify", L, M, "--json", "newdir/"], check=listing)
     case("report --body with other units", ["report", L, M, "--body", B, "-o", "r.html"], check=listing, timeout=60)
     print("## Status and messages")
-    case("identify | head -c1 (broken pipe)", shell=f"{{py}} identify {L} {M} --json - | head -c1 >/dev/null; "
-         "echo status ${{PIPESTATUS[0]}} >&2", timeout=30)
-    case("modes --method xyz", ["modes", FL, "r.csv", "--method", "xyz"],
-         setup=lambda d: shutil.copy(ROOT / "tests/data/records/good.csv", d / "r.csv"))
+    case("identify --json - | true (broken pipe)", shell=f"{{py}} identify {L} {M} --json - | true; "
+         "echo status of rigidid: ${{PIPESTATUS[0]}} >&2", timeout=30)
+    case("simulate --records rec -o - | head -c1 (broken pipe)", shell=f"{{py}} simulate {B} {FL} | head -c1 >/dev/null; "
+         "echo status of rigidid: ${{PIPESTATUS[0]}} >&2", timeout=30)
+    case("modes --method xyz", shell=f"{{py}} simulate {B} {FL} --records rec -o /dev/stdout >/dev/null 2>&1; "
+         f"{{py}} modes {FL} rec/record-1.csv --method xyz")
+    case("identify --resample 1000000", shell=f"{{py}} simulate {B} {FL} --records rec -o /dev/stdout >/dev/null 2>&1; "
+         f"{{py}} identify {FL} rec/record-1.csv rec/record-2.csv --records --resample 1000000", timeout=60)
+    case("identify --max-order 100000", shell=f"{{py}} simulate {B} {FL} --records rec -o /dev/stdout >/dev/null 2>&1; "
+         f"{{py}} identify {FL} rec/record-1.csv rec/record-2.csv --records --max-order 100000", timeout=60)
+    case("modes --n-modes 100", shell=f"{{py}} simulate {B} {FL} --records rec -o /dev/stdout >/dev/null 2>&1; "
+         f"{{py}} modes {FL} rec/record-1.csv rec/record-2.csv --n-modes 100", timeout=120)
+    case("records of different sample intervals", shell=f"{{py}} simulate {B} {FL} --records r1 -o /dev/stdout "
+         f">/dev/null 2>&1; {{py}} simulate {B} {FL} --records r2 --sample-rate 400 -o /dev/stdout >/dev/null 2>&1; "
+         f"{{py}} modes {FL} r1/record-1.csv r2/record-1.csv", timeout=60)
     case("identify --bogus-option", ["identify", L, M, "--bogus"])
     case("simulate with a bad body", ["simulate", "b.json", FL], setup=lambda d: (d / "b.json").write_text(
         Path(B).read_text().replace('"mass"', '"masss"', 1)))

@@ -540,6 +540,10 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
     records = []
     for record in contents.records:
         time = np.asarray(record.time, dtype=float)
+        missing = [s.id for s in layout.sensors if s.id not in record.sensor_ids]
+        if missing:
+            label = contents.record_labels[len(records)] if len(contents.record_labels) > len(records) else "a record"
+            raise InputError(f"{label} has no record of sensor {missing[0]}", source=src)
         order = [record.sensor_ids.index(sid) for sid in (s.id for s in layout.sensors)]
         records.append((np.asarray(record.data, dtype=float)[:, order], float(time[1] - time[0])))
     return TestData(layout, modes, records, list(contents.record_labels))

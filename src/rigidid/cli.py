@@ -605,7 +605,10 @@ def _parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
     for value in (*position, *direction):
         check_number(value, "--impact")
-    return position, direction
+    big = max(abs(v) for v in direction)
+    if big == 0.0:
+        raise InputError(f"the force direction of {text!r} is the zero vector", source="--impact")
+    return position, tuple(v / big for v in direction)
 
 
 @app.command()
@@ -805,6 +808,7 @@ def run(argv: list[str] | None = None) -> int:
     A standard output that is closed or whose reader has gone raises
     :class:`BrokenPipeError` out of here; :func:`main` turns it into a quiet end.
     """
+    from typer import exceptions as typer_exceptions
     from typer._click import exceptions as click_exceptions
 
     try:
@@ -817,7 +821,7 @@ def run(argv: list[str] | None = None) -> int:
             message = " ".join(exc.format_message().split()) or "usage error"
             sys.stderr.write(f"rigidid: error: {command}: {message} (see {command} --help)\n")
             return EXIT_INPUT
-        except click_exceptions.Abort:
+        except typer_exceptions.Abort:
             sys.stderr.write("rigidid: error: aborted\n")
             return EXIT_INPUT
         sys.stdout.flush()
