@@ -82,7 +82,10 @@ def test_strict_json(name: str, message: str) -> None:
 
 @pytest.mark.parametrize(
     ("name", "message"),
-    [("modes_underscore_number.csv", "row 5: real: '0_0324' is not a number"), ("modes_empty_imag.csv", "row 5: imag: empty cell")],
+    [
+        ("modes_underscore_number.csv", "row 5: real: '0_0324' is not a number"),
+        ("modes_empty_imag.csv", "row 5: imag: empty cell"),
+    ],
 )
 def test_strict_modes_cells(name: str, message: str) -> None:
     with pytest.raises(InputError) as info:
@@ -103,6 +106,7 @@ def test_deep_nesting_and_size_limit(tmp_path: Path, monkeypatch: pytest.MonkeyP
 def test_tiny_direction_vector_normalises() -> None:
     with pytest.warns(PhysicalPlausibilityWarning):  # the paper's damping, as in test_paper
         tiny = api.identify(DATA / "layout_tiny_direction.json", PAPER / "modes.csv")
+    with pytest.warns(PhysicalPlausibilityWarning):
         plain = api.identify(PAPER / "layout.json", PAPER / "modes.csv")
     np.testing.assert_allclose(tiny.directions, plain.directions, rtol=0, atol=1e-15)
 
@@ -150,13 +154,18 @@ def test_fifo_written_in_place_and_symlink_followed(tmp_path: Path) -> None:
     assert real.read_text() == "new\n"
 
 
-def test_output_set_all_or_nothing(tmp_path: Path) -> None:
-    with pytest.raises(RuntimeError), OutputSet() as outs:
-        write_text_atomic(tmp_path / "a.txt", "a")
-        outs.folder(tmp_path / "new" / "deeper")
-        write_text_atomic(tmp_path / "new" / "deeper" / "b.txt", "b")
-        assert not (tmp_path / "a.txt").exists()  # staged, not yet published
+def _stage_then_fail(folder: Path) -> None:
+    with OutputSet() as outs:
+        write_text_atomic(folder / "a.txt", "a")
+        outs.folder(folder / "new" / "deeper")
+        write_text_atomic(folder / "new" / "deeper" / "b.txt", "b")
+        assert not (folder / "a.txt").exists()  # staged, not yet published
         raise RuntimeError("a later step fails")
+
+
+def test_output_set_all_or_nothing(tmp_path: Path) -> None:
+    with pytest.raises(RuntimeError):
+        _stage_then_fail(tmp_path)
     assert list(tmp_path.iterdir()) == []
     with OutputSet() as outs:
         write_text_atomic(tmp_path / "a.txt", "a")
@@ -173,7 +182,9 @@ def test_output_set_all_or_nothing(tmp_path: Path) -> None:
 @ROOT_ONLY
 def test_identify_leaves_a_device_target_a_device(tmp_path: Path) -> None:
     dev = chardev(tmp_path / "null")
-    status, _, err = cli(tmp_path, "identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", "null", "--uff", "null")
+    status, _, err = cli(
+        tmp_path, "identify", PAPER / "layout.json", PAPER / "modes.csv", "--json", "null", "--uff", "null"
+    )
     assert status == 0, err
     assert stat.S_ISCHR(os.stat(dev).st_mode)
 

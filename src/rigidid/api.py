@@ -537,7 +537,7 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None) -> TestData
     modes = None
     if contents.mode_rows:
         modes = _table_from_rows(contents.mode_rows, tuple(s.id for s in layout.sensors), src)
-    records = []
+    records: list[tuple[NDArray[np.float64], float]] = []
     for record in contents.records:
         time = np.asarray(record.time, dtype=float)
         missing = [s.id for s in layout.sensors if s.id not in record.sensor_ids]
@@ -723,9 +723,8 @@ def convert(path: PathLike, directory: PathLike, *, units: dict[str, str] | None
     """
     import json
 
-    from rigidid.io.records import write_record
-
     from rigidid.io.atomic import check_folder, transaction
+    from rigidid.io.records import write_record
 
     check_folder(directory)
     data = load_uff(path, units=units)

@@ -634,9 +634,8 @@ def plan(
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
         from rigidid import api
-        from rigidid.render import plan_to_dict
-
         from rigidid.io.atomic import OutputSet
+        from rigidid.render import plan_to_dict
 
         if draws < 2:
             raise InputError(f"need at least 2 draws, got {draws}", source="--draws")
@@ -780,11 +779,11 @@ def _plug_closed_descriptors() -> None:
                 os.dup2(opened, fd)
                 os.close(opened)
             if fd == 1:
-                sys.stdout = _ClosedStdout()  # type: ignore[assignment]
+                sys.stdout = _ClosedStdout()
             elif fd == 2:
                 sys.stderr = open(os.devnull, "w")  # noqa: SIM115
     if sys.stdout is None:
-        sys.stdout = _ClosedStdout()  # type: ignore[assignment]
+        sys.stdout = _ClosedStdout()
     if sys.stderr is None:
         sys.stderr = open(os.devnull, "w")  # noqa: SIM115
 

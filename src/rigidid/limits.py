@@ -65,7 +65,9 @@ def check_count(value: int | None, name: str, *, low: int, high: int) -> None:
         raise InputError(f"must be from {low} to {high}, got {value}", source=name)
 
 
-def check_record_size(sample_rate: float, seconds: float, channels: int, records: int, *, name: str = "sample_rate") -> None:
+def check_record_size(
+    sample_rate: float, seconds: float, channels: int, records: int, *, name: str = "sample_rate"
+) -> None:
     """Refuse simulated records whose samples would exceed :data:`MAX_ARRAY_BYTES`.
 
     Parameters

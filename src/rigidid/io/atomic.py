@@ -15,6 +15,7 @@ are removed, so nothing new remains. Outside one, each write publishes at once.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import stat
@@ -204,10 +205,8 @@ class OutputSet:
         for tmp, _, _ in [*self._files, *self._streams]:
             tmp.unlink(missing_ok=True)
         for folder in reversed(self._folders):
-            try:
+            with contextlib.suppress(OSError):
                 folder.rmdir()
-            except OSError:
-                pass
         self._files, self._streams, self._stdout, self._folders = [], [], [], []
         self._drop_scratch()
 
@@ -222,9 +221,7 @@ class OutputSet:
         self._token = _ACTIVE.set(self)
         return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         _ACTIVE.reset(self._token)
         if kind is None:
             self.commit()
