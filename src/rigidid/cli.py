@@ -347,6 +347,14 @@ def _identify(
     _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
     src = _source(layout, inputs)
     data = _test_data(layout, inputs or [], records, units)
+    if resample and data.records:  # before any estimation: blame the option, not the records
+        shortest = min(values.shape[0] for values, _ in data.records)
+        if resample * 16 > shortest:
+            raise InputError(
+                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
+                f"the limit here is {shortest // 16}",
+                source="--resample",
+            )
     estimate = _estimate(data, **modal, source=src) if records else None
     modes = data.modes
     if estimate is not None:
@@ -369,13 +377,6 @@ def _identify(
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
-        shortest = min(values.shape[0] for values, _ in data.records)
-        if resample * 16 > shortest:
-            raise InputError(
-                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
-                f"the limit here is {shortest // 16}",
-                source="--resample",
-            )
         options = {key: modal[key] for key in ("method", "band", "max_order") if modal[key] is not None}
         result = api.with_record_spread(
             result, data.records, segments=resample, n_modes=modal["n_modes"], estimate_options=options
