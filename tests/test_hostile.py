@@ -234,7 +234,7 @@ def test_records_errors_name_the_option_and_files(tmp_path: Path) -> None:
     status, _, err = cli(tmp_path, "identify", FOUR / "layout.json", *recs, "--records", "--max-order", "100000")
     assert "--max-order: must be from 1 to 1000" in one_error(err)
     status, _, err = cli(tmp_path, "identify", FOUR / "layout.json", *recs, "--records", "--resample", "1000000")
-    assert "--resample: 1000000 segments of records of 512 samples" in one_error(err)
+    assert "--resample: 1000000 segments of records of" in one_error(err)
     status, _, err = cli(tmp_path, "modes", FOUR / "layout.json", *recs, "--json", "e.json", "-o", "nodir/m.csv")
     assert "nodir/m.csv: cannot write" in one_error(err)
     assert not (tmp_path / "e.json").exists()
