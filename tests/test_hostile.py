@@ -93,6 +93,17 @@ def test_strict_modes_cells(name: str, message: str) -> None:
     assert str(info.value) == f"{BAD / name}: {message}"
 
 
+def test_huge_numbers_are_refused_at_the_reader(tmp_path: Path) -> None:
+    modes = tmp_path / "modes.csv"
+    modes.write_text((PAPER / "modes.csv").read_text().replace(",0.0414\n", ",1e308\n", 1))
+    with pytest.raises(InputError, match=r"modes.csv: row 2: imag: must be at most 1e\+100 in magnitude"):
+        api.identify(PAPER / "layout.json", modes)
+    layout = tmp_path / "layout.json"
+    layout.write_text((PAPER / "layout.json").read_text().replace("6.75", "1e400"))
+    with pytest.raises(InputError, match=r"layout.json: sensors.0.position.0: must be at most 1e\+100"):
+        api.load_layout(layout)
+
+
 def test_deep_nesting_and_size_limit(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     deep = tmp_path / "deep.json"
     deep.write_text("[" * 200_000)
@@ -233,8 +244,8 @@ def test_records_errors_name_the_option_and_files(tmp_path: Path) -> None:
     assert "--n-modes: must be from 1 to 30, got 100" in one_error(err)
     status, _, err = cli(tmp_path, "identify", FOUR / "layout.json", *recs, "--records", "--max-order", "100000")
     assert "--max-order: must be from 1 to 1000" in one_error(err)
-    status, _, err = cli(tmp_path, "identify", FOUR / "layout.json", *recs, "--records", "--resample", "1000000")
-    assert "--resample: 1000000 segments of records of" in one_error(err)
+    status, _, err = cli(tmp_path, "identify", FOUR / "layout.json", *recs, "--records", "--resample", "100")
+    assert "--resample: 100 segments of records of" in one_error(err)
     status, _, err = cli(tmp_path, "modes", FOUR / "layout.json", *recs, "--json", "e.json", "-o", "nodir/m.csv")
     assert "nodir/m.csv: cannot write" in one_error(err)
     assert not (tmp_path / "e.json").exists()

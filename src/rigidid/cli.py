@@ -151,6 +151,11 @@ def _reported() -> Iterator[None]:
             _fail(f"{exc.filename or 'standard output'}: {exc.strerror or exc}", EXIT_INPUT)
         except (MemoryError, RecursionError) as exc:
             _fail(f"input too large or too deeply nested ({type(exc).__name__})", EXIT_INPUT)
+        except (ArithmeticError, ValueError) as exc:
+            # last resort for numbers the limits let through (LinAlgError is a ValueError)
+            if type(exc).__name__ not in ("LinAlgError", "OverflowError", "FloatingPointError", "ZeroDivisionError"):
+                raise
+            _fail(f"the computation failed numerically ({exc}); check the inputs' magnitudes", EXIT_IDENTIFICATION)
         finally:
             seen: set[str] = set()
             for w in caught:

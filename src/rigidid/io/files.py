@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import re
 from collections.abc import Sequence
@@ -133,13 +134,17 @@ class _BadConstant(Exception):
     pass
 
 
-def _first_bool(data: Any, where: str = "") -> str | None:
-    """Dotted location of the first true/false in a JSON document (rigidid's inputs have none)."""
+def _first_odd(data: Any, where: str = "") -> tuple[str, str] | None:
+    """Location and fault of the first true/false (rigidid's inputs have none) or too large number."""
+    from rigidid.limits import MAX_MAGNITUDE
+
     if isinstance(data, bool):
-        return where or "(top)"
+        return where or "(top)", "true/false where a number or text is expected"
+    if isinstance(data, (int, float)) and not abs(data) <= MAX_MAGNITUDE:
+        return where or "(top)", f"must be at most {MAX_MAGNITUDE:g} in magnitude"
     items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
     for key, value in items:
-        found = _first_bool(value, f"{where}.{key}" if where else str(key))
+        found = _first_odd(value, f"{where}.{key}" if where else str(key))
         if found:
             return found
     return None
@@ -168,11 +173,11 @@ def load_json(path: Path) -> Any:
     except RecursionError:
         raise InputError("nested too deeply to be a rigidid file", source=src) from None
     try:
-        where = _first_bool(data)
+        odd = _first_odd(data)
     except RecursionError:  # pragma: no cover - json nests less deeply than this walk can
         raise InputError("nested too deeply to be a rigidid file", source=src) from None
-    if where is not None:
-        raise InputError("true/false where a number or text is expected", source=src, location=where)
+    if odd is not None:
+        raise InputError(odd[1], source=src, location=odd[0])
     return data
 
 
@@ -277,6 +282,8 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         mode, frequency or damping differing between rows of one mode, a mode
         missing a sensor, or no rows at all.
     """
+    from rigidid.limits import MAX_MAGNITUDE
+
     p = Path(path)
     src = str(p)
     reader = _csv_rows(csv.reader(io.StringIO(_read_text(p))), src)
@@ -315,6 +322,10 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
                 raise InputError("empty cell", source=src, location=f"{where}: {name}")
             if not _NUMBER.fullmatch(cell):
                 raise InputError(f"{cell[:40]!r} is not a number", source=src, location=f"{where}: {name}")
+            if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
+                raise InputError(
+                    f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}"
+                )
         try:
             parsed = ModeRow.model_validate(record)
         except ValidationError as exc:
