@@ -83,7 +83,7 @@ def test_strict_json(name: str, message: str) -> None:
 @pytest.mark.parametrize(
     ("name", "message"),
     [
-        ("modes_underscore_number.csv", "row 5: real: '0_0324' is not a number"),
+        ("modes_underscore_number.csv", "row 5: real: '0_0324' is not a plain decimal number"),
         ("modes_empty_imag.csv", "row 5: imag: empty cell"),
     ],
 )

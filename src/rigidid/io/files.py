@@ -251,6 +251,13 @@ def load_body(path: str | os.PathLike[str]) -> BodyFile:
     return _load_json_model(Path(path), BodyFile)
 
 
+def _python_float(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
 def _csv_rows(reader: Any, src: str) -> Any:
     """The rows of a CSV reader; a malformed line becomes an InputError naming the row."""
     try:
@@ -321,7 +328,11 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
             if cell == "":
                 raise InputError("empty cell", source=src, location=f"{where}: {name}")
             if not _NUMBER.fullmatch(cell):
-                raise InputError(f"{cell[:40]!r} is not a number", source=src, location=f"{where}: {name}")
+                if _python_float(cell) is None:
+                    continue  # not a number at all: the model says so
+                raise InputError(
+                    f"{cell[:40]!r} is not a plain decimal number", source=src, location=f"{where}: {name}"
+                )
             if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
                 raise InputError(
                     f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}"
