@@ -162,4 +162,4 @@ def test_modes_method_is_a_deprecated_alias_of_modal_method(tmp_path: Path) -> N
     out = run("modes", ENGINE / "layout.json", tmp_path / "record-1.csv", "--method", "bogus")
     assert out.returncode == 2
     assert "--method is deprecated; use --modal-method" in out.stderr
-    assert "--modal-method: unknown method 'bogus'" in out.stderr  # the value went where --modal-method goes
+    assert "--method: unknown method 'bogus'" in out.stderr  # the error names the option the user typed

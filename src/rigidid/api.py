@@ -634,9 +634,13 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
     if contents.mode_rows:
         values = [files.ModeValue(None, m, f, z, sid, complex(re, im)) for m, f, z, sid, re, im in contents.mode_rows]
         modes = files.mode_table_from_rows(values, tuple(s.id for s in layout.sensors), src)
-    records = []
+    records: list[tuple[NDArray[np.float64], float]] = []
     for record in contents.records:
         time = np.asarray(record.time, dtype=float)
+        missing = [s.id for s in layout.sensors if s.id not in record.sensor_ids]
+        if missing:
+            label = contents.record_labels[len(records)] if len(contents.record_labels) > len(records) else "a record"
+            raise InputError(f"{label} has no record of sensor {missing[0]}", source=src)
         order = [record.sensor_ids.index(sid) for sid in (s.id for s in layout.sensors)]
         records.append((np.asarray(record.data, dtype=float)[:, order], float(time[1] - time[0])))
     return TestData(layout, modes, records, list(contents.record_labels))
@@ -865,22 +869,24 @@ def convert(
     """
     import json
 
+    from rigidid.io.atomic import check_folder, transaction
     from rigidid.io.records import write_record
 
+    check_folder(directory)
     data = load_uff(path, units=units, geometry=geometry)
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = [folder / "layout.json"]
-    write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
-    if data.modes is not None:
-        written.append(folder / "modes.csv")
-        # 17 digits: the numbers the UFF file holds, unrounded (identify on the converted files
-        # then matches identify on the UFF file to rounding)
-        write_text_atomic(written[-1], files.modes_csv_text(data.modes, digits=17))
-    ids = [s.id for s in data.layout.sensors]
-    for k, (values, dt) in enumerate(data.records, start=1):
-        written.append(folder / f"record-{k}.csv")
-        write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+    with transaction() as outs:  # all files or none
+        folder = outs.folder(directory)
+        written = [folder / "layout.json"]
+        write_text_atomic(written[0], json.dumps(data.layout.model_dump(exclude_none=True), indent=2) + "\n")
+        if data.modes is not None:
+            written.append(folder / "modes.csv")
+            # 17 digits: the numbers the UFF file holds, unrounded (identify on the converted files
+            # then matches identify on the UFF file to rounding)
+            write_text_atomic(written[-1], files.modes_csv_text(data.modes, digits=17))
+        ids = [s.id for s in data.layout.sensors]
+        for k, (values, dt) in enumerate(data.records, start=1):
+            written.append(folder / f"record-{k}.csv")
+            write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
     return written
 
 
@@ -936,8 +942,11 @@ def simulate_records(
     for _, direction in impacts:
         if not np.any(np.asarray(direction, dtype=float)):
             raise InputError("an impact direction is the zero vector", source="impacts")
-    if sample_rate <= 0 or duration <= 0 or pretrigger < 0:
+    if not (sample_rate > 0 and duration > 0 and pretrigger >= 0):
         raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
+    from rigidid.limits import check_record_size
+
+    check_record_size(sample_rate, duration + pretrigger, len(ids), len(impacts))
     data = impulse_records(
         body_from_file(spec),
         positions,
@@ -950,15 +959,17 @@ def simulate_records(
         seed=seed,
         progress=progress,
     )
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
+    from rigidid.io.atomic import transaction
+
     step = progress or no_progress
-    for k, values in enumerate(data, start=1):
-        step("writing records", k - 1, len(data))
-        written.append(folder / f"record-{k}.csv")
-        write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
-    step("writing records", len(data), len(data))
+    with transaction() as outs:  # all records or none
+        folder = outs.folder(directory)
+        written = []
+        for k, values in enumerate(data, start=1):
+            step("writing records", k - 1, len(data))
+            written.append(folder / f"record-{k}.csv")
+            write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
+        step("writing records", len(data), len(data))
     return written
 
 

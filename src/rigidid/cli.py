@@ -202,6 +202,20 @@ def _reported() -> Iterator[None]:
         except RigididError as exc:
             _print_warnings(caught)
             _fail(_flag_text(exc), EXIT_IDENTIFICATION)
+        except BrokenPipeError:
+            raise _StdoutGone() from None
+        except OSError as exc:
+            _print_warnings(caught)
+            _fail(f"{exc.filename or 'standard output'}: {exc.strerror or exc}", EXIT_INPUT)
+        except (MemoryError, RecursionError) as exc:
+            _print_warnings(caught)
+            _fail(f"input too large or too deeply nested ({type(exc).__name__})", EXIT_INPUT)
+        except (ArithmeticError, ValueError) as exc:
+            # last resort for numbers the limits let through (LinAlgError is a ValueError)
+            if type(exc).__name__ not in ("LinAlgError", "OverflowError", "FloatingPointError", "ZeroDivisionError"):
+                raise
+            _print_warnings(caught)
+            _fail(f"the computation failed numerically ({exc}); check the inputs' magnitudes", EXIT_IDENTIFICATION)
         _print_warnings(caught)
 
 
@@ -223,10 +237,11 @@ def _force_unit(text: str | None) -> str | None:
 
 
 def _write_csv(directory: Path, result: IdentifyResult, force_unit: str | None) -> None:
-    from rigidid.io.atomic import write_text_atomic
+    from rigidid.io.atomic import transaction, write_text_atomic
     from rigidid.render import result_csv_files
 
-    directory.mkdir(parents=True, exist_ok=True)
+    with transaction() as outs:
+        outs.folder(directory, option="--csv")
     files = result_csv_files(result, force_unit)
     for name, text in files.items():
         write_text_atomic(directory / name, text)
@@ -253,24 +268,75 @@ def _parse_units(text: str | None) -> dict[str, str] | None:
 
 def _noise_overrides(**given: float | None) -> dict[str, float]:
     names = {"angle_deg": "--angle-noise"}
+    from rigidid.limits import check_number
+
     out: dict[str, float] = {}
     for key, value in given.items():
         if value is None:
             continue
-        if not value >= 0.0:
-            raise InputError(f"must be zero or positive, got {value}", source=names.get(key, f"--{key}-noise"))
+        check_number(value, names.get(key, f"--{key}-noise"), nonnegative=True)
         out[key] = value
     return out
 
 
 def _write_json(target: str, data: dict[str, Any]) -> None:
-    from rigidid.io.atomic import write_text_atomic
+    from rigidid.io.atomic import first_non_finite, transaction, write_text_atomic
 
-    text = json.dumps(data, indent=2) + "\n"
+    bad = first_non_finite(data)
+    if bad is not None:
+        raise InputError(
+            f"result field {bad} is not a finite number; nothing written (inputs or options too large?)",
+            source=target if target != "-" else "--json",
+        )
+    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
     if target == "-":
-        sys.stdout.write(text)
+        with transaction() as outs:
+            outs.stdout(text)
     else:
         write_text_atomic(target, text)
+
+
+class _StdoutGone(Exception):
+    """Standard output is closed or its reader has gone (broken pipe)."""
+
+
+def _check_outputs(files: dict[str, Any], folders: dict[str, Any] | None = None) -> None:
+    """Check every output path (by option name) before any work; '-' and None need no check."""
+    from rigidid.io.atomic import check_folder, check_output
+
+    for option, path in files.items():
+        if path is not None and str(path) != "-":
+            check_output(path, option=option)
+    for option, path in (folders or {}).items():
+        if path is not None:
+            check_folder(path, option=option)
+
+
+def _check_options(**values: Any) -> None:
+    """Refuse option values that would overflow or run without bound (name -> value, by flag)."""
+    from rigidid.limits import MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number
+
+    counts = {"--n-modes": (1, MAX_MODES), "--max-order": (1, MAX_MODEL_ORDER), "--resample": (0, MAX_SEGMENTS),
+              "--decimate": (1, 10_000), "--uncertainty": (0, 1_000_000), "--draws": (2, 1_000_000),
+              "--add": (0, 1000), "--seed": (0, 2**63 - 1)}  # fmt: skip
+    for name, value in values.items():
+        flag = "--" + name.replace("_", "-")
+        if name == "band" and value is not None:
+            for v in value:
+                check_number(v, "--band", nonnegative=True)
+            if not value[0] < value[1]:
+                raise InputError(f"FMIN must be below FMAX, got {value[0]:g} {value[1]:g}", source="--band")
+        elif flag in counts and value is not None:
+            check_count(value, flag, low=counts[flag][0], high=counts[flag][1])
+        elif isinstance(value, float):
+            check_number(value, flag, positive=name in ("sample_rate", "duration"), nonnegative=name != "mass")
+
+
+def _source(layout: Path, inputs: list[Path] | None) -> str:
+    """The file(s) modes or records come from, to name in an error."""
+    if layout.suffix.lower() in UFF_SUFFIXES or not inputs:
+        return str(layout)
+    return ", ".join(str(p) for p in inputs)
 
 
 def _test_data(
@@ -308,15 +374,35 @@ def _estimate(
     band: tuple[float, float] | None,
     max_order: int | None,
     decimate: int | None,
+    option: str = "--modal-method",
+    source: str | None = None,
 ) -> tuple[ModeTable, ModalEstimate]:
     from rigidid import api
     from rigidid.core.timedomain import METHODS
 
     if method is not None and method not in METHODS:
-        raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--modal-method")
-    return api.estimate_modes(
-        data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order, decimate=decimate
-    )
+        raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source=option)
+    _check_options(n_modes=n_modes, band=band, max_order=max_order, decimate=decimate)
+    with _naming(source):
+        return api.estimate_modes(
+            data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
+            decimate=decimate,
+        )  # fmt: skip
+
+
+@contextmanager
+def _naming(source: str | None) -> Iterator[None]:
+    """Give an error that names no file the input file(s) it came from."""
+    try:
+        yield
+    except InputError as exc:
+        if source and exc.source in (None, "records"):
+            raise InputError(exc.message, source=source, location=exc.location) from None
+        raise
+    except RigididError as exc:
+        if source and not str(exc).startswith(source):
+            raise type(exc)(f"{source}: {exc}") from None
+        raise
 
 
 def _identify(
@@ -347,19 +433,30 @@ def _identify(
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
+    _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
+    src = _source(layout, inputs)
     data = _test_data(layout, inputs or [], records, units, geometry)
     if keep is not None:
         keep["records"] = data.records
-    modes, estimate = _estimate(data, **modal) if records else (data.modes, None)
+    if resample and data.records:  # before any estimation: blame the option, not the records
+        shortest = min(values.shape[0] for values, _ in data.records)
+        if resample * 16 > shortest:
+            raise InputError(
+                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
+                f"the limit here is {shortest // 16}",
+                source="--resample",
+            )
+    modes, estimate = _estimate(data, **modal, source=src) if records else (data.modes, None)
     assert modes is not None
+    chosen = _parse_modes(modes_used)
     from rigidid.progress import terminal_progress
 
-    with terminal_progress() as progress:
+    with _naming(src), terminal_progress() as progress:
         result = api.identify(
             data.layout,
             modes,
             mass=mass,
-            modes_used=_parse_modes(modes_used),
+            modes_used=chosen,
             method=method,  # type: ignore[arg-type]
             uncertainty=draws,
             noise=noise,
@@ -426,10 +523,12 @@ def identify(
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
+        from rigidid.io.atomic import OutputSet
         from rigidid.jsonout import result_to_dict
 
         force_unit = _force_unit(force_unit)
 
+        _check_outputs({"--json": json_path, "--uff": uff}, {"--csv": csv})
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -439,17 +538,22 @@ def identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry,
         )  # fmt: skip
-        if json_path is not None:
-            out = result_to_dict(result, force_unit)
-            if estimate is not None:
-                from rigidid.jsonout import estimate_to_dict
+        with OutputSet():  # every output or none
+            if json_path is not None:
+                out = result_to_dict(result, force_unit)
+                if estimate is not None:
+                    from rigidid.jsonout import estimate_to_dict
 
-                out["modal_estimation"] = estimate_to_dict(estimate)
-            _write_json(json_path, out)
-        if uff is not None:
-            from rigidid.io.uff import write_uff
+                    out["modal_estimation"] = estimate_to_dict(estimate)
+                _write_json(json_path, out)
+            if uff is not None:
+                from rigidid.io.uff import write_uff
 
-            write_uff(uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units)
+                write_uff(
+                    uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units
+                )
+            if csv is not None:
+                _write_csv(csv, result, force_unit)
         if json_path != "-":
             from rigidid.render import result_tables
 
@@ -459,8 +563,6 @@ def identify(
 
                 console.print(estimate_tables(estimate))
             console.print(result_tables(result, force_unit))
-        if csv is not None:
-            _write_csv(csv, result, force_unit)
 
 
 @app.command()
@@ -487,7 +589,7 @@ def modes(
 ) -> None:
     """Estimate modal parameters from impact records (free decays) and write modes.csv."""
     with _reported():
-        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import modes_csv_text
         from rigidid.jsonout import estimate_to_dict
 
@@ -496,17 +598,23 @@ def modes(
                 raise InputError("give --modal-method only (--method is its old name)", source="--method")
             sys.stderr.write("rigidid: warning: modes --method is deprecated; use --modal-method\n")
             modal_method = method
+        if output == "-" and json_path == "-":
+            raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
+        _check_outputs({"--output": output, "--json": json_path})
         data = _test_data(layout, records or [], True, units, geometry)
-        table, estimate = _estimate(data, modal_method, n_modes, band, max_order, decimate)
+        option = "--modal-method" if method is None else "--method"
+        table, estimate = _estimate(
+            data, modal_method, n_modes, band, max_order, decimate, option=option, source=_source(layout, records)
+        )
         text = modes_csv_text(table)
-        if json_path is not None:
-            _write_json(json_path, estimate_to_dict(estimate))
-        if output == "-":
-            if json_path == "-":
-                raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
-            sys.stdout.write(text)
-        else:
-            write_text_atomic(output, text)
+        with OutputSet() as outs:  # every output or none
+            if json_path is not None:
+                _write_json(json_path, estimate_to_dict(estimate))
+            if output == "-":
+                outs.stdout(text)
+            else:
+                write_text_atomic(output, text)
+        if output != "-":
             if json_path != "-":
                 from rigidid.render import estimate_tables
 
@@ -546,8 +654,9 @@ def simulate(
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
         from rigidid import api
-        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import modes_csv_text
+        from rigidid.limits import check_number
 
         for name, value in (
             ("--frequency-noise", frequency_noise),
@@ -555,34 +664,38 @@ def simulate(
             ("--shape-noise", shape_noise),
             ("--record-noise", record_noise),
         ):
-            if not value >= 0.0:
-                raise InputError(f"must be zero or positive, got {value}", source=name)
-        table = api.simulate(
-            body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
-            seed=seed,
-        )  # fmt: skip
-        if records is not None:
-            from rigidid.progress import terminal_progress
-
-            with terminal_progress() as progress:
-                written = api.simulate_records(
-                    body,
-                    layout,
-                    records,
-                    impacts=[_parse_impact(text) for text in impact] if impact else None,
-                    sample_rate=sample_rate,
-                    duration=duration,
-                    pretrigger=pretrigger,
-                    noise=record_noise,
-                    seed=seed,
-                    progress=progress,
-                )
-            sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
+            check_number(value, name, nonnegative=True)
+        _check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
+        _check_outputs({"--output": output}, {"--records": records})
+        impacts = [_parse_impact(text) for text in impact] if impact else None
+        with _naming(str(body)):
+            table = api.simulate(
+                body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
+                seed=seed,
+            )  # fmt: skip
         text = modes_csv_text(table)
-        if output == "-":
-            sys.stdout.write(text)
-        else:
-            write_text_atomic(output, text)
+        with OutputSet() as outs:  # every output or none
+            written = []
+            if records is not None:
+                from rigidid.progress import terminal_progress
+
+                try:
+                    with terminal_progress() as progress:
+                        written = api.simulate_records(
+                            body, layout, records, impacts=impacts, sample_rate=sample_rate, duration=duration,
+                            pretrigger=pretrigger, noise=record_noise, seed=seed, progress=progress,
+                        )  # fmt: skip
+                except InputError as exc:
+                    if exc.source == "sample_rate":
+                        raise InputError(exc.message, source="--sample-rate/--duration") from None
+                    raise
+            if output == "-":
+                outs.stdout(text)
+            else:
+                write_text_atomic(output, text)
+        if records is not None:
+            sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
+        if output != "-":
             sys.stderr.write(
                 f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
             )
@@ -597,7 +710,14 @@ def _parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
         raise InputError(f"expected X,Y,Z:DX,DY,DZ, got {text!r}", source="--impact") from None
     if len(position) != 3 or len(direction) != 3:
         raise InputError(f"expected X,Y,Z:DX,DY,DZ, got {text!r}", source="--impact")
-    return position, direction
+    from rigidid.limits import check_number
+
+    for value in (*position, *direction):
+        check_number(value, "--impact")
+    big = max(abs(v) for v in direction)
+    if big == 0.0:
+        raise InputError(f"the force direction of {text!r} is the zero vector", source="--impact")
+    return position, tuple(v / big for v in direction)
 
 
 @app.command()
@@ -625,23 +745,27 @@ def plan(
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
         from rigidid import api
+        from rigidid.io.atomic import OutputSet
         from rigidid.jsonout import plan_to_dict
 
         if draws < 2:
             raise InputError(f"need at least 2 draws, got {draws}", source="--draws")
+        _check_options(draws=draws, add=add, seed=seed)
+        _check_outputs({"--json": json_path})
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
         )  # fmt: skip
         from rigidid.progress import terminal_progress
 
-        with terminal_progress() as progress:
+        with _naming(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
                 units=_parse_units(units), geometry=geometry, progress=progress,
             )  # fmt: skip
-        if json_path is not None:
-            _write_json(json_path, plan_to_dict(result))
+        with OutputSet():
+            if json_path is not None:
+                _write_json(json_path, plan_to_dict(result))
         if json_path != "-":
             from rigidid.render import plan_tables
 
@@ -684,11 +808,11 @@ def report(
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
         from rigidid import api
-        from rigidid.io.atomic import write_text_atomic
+        from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import load_body
 
         force_unit = _force_unit(force_unit)
-
+        _check_outputs({"--output": output}, {"--png": png})
         noise = _noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -699,7 +823,16 @@ def report(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept,
         )  # fmt: skip
-        spec = None if body is None else load_body(body)
+        spec = None
+        if body is not None:
+            spec = load_body(body)
+            if dict(spec.units.model_dump()) != dict(result.units):
+                raise InputError(
+                    f"units {spec.units.length},{spec.units.mass} differ from the layout's "
+                    f"{result.units.get('length')},{result.units.get('mass')}",
+                    source=str(body),
+                    location="units",
+                )
         diagram = None if estimate is None else estimate.diagram
         from rigidid.progress import terminal_progress
 
@@ -708,14 +841,18 @@ def report(
                 result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
                 force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
             )  # fmt: skip
-        write_text_atomic(output, text)
+        paths: list[Any] = []
+        with OutputSet() as outs:  # every output or none
+            write_text_atomic(output, text)
+            if png is not None:
+                outs.folder(png, option="--png")
+                with terminal_progress() as progress:
+                    paths = api.report_pngs(
+                        result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
+                        records=kept.get("records"), progress=progress,
+                    )  # fmt: skip
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:
-            with terminal_progress() as progress:
-                paths = api.report_pngs(
-                    result, png, stabilisation=diagram, force_unit=force_unit, body=spec, records=kept.get("records"),
-                    progress=progress,
-                )  # fmt: skip
             sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
 
 
@@ -729,11 +866,112 @@ def convert(
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""
     with _reported():
         from rigidid import api
+        from rigidid.io.atomic import OutputSet
 
-        for path in api.convert(uff_file, output, units=_parse_units(units), geometry=geometry):
+        _check_outputs({}, {"--output": output})
+        with OutputSet():  # every file or none
+            written = api.convert(uff_file, output, units=_parse_units(units), geometry=geometry)
+        for path in written:
             sys.stderr.write(f"rigidid: wrote {path}\n")
+
+
+class _ClosedStdout:
+    """Stands for a standard output that was closed (``>&-``): writing to it is a broken pipe."""
+
+    encoding = "utf-8"
+
+    def write(self, text: str) -> int:
+        raise BrokenPipeError(32, "standard output is closed")
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+    def fileno(self) -> int:
+        import io
+
+        raise io.UnsupportedOperation("standard output is closed")
+
+
+def _plug_closed_descriptors() -> None:
+    """Point closed descriptors 0-2 at /dev/null, so that no file rigidid opens becomes one of them."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            opened = os.open(os.devnull, os.O_RDWR)
+            if opened != fd:  # pragma: no cover - the lowest free descriptor is the closed one
+                os.dup2(opened, fd)
+                os.close(opened)
+            if fd == 1:
+                sys.stdout = _ClosedStdout()
+            elif fd == 2:
+                sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+    if sys.stdout is None:
+        sys.stdout = _ClosedStdout()
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+
+
+def _end_quietly_by_sigpipe() -> NoReturn:
+    """Standard output's reader has gone: end as a Unix filter does, killed by SIGPIPE, nothing printed."""
+    import signal
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)  # nothing left to flush at exit
+    if hasattr(signal, "SIGPIPE"):
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGPIPE)
+    raise SystemExit(141)  # pragma: no cover - where there is no SIGPIPE
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Run the command line on `argv` (default ``sys.argv[1:]``); return the exit status.
+
+    Every error is one line on standard error: usage errors (status 2) included.
+    A standard output that is closed or whose reader has gone raises
+    :class:`BrokenPipeError` out of here; :func:`main` turns it into a quiet end.
+    """
+    from typer import exceptions as typer_exceptions
+    from typer._click import exceptions as click_exceptions
+
+    try:
+        try:
+            status = app(args=argv, prog_name="rigidid", standalone_mode=False)
+        except click_exceptions.NoArgsIsHelpError:
+            return EXIT_INPUT
+        except click_exceptions.UsageError as exc:
+            command = exc.ctx.command_path if exc.ctx is not None else "rigidid"
+            message = " ".join(exc.format_message().split()) or "usage error"
+            sys.stderr.write(f"rigidid: error: {command}: {message} (see {command} --help)\n")
+            return EXIT_INPUT
+        except typer_exceptions.Abort:
+            sys.stderr.write("rigidid: error: aborted\n")
+            return EXIT_INPUT
+        sys.stdout.flush()
+    except (_StdoutGone, BrokenPipeError):
+        raise BrokenPipeError(32, "standard output is closed") from None
+    except OSError as exc:
+        sys.stderr.write(f"rigidid: error: standard output: {exc.strerror or exc}\n")
+        return EXIT_INPUT
+    return int(status or 0)
 
 
 def main() -> None:
     """Entry point of the ``rigidid`` console script."""
-    app(prog_name="rigidid")
+    _plug_closed_descriptors()
+    try:
+        status = run()
+    except BrokenPipeError:
+        _end_quietly_by_sigpipe()
+    except BaseException:
+        raise
+    if status:
+        # a failed flush at exit must not print a second message
+        try:
+            sys.stdout.flush()
+        except OSError:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+    raise SystemExit(status)

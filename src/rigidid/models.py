@@ -100,6 +100,8 @@ class SensorSpec(_Strict):
         if isinstance(self.direction, str):
             return AXIS_DIRECTIONS[self.direction]
         x, y, z = self.direction
+        big = max(abs(x), abs(y), abs(z))  # scale first: [0, 0, 1e-200] and [1e300, 0, 0] normalise too
+        x, y, z = x / big, y / big, z / big
         n = math.sqrt(x * x + y * y + z * z)
         return (x / n, y / n, z / n)
 

@@ -9,7 +9,9 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +41,8 @@ MODES_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "sensor", "real", "ima
 _REQUIRED = MODES_COLUMNS[:5]
 
 M = TypeVar("M", bound=BaseModel)
+# a plain decimal number: no underscores ("1_0"), no hex, no words but nan/inf (refused by the model)
+_NUMBER = re.compile(r"[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -101,23 +105,98 @@ def _first_error(exc: ValidationError) -> tuple[str, str]:
     return loc, message
 
 
-def _read_text(path: Path) -> str:
+def _read_text(path: Path, limit: int | None = None) -> str:
+    """The file's text (UTF-8, optional BOM), reading at most `limit` bytes (default: no limit)."""
+    from rigidid.limits import MAX_CSV_BYTES
+
+    limit = MAX_CSV_BYTES if limit is None else limit
     try:
-        return path.read_text(encoding="utf-8-sig")
+        with path.open("rb") as fh:
+            raw = fh.read(limit + 1)
     except FileNotFoundError:
         raise InputError("file not found", source=str(path)) from None
     except IsADirectoryError:
         raise InputError("is a directory, not a file", source=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read: {exc}", source=str(path)) from None
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", source=str(path)) from None
+    if len(raw) > limit:
+        raise InputError(f"larger than the limit of {limit // 2**20} MiB for this kind of file", source=str(path))
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (byte {exc.start})", source=str(path)) from None
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(key)
+        out[key] = value
+    return out
+
+
+class _DuplicateKey(Exception):
+    pass
+
+
+def _no_constant(name: str) -> Any:
+    raise _BadConstant(name)
+
+
+class _BadConstant(Exception):
+    pass
+
+
+def _first_odd(data: Any, where: str = "") -> tuple[str, str] | None:
+    """Location and fault of the first true/false (rigidid's inputs have none) or too large number."""
+    from rigidid.limits import MAX_MAGNITUDE
+
+    if isinstance(data, bool):
+        return where or "(top)", "true/false where a number or text is expected"
+    if isinstance(data, (int, float)) and not abs(data) <= MAX_MAGNITUDE:
+        return where or "(top)", f"must be at most {MAX_MAGNITUDE:g} in magnitude"
+    items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
+    for key, value in items:
+        found = _first_odd(value, f"{where}.{key}" if where else str(key))
+        if found:
+            return found
+    return None
+
+
+def load_json(path: Path) -> Any:
+    """Parse a JSON input strictly: bounded size, no duplicate keys, no NaN/Infinity, no true/false, no deep nesting.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the line or field.
+    """
+    from rigidid.limits import MAX_JSON_BYTES
+
+    src = str(path)
+    text = _read_text(path, MAX_JSON_BYTES)
+    try:
+        data = json.loads(text, object_pairs_hook=_unique_keys, parse_constant=_no_constant)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"invalid JSON: {exc.msg}", source=src, location=f"line {exc.lineno}") from None
+    except _DuplicateKey as exc:
+        raise InputError(f"key {exc.args[0]!r} appears twice in one object", source=src) from None
+    except _BadConstant as exc:
+        raise InputError(f"{exc.args[0]} is not a number JSON allows", source=src) from None
+    except RecursionError:
+        raise InputError("nested too deeply to be a rigidid file", source=src) from None
+    try:
+        odd = _first_odd(data)
+    except RecursionError:  # pragma: no cover - json nests less deeply than this walk can
+        raise InputError("nested too deeply to be a rigidid file", source=src) from None
+    if odd is not None:
+        raise InputError(odd[1], source=src, location=odd[0])
+    return data
 
 
 def _load_json_model(path: Path, model: type[M]) -> M:
-    text = _read_text(path)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"invalid JSON: {exc.msg}", source=str(path), location=f"line {exc.lineno}") from None
+    data = load_json(path)
     try:
         return model.model_validate(data)
     except ValidationError as exc:
@@ -186,6 +265,21 @@ def load_body(path: str | os.PathLike[str]) -> BodyFile:
     return _load_json_model(Path(path), BodyFile)
 
 
+def _python_float(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _csv_rows(reader: Any, src: str) -> Any:
+    """The rows of a CSV reader; a malformed line becomes an InputError naming the row."""
+    try:
+        yield from reader
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV: {exc}", source=src, location=f"row {reader.line_num}") from None
+
+
 def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeTable:
     """Read and validate ``modes.csv`` against the layout's sensor ids.
 
@@ -216,11 +310,13 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         mode, frequency or damping differing between rows of one mode, a mode
         missing a sensor, or no rows at all.
     """
+    from rigidid.limits import MAX_MAGNITUDE
+
     p = Path(path)
     src = str(p)
     text = _read_text(p)
     dialect = sniff_dialect(text)
-    reader = csv.reader(io.StringIO(text), delimiter=dialect.delimiter)
+    reader = _csv_rows(csv.reader(io.StringIO(text), delimiter=dialect.delimiter), src)
     header = next(reader, None)
     if header is None:
         raise InputError("file is empty", source=src)
@@ -245,8 +341,22 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         if len(row) != len(columns):
             raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
         record: dict[str, Any] = {c: _modes_cell(c, v, dialect) for c, v in zip(columns, row, strict=True)}
-        if record.get("imag") == "":
-            del record["imag"]
+        for name in ("mode", "frequency_hz", "damping_ratio", "real", "imag"):
+            cell = record.get(name)
+            if cell is None:
+                continue
+            if cell == "":
+                raise InputError("empty cell", source=src, location=f"{where}: {name}")
+            if not _NUMBER.fullmatch(cell):
+                if _python_float(cell) is None:
+                    continue  # not a number at all: the model says so
+                raise InputError(
+                    f"{cell[:40]!r} is not a plain decimal number", source=src, location=f"{where}: {name}"
+                )
+            if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
+                raise InputError(
+                    f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}"
+                )
         try:
             parsed = ModeRow.model_validate(record)
         except ValidationError as exc:
@@ -350,6 +460,13 @@ def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(MODES_COLUMNS)
     fmt = f"{{:.{digits}g}}"
+    for name, values in (
+        ("frequency_hz", table.frequency_hz),
+        ("damping_ratio", table.damping_ratio),
+        ("shapes", table.shapes),
+    ):
+        if not np.all(np.isfinite(values)):
+            raise InputError(f"{name} holds NaN or infinite values; nothing written (inputs or options too large?)")
     for k, label in enumerate(table.labels):
         f, z = fmt.format(table.frequency_hz[k]), fmt.format(table.damping_ratio[k])
         for i, sid in enumerate(table.sensor_ids):

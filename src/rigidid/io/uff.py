@@ -485,6 +485,12 @@ def _read_all(path: Path) -> list[dict[str, Any]]:
         raise InputError("file not found", source=src)
     if path.is_dir():
         raise InputError("is a directory, not a file", source=src)
+    from rigidid.limits import MAX_UFF_BYTES
+
+    if not path.is_file():
+        raise InputError("not a regular file (a device or pipe cannot be read as UFF)", source=src)
+    if path.stat().st_size > MAX_UFF_BYTES:
+        raise InputError(f"larger than the limit of {MAX_UFF_BYTES // 2**20} MiB for a UFF file", source=src)
     try:
         uff = pyuff.UFF(src)
         n = uff.get_n_sets()
