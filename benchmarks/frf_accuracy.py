@@ -24,11 +24,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from rigidid.core.frf import accelerance, random_elastic_modes  # noqa: E402
-from rigidid.core.massline import mass_line  # noqa: E402
-from rigidid.core.simulate import Body, Mount  # noqa: E402
-from rigidid.errors import IdentificationError  # noqa: E402
-from tests.bodies import random_body, random_layout  # noqa: E402
+from tests.bodies import random_body, random_layout
+
+from rigidid.core.frf import accelerance, random_elastic_modes
+from rigidid.core.massline import mass_line
+from rigidid.core.simulate import Body, Mount
+from rigidid.errors import IdentificationError
 
 
 def scenario(seed: int, soften: float) -> tuple[float, float, float, float]:
