@@ -55,7 +55,16 @@ ModesUsed = Annotated[
     typer.Option("--modes", help="The six rigid-body mode labels, e.g. 1,2,3,5,6,7.", show_default=False),
 ]
 IdMethod = Annotated[
-    str, typer.Option(help="structured (default, robust) or paper (the paper's eqs. 25-26 and 36-40).")
+    str,
+    typer.Option(
+        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40) or massline (from --frf)."
+    ),
+]
+FrfPath = Annotated[
+    Path | None, typer.Option("--frf", help="FRF CSV (accelerance) for --method massline.", show_default=False)
+]
+ReferencesPath = Annotated[
+    Path | None, typer.Option(help="references.json: force points and directions of the FRFs.", show_default=False)
 ]
 JsonPath = Annotated[
     str | None,
@@ -423,11 +432,16 @@ def identify(
     geometry: Geometry = None,
     force_unit: ForceUnit = None,
     csv: CsvDir = None,
+    frf: FrfPath = None,
+    references: ReferencesPath = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
         from rigidid.jsonout import result_to_dict
 
+        if method == "massline" or frf is not None:
+            _identify_massline(layout, frf, references, mass=mass, band=band, method=method, json_path=json_path)
+            return
         force_unit = _force_unit(force_unit)
 
         noise = _noise_overrides(
@@ -542,6 +556,9 @@ def simulate(
     record_noise: Annotated[
         float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=_TIME)
     ] = 0.0,
+    frf: Annotated[Path | None, typer.Option("--frf", help="Also write accelerance FRFs as CSV to PATH.")] = None,
+    references: ReferencesPath = None,
+    frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
 ) -> None:
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
@@ -578,6 +595,8 @@ def simulate(
                     progress=progress,
                 )
             sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
+        if frf is not None:
+            _simulate_frf(body, layout, frf, references, frf_noise, seed)
         text = modes_csv_text(table)
         if output == "-":
             sys.stdout.write(text)
@@ -586,6 +605,54 @@ def simulate(
             sys.stderr.write(
                 f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
             )
+
+
+def _identify_massline(
+    layout: Path,
+    frf: Path | None,
+    references: Path | None,
+    *,
+    mass: float | None,
+    band: tuple[float, float] | None,
+    method: str,
+    json_path: str | None,
+) -> None:
+    """``identify --method massline``: mass, CG and inertia from FRFs (rigidid.api_frf)."""
+    from rigidid import api_frf
+    from rigidid.jsonout import massline_to_dict
+
+    if method != "massline":
+        raise InputError(f"FRFs are identified with --method massline, not {method!r}", source="--method")
+    if frf is None:
+        raise InputError("--method massline needs --frf FRF.csv", source="--frf")
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    result = api_frf.identify_massline(layout, frf, references, mass=mass, band=band)
+    if json_path is not None:
+        _write_json(json_path, massline_to_dict(result))
+    if json_path != "-":
+        from rigidid.render import massline_tables
+
+        _console().print(massline_tables(result))
+
+
+def _simulate_frf(
+    body: Path, layout: Path, out: Path, references: Path | None, noise: float, seed: int | None
+) -> None:
+    from rigidid import api_frf
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.io.frf import frf_csv_text
+
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    if not noise >= 0.0:
+        raise InputError(f"must be zero or positive, got {noise}", source="--frf-noise")
+    data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
+    write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+    sys.stderr.write(
+        f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
+        f"({data.frequencies.size} lines) to {out}\n"
+    )
 
 
 def _parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
