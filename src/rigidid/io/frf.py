@@ -124,12 +124,12 @@ def load_frf_csv(
     frf = np.zeros((p, q, freqs.size), dtype=complex)
     for i, s in enumerate(sensor_ids):
         for j, r in enumerate(reference_ids):
-            cell = values.get((i, j))
-            if cell is None:
+            pair = values.get((i, j))
+            if pair is None:
                 raise InputError(f"no FRF for response {s!r} and reference {r!r}", source=src)
-            if len(cell) != freqs.size or np.any(np.array(sorted(cell)) != freqs):
+            if len(pair) != freqs.size or np.any(np.array(sorted(pair)) != freqs):
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
-            frf[i, j] = [cell[f] for f in freqs]
+            frf[i, j] = [pair[f] for f in freqs]
     return freqs, frf
 
 
