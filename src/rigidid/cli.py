@@ -636,9 +636,7 @@ def _identify_massline(
         _console().print(massline_tables(result))
 
 
-def _simulate_frf(
-    body: Path, layout: Path, out: Path, references: Path | None, noise: float, seed: int | None
-) -> None:
+def _simulate_frf(body: Path, layout: Path, out: Path, references: Path | None, noise: float, seed: int | None) -> None:
     from rigidid import api_frf
     from rigidid.io.atomic import write_text_atomic
     from rigidid.io.frf import frf_csv_text

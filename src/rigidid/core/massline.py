@@ -137,9 +137,7 @@ def _mass_matrix(theta: Array) -> Array:
     """``M`` at the origin from ``(m, m c_x, m c_y, m c_z, Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)`` (about the origin)."""
     m = theta[0]
     mc = theta[1:4]
-    jo = np.array(
-        [[theta[4], theta[7], theta[8]], [theta[7], theta[5], theta[9]], [theta[8], theta[9], theta[6]]]
-    )
+    jo = np.array([[theta[4], theta[7], theta[8]], [theta[7], theta[5], theta[9]], [theta[8], theta[9], theta[6]]])
     out = np.zeros((6, 6))
     out[:3, :3] = m * np.eye(3)
     out[:3, 3:] = -skew(mc)
@@ -240,9 +238,7 @@ def mass_line(
     y = np.linalg.lstsq(t, h[:, :, sel].reshape(p, q * n_f), rcond=None)[0].reshape(6 * q, n_f)
     # per rigid coordinate and reference: constant (the mass line) plus correction terms
     extra = tuple(
-        name
-        for name, on in (("stiffness", stiffness), ("damping", damping), ("upper_residual", upper_residual))
-        if on
+        name for name, on in (("stiffness", stiffness), ("damping", damping), ("upper_residual", upper_residual)) if on
     )
     w0 = float(np.sqrt(w[0] * w[-1]))
     u = w / w0
