@@ -21,7 +21,8 @@ REFS = DATA / "frf" / "references.json"
 
 
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True, check=False)
+    cmd = [sys.executable, "-m", "rigidid", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, check=False)
 
 
 def test_frf_csv_round_trip_is_exact(tmp_path: Path) -> None:
@@ -32,7 +33,7 @@ def test_frf_csv_round_trip_is_exact(tmp_path: Path) -> None:
     freqs, h = load_frf_csv(path, data.sensor_ids, data.reference_ids[::-1])
     np.testing.assert_array_equal(freqs, data.frequencies)
     np.testing.assert_array_equal(h, data.frf[:, ::-1])
-    ids, pos, dirs = reference_arrays(load_references(REFS))
+    ids, _pos, dirs = reference_arrays(load_references(REFS))
     assert ids == ("h1", "h2", "h3")
     np.testing.assert_array_equal(dirs, np.eye(3))
 
