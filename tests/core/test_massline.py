@@ -73,6 +73,8 @@ def test_one_reference_cannot_determine_the_body_and_a_narrow_band_is_refused():
         mass_line(f, h, pos, dirs, rpos[:1], rdirs[:1], band=(20.0, 300.0))
     h3 = accelerance(body, pos, dirs, rpos, rdirs, f)
     with pytest.raises(InputError, match="frequency lines"):
-        mass_line(f, h3, pos, dirs, rpos, rdirs, band=(100.0, 100.2))
+        mass_line(f[::100], h3[:, :, ::100], pos, dirs, rpos, rdirs, band=(100.0, 201.0))
+    with pytest.raises(IdentificationError, match="less than a factor 2"):
+        mass_line(f, h3, pos, dirs, rpos, rdirs, band=(100.0, 150.0))
     with pytest.raises(InputError, match="shape"):
         mass_line(f, h3[:, :2], pos, dirs, rpos, rdirs)

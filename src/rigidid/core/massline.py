@@ -31,9 +31,17 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
 
-__all__ = ["MassLine", "auto_band", "mass_line"]
+__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_line"]
 
 Array = NDArray[np.float64]
+
+MIN_LINES = 10
+"""Fewest frequency lines in the band (the fit has up to six terms per rigid coordinate)."""
+
+MIN_BAND_RATIO = 2.0
+"""Narrowest band (upper over lower frequency) the mass line accepts: over narrower bands the
+constant and its correction terms cannot be told apart (benchmarks/frf_accuracy.py, on mounts:
+bands of ratio 1.3-1.6 gave mass errors of 18-99 %, ratio 1.8-2.2 about 1 %)."""
 
 
 @dataclass(frozen=True)
@@ -125,7 +133,7 @@ def _auto_band(f: Array, h: NDArray[np.complex128]) -> tuple[tuple[float, float]
     else:
         low, high = 3.0 * fp[-1], float(f[-1])
         elastic = None
-    if not high > low or np.count_nonzero((f >= low) & (f <= high)) < 3:
+    if not high > low or np.count_nonzero((f >= low) & (f <= high)) < MIN_LINES:
         raise IdentificationError(
             f"no room for a mass-line band between the rigid-body peaks (up to {fp.max():.4g} Hz) "
             "and the elastic ones: give the band"
@@ -192,8 +200,9 @@ def mass_line(
     InputError
         If shapes disagree or the band holds too few lines.
     IdentificationError
-        If the sensors do not see six rigid-body motions or the references do
-        not determine the ten inertial parameters.
+        If the sensors do not see six rigid-body motions, the references do
+        not determine the ten inertial parameters, or the band spans less than
+        :data:`MIN_BAND_RATIO`.
 
     Notes
     -----
@@ -222,9 +231,14 @@ def mass_line(
             elastic_frequency = found
     lo, hi = float(band[0]), float(band[1])
     sel = (f >= lo) & (f <= hi)
+    if hi < MIN_BAND_RATIO * lo:
+        raise IdentificationError(
+            f"the mass-line band {lo:.4g}-{hi:.4g} Hz spans less than a factor {MIN_BAND_RATIO:g}: the rigid-body "
+            "modes are too close to the elastic ones to separate the mass line from the mounts (use the modal route)"
+        )
     n_f = int(np.count_nonzero(sel))
-    if n_f < 3:
-        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least 3")
+    if n_f < MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {MIN_LINES}")
     # scaled frame: origin at the sensor centroid, lengths in units of the span
     origin = pos.mean(axis=0)
     span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
