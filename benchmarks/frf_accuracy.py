@@ -8,7 +8,8 @@ drawn ("mounts"); 8 random sensors; 3 references at three corners of the sensor 
 hitting along x, y and z (moments of rank 3); accelerance 0.25-400 Hz (3200 lines) with one elastic mode at
 300 Hz (1 % damping, random shape of the mass-line size) and 1 % complex noise on every
 value. The band is chosen automatically; bands narrower than a factor 2 are refused
-(counted). A third part compares the mass line with identify() given the mass-line mass. Errors: mass (relative), CG (distance over the
+(counted). A third part compares the mass line with identify() given the mass-line mass.
+Errors: mass (relative), CG (distance over the
 largest sensor-box edge), inertia diagonal (largest relative error). Worst and median
 over the trials are printed.
 """
@@ -112,7 +113,7 @@ def main() -> None:
             print(f"  {label:13s} median {np.median(errs[:, k]):.4f}  worst {errs[:, k].max():.4f}")
     rows = np.array([compare_with_modes(seed) for seed in range(args.trials)])
     print(
-        f"on mounts, elastic mode at 15x the top rigid mode: mass line vs identify() given its mass, {args.trials} trials"
+        f"on mounts, elastic mode 15x the top rigid one: mass line vs identify() given its mass, {args.trials} trials"
     )
     labels = ("mass line mass", "CG apart/span", "inertia apart", "inertia ML", "inertia modal")
     for k, label in enumerate(labels):
