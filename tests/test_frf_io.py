@@ -12,7 +12,7 @@ import pytest
 
 from rigidid import api_frf
 from rigidid.errors import InputError
-from rigidid.io.frf import frf_csv_text, load_frf_csv, load_references, reference_arrays
+from rigidid.io.frf import frf_csv_text, load_frf_csv, load_frf_uff, load_references, reference_arrays
 
 from .conftest import DATA, SAMPLES
 
@@ -80,3 +80,51 @@ def test_massline_without_references_is_an_input_error(tmp_path: Path) -> None:
     done = run("identify", FOUR / "layout.json", "--frf", tmp_path / "x.csv", "--method", "massline")
     assert done.returncode == 2
     assert "--references" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
+def _write_uff58(path: Path, data: api_frf.FrfData, directions: dict[str, int], ref_dirs: dict[str, int]) -> None:
+    import pyuff
+
+    sets = []
+    for i, s in enumerate(data.sensor_ids):
+        for j, r in enumerate(data.reference_ids):
+            w = 2 * np.pi * data.frequencies
+            mobility = i == 0 and j == 0  # one pair as mobility: converted back to accelerance
+            values = data.frf[i, j] / (1j * w) if mobility else data.frf[i, j]
+            sets.append(
+                pyuff.prepare_58(
+                    func_type=4, rsp_node=int(s), rsp_dir=directions[s], ref_node=int(r), ref_dir=ref_dirs[r],
+                    ord_data_type=6, num_pts=data.frequencies.size, abscissa_spacing=0, abscissa_spec_data_type=18,
+                    ordinate_spec_data_type=11 if mobility else 12, orddenom_spec_data_type=13,
+                    data=values, x=data.frequencies, id1="rigidid test", rsp_ent_name="b", ref_ent_name="b",
+                    abscissa_min=float(data.frequencies[0]), abscissa_inc=0.0,
+                )
+            )  # fmt: skip
+    uff = pyuff.UFF(str(path))
+    uff.write_sets(sets, mode="overwrite")
+
+
+def test_uff58_frfs_read_as_accelerance(tmp_path: Path) -> None:
+    refs = tmp_path / "refs.json"
+    refs.write_text(
+        json.dumps(
+            {"references": [{"id": "101", "position": [0.3, 0.2, 0.15], "direction": "+x"},
+                            {"id": "102", "position": [-0.3, 0.2, -0.15], "direction": "+y"},
+                            {"id": "103", "position": [0.3, -0.2, -0.15], "direction": "+z"}]}
+        )
+    )  # fmt: skip
+    lines = np.arange(1.0, 400.0, 4.0)  # exact in the 58's abscissa format
+    data = api_frf.simulate_frf(FOUR / "body.json", FOUR / "layout.json", refs, frequencies=lines)
+    codes = {"1": 3, "2": 1, "3": 2, "4": 3, "5": 1, "6": 2, "7": 3, "8": 1}
+    path = tmp_path / "frf.uff"
+    _write_uff58(path, data, codes, {"101": 1, "102": 2, "103": 3})
+    freqs, h = load_frf_uff(path, data.sensor_ids, data.reference_ids)
+    np.testing.assert_allclose(freqs, data.frequencies, rtol=1e-12)
+    np.testing.assert_allclose(h, data.frf, rtol=1e-9, atol=1e-15)
+
+
+def test_a_real_h1_export_without_nodes_is_refused_saying_why(tmp_path: Path) -> None:
+    path = tmp_path / "h1.uff"
+    path.write_bytes((DATA / "uff" / "non_ascii_header_frf.uff").read_bytes())
+    with pytest.raises(InputError, match=r"dataset 58 #1.*names no response or reference node.*no geometry"):
+        load_frf_uff(path, ["1"], ["h1"])

@@ -139,7 +139,8 @@ def identify_massline(
     layout : LayoutFile or path-like
         The sensors (responses).
     frf : path-like
-        FRF CSV (see :func:`rigidid.io.frf.load_frf_csv`).
+        FRF CSV (see :func:`rigidid.io.frf.load_frf_csv`), or a UFF file
+        (``.uff``/``.unv``, :func:`rigidid.io.frf.load_frf_uff`).
     references : ReferencesFile or path-like
         The force points and directions.
     mass : float, optional
@@ -152,13 +153,14 @@ def identify_massline(
     MassLineResult
     """
     from rigidid.core.massline import mass_line
-    from rigidid.io.frf import load_frf_csv, reference_arrays
+    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
     refs = _references(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
-    freqs, h = load_frf_csv(frf, ids, rids)
+    is_uff = str(frf).lower().endswith((".uff", ".unv"))
+    freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
     result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.models import ReferencesFile
 
-__all__ = ["FRF_COLUMNS", "frf_csv_text", "load_frf_csv", "load_references", "reference_arrays"]
+__all__ = ["FRF_COLUMNS", "frf_csv_text", "load_frf_csv", "load_frf_uff", "load_references", "reference_arrays"]
 
 FRF_COLUMNS = ("frequency_hz", "response", "reference", "real", "imag")
 
@@ -149,3 +149,122 @@ def frf_csv_text(
                 v = frf[i, j, k]
                 w.writerow([repr(float(f)), s, r, repr(float(v.real)), repr(float(v.imag))])
     return out.getvalue()
+
+
+_ORDINATE_KINDS = {12: "accelerance", 11: "mobility", 8: "receptance", 0: "accelerance", 1: "accelerance"}
+"""UFF 58 ordinate specific data type (numerator of an FRF) -> what the FRF is; unknown (0) and
+general (1), which some writers use for accelerance, are taken as accelerance."""
+
+
+def _uff_id(node: int, code: int, ids: Sequence[str]) -> str | None:
+    """The id among `ids` of a UFF node and direction: ``"12+z"`` or, else, ``"12"``."""
+    axis = ("+" if code > 0 else "-") + "xyz"[abs(code) - 1]
+    for candidate in (f"{node}{axis}", str(node)):
+        if candidate in ids:
+            return candidate
+    return None
+
+
+def load_frf_uff(
+    path: str | os.PathLike[str], sensor_ids: Sequence[str], reference_ids: Sequence[str]
+) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
+    """Read FRFs from a universal file (datasets 58, function type 4) as accelerance.
+
+    Parameters
+    ----------
+    path : path-like
+        The UFF file.
+    sensor_ids, reference_ids : sequence of str
+        Ids of the layout's sensors and of the references: a record's response
+        (reference) node ``n`` and direction ``d`` is the id ``"n+x"``-style if
+        there is one, else ``"n"``.
+
+    Returns
+    -------
+    frequencies : ndarray, shape (f,)
+    frf : ndarray of complex, shape (p, q, f)
+        Accelerance; mobility (ordinate type 11) is multiplied by ``i w``,
+        receptance (8) by ``-w^2``; values are taken in the layout's units.
+
+    Raises
+    ------
+    InputError
+        Naming the file and dataset: function type 3 (cross spectrum) or
+        another non-FRF, an ordinate that is not acceleration, velocity or
+        displacement, a node/direction that is no sensor or reference, a
+        missing pair, or pairs with other frequency lines.
+    """
+    from rigidid.io.uff import _read_all
+
+    src = str(path)
+    sets = _read_all(Path(path))
+    s_index = {s: i for i, s in enumerate(sensor_ids)}
+    r_index = {r: j for j, r in enumerate(reference_ids)}
+    found: dict[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.complex128]]] = {}
+    n58 = 0
+    for dset in sets:
+        if dset.get("type") != 58:
+            continue
+        n58 += 1
+        where = f"dataset 58 #{n58}"
+        func = int(dset.get("func_type", 0))
+        if func == 3:
+            raise InputError(
+                "function type 3 is a cross spectrum, not an FRF: export H1/H2 FRFs (function type 4)",
+                source=src,
+                location=where,
+            )
+        if func != 4:
+            raise InputError(f"function type {func} is not an FRF (function type 4)", source=src, location=where)
+        kind = _ORDINATE_KINDS.get(int(dset.get("ordinate_spec_data_type", 12)))
+        if kind is None:
+            raise InputError(
+                f"ordinate type {dset.get('ordinate_spec_data_type')} is not acceleration (12), velocity (11) "
+                "or displacement (8)",
+                source=src,
+                location=where,
+            )
+        if int(dset.get("rsp_node", 0)) <= 0 or int(dset.get("ref_node", 0)) <= 0:
+            raise InputError(
+                f"the FRF names no response or reference node (response node {dset.get('rsp_node')}, reference "
+                f"node {dset.get('ref_node')}): it carries no geometry; name the nodes in the exporting tool",
+                source=src,
+                location=where,
+            )
+        rsp = _uff_id(int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0)), list(s_index))
+        ref = _uff_id(int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)), list(r_index))
+        if rsp is None:
+            raise InputError(
+                f"response node {dset.get('rsp_node')} direction {dset.get('rsp_dir')} is no sensor of the layout",
+                source=src,
+                location=where,
+            )
+        if ref is None:
+            raise InputError(
+                f"reference node {dset.get('ref_node')} direction {dset.get('ref_dir')} is not in the references",
+                source=src,
+                location=where,
+            )
+        x = np.asarray(dset["x"], dtype=float)
+        data = np.asarray(dset["data"], dtype=complex)
+        keep = x > 0.0
+        x, data = x[keep], data[keep]
+        w = 2.0 * np.pi * x
+        if kind == "mobility":
+            data = 1j * w * data
+        elif kind == "receptance":
+            data = -(w**2) * data
+        found[(s_index[rsp], r_index[ref])] = (x, data)
+    if not found:
+        raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
+    freqs = next(iter(found.values()))[0]
+    frf = np.zeros((len(sensor_ids), len(reference_ids), freqs.size), dtype=complex)
+    for i, s in enumerate(sensor_ids):
+        for j, r in enumerate(reference_ids):
+            pair = found.get((i, j))
+            if pair is None:
+                raise InputError(f"no FRF for response {s!r} and reference {r!r}", source=src)
+            if pair[0].shape != freqs.shape or not np.allclose(pair[0], freqs, rtol=1e-9, atol=0.0):
+                raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
+            frf[i, j] = pair[1]
+    return freqs, frf
