@@ -154,6 +154,30 @@ def _mass_matrix(theta: Array) -> Array:
     return out
 
 
+def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) -> tuple[float, Array, Array]:
+    """Mass, CG and inertia about the CG from ``y0 = M^-1 T_f^T`` (scaled frame): ``M y0 = T_f^T``, linear."""
+    q = tf.shape[0]
+    a_mat = np.stack([(_mass_matrix(e) @ y0).reshape(-1) for e in np.eye(10)], axis=1)
+    b_vec = tf.T.reshape(-1)
+    norms = np.linalg.norm(a_mat, axis=0)
+    norms[norms == 0.0] = 1.0
+    sol, _, rank10, svals = np.linalg.lstsq(a_mat / norms, b_vec, rcond=None)
+    if rank10 < 10 or svals[-1] < 1e-4 * svals[0]:
+        raise IdentificationError(
+            f"the {q} reference(s) do not determine the mass, CG and inertia from the mass line "
+            "(at least 2 references at different points and in different directions are needed)"
+        )
+    theta = sol / norms
+    m = float(theta[0])
+    if not m > 0.0:
+        raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive")
+    c_scaled = theta[1:4] / m
+    j_o = _mass_matrix(theta)[3:, 3:]
+    j_g_scaled = j_o + m * skew(c_scaled) @ skew(c_scaled)
+    inertia = span**2 * j_g_scaled
+    return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
+
+
 def mass_line(
     frequencies: ArrayLike,
     frf: ArrayLike,
@@ -280,30 +304,11 @@ def mass_line(
     fitted = design @ coef
     residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
     y0 = coef[0].reshape(6, q)  # M^-1 T_f^T (scaled rigid coordinates per unit force)
-    # M y0 = T_f^T, linear in the ten inertial parameters
-    a_mat = np.stack([(_mass_matrix(e) @ y0).reshape(-1) for e in np.eye(10)], axis=1)
-    b_vec = tf.T.reshape(-1)
-    norms = np.linalg.norm(a_mat, axis=0)
-    norms[norms == 0.0] = 1.0
-    sol, _, rank10, svals = np.linalg.lstsq(a_mat / norms, b_vec, rcond=None)
-    if rank10 < 10 or svals[-1] < 1e-4 * svals[0]:
-        raise IdentificationError(
-            f"the {q} reference(s) do not determine the mass, CG and inertia from the mass line "
-            "(at least 2 references at different points and in different directions are needed)"
-        )
-    theta = sol / norms
-    m = float(theta[0])
-    if not m > 0.0:
-        raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive")
-    c_scaled = theta[1:4] / m
-    j_o = _mass_matrix(theta)[3:, 3:]
-    j_g_scaled = j_o + m * skew(c_scaled) @ skew(c_scaled)
-    cg = origin + span * c_scaled
-    inertia = span**2 * j_g_scaled
+    m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
     return MassLine(
         mass=m,
         center_of_gravity=cg,
-        inertia_tensor=0.5 * (inertia + inertia.T),
+        inertia_tensor=inertia,
         band=(lo, hi),
         band_source=band_source,
         frequencies_used=n_f,
