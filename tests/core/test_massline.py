@@ -78,3 +78,28 @@ def test_one_reference_cannot_determine_the_body_and_a_narrow_band_is_refused():
         mass_line(f, h3, pos, dirs, rpos, rdirs, band=(100.0, 150.0))
     with pytest.raises(InputError, match="shape"):
         mass_line(f, h3[:, :2], pos, dirs, rpos, rdirs)
+
+
+@pytest.mark.parametrize("seed", [1, 5])
+def test_mass_from_residues_on_mounts_with_noise_and_an_elastic_mode(seed):
+    from rigidid.core.massline import mass_from_residues
+    from rigidid.core.simulate import body_modes
+    from tests.tolerances import RESIDUES_ON_MOUNTS
+
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    poles = body_modes(body, pos, dirs).poles
+    r = mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles)
+    assert r.band[0] == f[0] and 149.0 < r.band[1] < 151.0
+    mass, cg, inertia = _errors(r, body, pos)
+    assert mass < RESIDUES_ON_MOUNTS["mass"]
+    assert cg < RESIDUES_ON_MOUNTS["cg_span"]
+    assert inertia < RESIDUES_ON_MOUNTS["inertia"]
+    with pytest.raises(InputError, match="six rigid-body poles"):
+        mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles[:5])

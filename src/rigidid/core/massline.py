@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
 
-__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_line"]
+__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line"]
 
 Array = NDArray[np.float64]
 
@@ -314,4 +314,111 @@ def mass_line(
         frequencies_used=n_f,
         residual=residual,
         corrections=extra,
+    )
+
+
+def mass_from_residues(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+) -> MassLine:
+    """Mass, CG and inertia from scaled rigid-body modes: residues fitted with known poles.
+
+    Parameters
+    ----------
+    frequencies, frf, positions, directions, reference_positions, reference_directions
+        As :func:`mass_line`.
+    poles : array_like of complex, shape (6,)
+        The six rigid-body poles (rad/s, ``Im > 0``), e.g. from ``modes.csv``.
+    band : (float, float), optional
+        Band (Hz) of the fit: it must hold the rigid-body modes and lie below the
+        first elastic mode. Default: from the lowest line to half the first
+        elastic peak (:func:`auto_band`), or the last line.
+
+    Returns
+    -------
+    MassLine
+        ``band_source`` as for :func:`mass_line`; ``corrections`` is
+        ``("residues", "upper_residual")``.
+
+    Notes
+    -----
+    The receptance is ``sum_k R_k / (i w - l_k) + conj``; the residues ``R_k``
+    (``p x q``, complex, the scaled shapes times their participations) are fitted
+    by linear least squares to the accelerance ``-w^2 x receptance`` with an
+    upper residual (``w^2``, ``w^4``). The high-frequency limit of the model,
+    ``sum_k 2 Re(l_k R_k) = T M^-1 T_f^T``, then gives the body as the mass
+    line does, but from every line of the band including the resonances.
+    """
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    h = np.asarray(frf, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    rpos = np.asarray(reference_positions, dtype=float)
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    p, q = pos.shape[0], rpos.shape[0]
+    if h.shape != (p, q, f.size):
+        raise InputError(f"frf must have shape (sensors, references, frequencies) = {(p, q, f.size)}, got {h.shape}")
+    if lam.size != 6 or np.any(lam.imag <= 0.0):
+        raise InputError("poles must be the six rigid-body poles with positive imaginary parts")
+    band_source = "given"
+    if band is None:
+        band_source = "automatic"
+        try:
+            _, elastic = _auto_band(f, h)
+        except IdentificationError:
+            elastic = None
+        band = (float(f[0]), 0.5 * elastic if elastic is not None else float(f[-1]))
+    lo, hi = float(band[0]), float(band[1])
+    sel = (f >= lo) & (f <= hi)
+    n_f = int(np.count_nonzero(sel))
+    if n_f < 3 * MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {3 * MIN_LINES}")
+    top = float(np.abs(lam).max()) / (2.0 * np.pi)
+    if hi < 2.0 * top:
+        raise IdentificationError(f"the band must reach beyond the rigid-body modes (up to {top:.4g} Hz)")
+    origin = pos.mean(axis=0)
+    span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
+    t = sensor_matrix((pos - origin) / span, dirs)
+    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    sv = np.linalg.svd(t, compute_uv=False)
+    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
+        raise IdentificationError("the sensors do not see six independent rigid-body motions")
+    w = 2.0 * np.pi * f[sel]
+    iw = 1j * w
+    w0 = float(w[-1])
+    cols = []
+    for lk in lam:
+        g1 = -(w**2) / (iw - lk)
+        g2 = -(w**2) / (iw - np.conj(lk))
+        cols.extend([g1 + g2, 1j * (g1 - g2)])  # real and imaginary part of R_k
+    cols.extend([(w / w0) ** 2 + 0j, (w / w0) ** 4 + 0j])
+    g = np.stack(cols, axis=1)
+    design = np.concatenate([g.real, g.imag])
+    y = h[:, :, sel].reshape(p * q, n_f).T
+    target = np.concatenate([y.real, y.imag])
+    coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
+    if rank < design.shape[1]:
+        raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
+    fitted = design @ coef
+    residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
+    r = coef[0:12:2] + 1j * coef[1:12:2]  # (6, p q)
+    h_inf = np.sum(2.0 * (lam[:, None] * r).real, axis=0).reshape(p, q)  # T M^-1 T_f^T
+    y0 = np.linalg.lstsq(t, h_inf, rcond=None)[0]
+    m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+    return MassLine(
+        mass=m,
+        center_of_gravity=cg,
+        inertia_tensor=inertia,
+        band=(lo, hi),
+        band_source=band_source,
+        frequencies_used=n_f,
+        residual=residual,
+        corrections=("residues", "upper_residual"),
     )
