@@ -128,3 +128,20 @@ def test_a_real_h1_export_without_nodes_is_refused_saying_why(tmp_path: Path) ->
     path.write_bytes((DATA / "uff" / "non_ascii_header_frf.uff").read_bytes())
     with pytest.raises(InputError, match=r"dataset 58 #1.*names no response or reference node.*no geometry"):
         load_frf_uff(path, ["1"], ["h1"])
+
+
+def test_identify_residues_takes_the_poles_from_the_modes_file(tmp_path: Path) -> None:
+    frf, modes = tmp_path / "frf.csv", tmp_path / "modes.csv"
+    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", modes, "--frf", frf,
+               "--references", REFS, "--frf-noise", "0.01", "--seed", "3")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    done = run("identify", FOUR / "layout.json", modes, "--frf", frf, "--references", REFS, "--method", "residues",
+               "--mass", "41", "--json", "-")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    assert out["route"] == "residues" and "poles" in out["route_reason"]
+    assert abs(out["mass_measured"] / 40.0 - 1.0) < 0.01  # the truth is 40 kg
+    assert out["mass_given"] == 41.0
+    assert out["mass_difference_relative"] == pytest.approx(out["mass_measured"] / 41.0 - 1.0)
+    done = run("identify", FOUR / "layout.json", "--frf", frf, "--references", REFS, "--method", "residues")
+    assert done.returncode == 2 and "modes.csv" in done.stderr

@@ -56,13 +56,16 @@ class MassLineResult:
     mass_given : float or None
         The mass of the layout or of the ``mass`` parameter, if any.
     reason : str
-        Why the mass line was the route.
+        Why this route was used.
+    route : str
+        ``"massline"`` or ``"residues"`` (scaled modes).
     """
 
     massline: MassLine
     units: dict[str, str]
     mass_given: float | None
     reason: str
+    route: str = "massline"
 
 
 def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
@@ -131,8 +134,10 @@ def identify_massline(
     *,
     mass: float | None = None,
     band: tuple[float, float] | None = None,
+    modes: PathLike | None = None,
+    modes_used: tuple[int, ...] | None = None,
 ) -> MassLineResult:
-    """Mass, CG and inertia of a body from FRFs by the mass line.
+    """Mass, CG and inertia of a body from FRFs by the mass line, or from scaled modes.
 
     Parameters
     ----------
@@ -147,6 +152,11 @@ def identify_massline(
         A known mass to compare the measured one with (overrides the layout's).
     band : (float, float), optional
         Mass-line band (Hz); automatic by default.
+    modes : path-like, optional
+        ``modes.csv`` of the same test: its rigid-body poles turn the route into
+        scaled modes (:func:`rigidid.core.massline.mass_from_residues`).
+    modes_used : tuple of int, optional
+        The six rigid-body mode labels of `modes` (default: all, if there are six).
 
     Returns
     -------
@@ -163,14 +173,34 @@ def identify_massline(
     freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
-    result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
-    reason = (
-        "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
-        "the mass is measured through the force, no mounts or mass needed"
-    )
+    if modes is None:
+        result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+        reason = (
+            "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
+            "the mass is measured through the force, no mounts or mass needed"
+        )
+    else:
+        from rigidid.core.massline import mass_from_residues
+        from rigidid.core.statespace import poles_from_modal
+
+        table = files.load_modes(modes, ids)
+        labels = modes_used if modes_used is not None else table.labels
+        if len(labels) != 6 or any(label not in table.labels for label in labels):
+            raise InputError(
+                f"scaled modes need six rigid-body modes of the modes file, got labels {list(labels)}",
+                source="modes_used",
+            )
+        cols = [table.labels.index(label) for label in labels]
+        poles = poles_from_modal(table.frequency_hz[cols], table.damping_ratio[cols])
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
+        reason = (
+            "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
+            "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
+        )
     return MassLineResult(
         result,
         {"length": lay.units.length, "mass": lay.units.mass},
         mass if mass is not None else lay.mass,
         reason,
+        "massline" if modes is None else "residues",
     )

@@ -57,7 +57,8 @@ ModesUsed = Annotated[
 IdMethod = Annotated[
     str,
     typer.Option(
-        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40) or massline (from --frf)."
+        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40); from --frf: massline, "
+        "or residues (scaled modes, with MODES)."
     ),
 ]
 FrfPath = Annotated[
@@ -439,8 +440,11 @@ def identify(
     with _reported():
         from rigidid.jsonout import result_to_dict
 
-        if method == "massline" or frf is not None:
-            _identify_massline(layout, frf, references, mass=mass, band=band, method=method, json_path=json_path)
+        if method in ("massline", "residues") or frf is not None:
+            _identify_massline(
+                layout, frf, references, mass=mass, band=band, method=method, json_path=json_path,
+                modes=inputs, modes_used=modes_used,
+            )  # fmt: skip
             return
         force_unit = _force_unit(force_unit)
 
@@ -616,18 +620,29 @@ def _identify_massline(
     band: tuple[float, float] | None,
     method: str,
     json_path: str | None,
+    modes: list[Path] | None = None,
+    modes_used: str | None = None,
 ) -> None:
-    """``identify --method massline``: mass, CG and inertia from FRFs (rigidid.api_frf)."""
+    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api_frf)."""
     from rigidid import api_frf
     from rigidid.jsonout import massline_to_dict
 
-    if method != "massline":
-        raise InputError(f"FRFs are identified with --method massline, not {method!r}", source="--method")
+    if method not in ("massline", "residues"):
+        raise InputError(f"FRFs are identified with --method massline or residues, not {method!r}", source="--method")
     if frf is None:
-        raise InputError("--method massline needs --frf FRF.csv", source="--frf")
+        raise InputError(f"--method {method} needs --frf FRF.csv", source="--frf")
     if references is None:
         raise InputError("--frf needs --references REFS.json", source="--references")
-    result = api_frf.identify_massline(layout, frf, references, mass=mass, band=band)
+    modes_file = None
+    if method == "residues":
+        if not modes or len(modes) != 1:
+            raise InputError("--method residues needs the test's modes.csv (its rigid-body poles)", source="MODES")
+        modes_file = modes[0]
+    parsed = _parse_modes(modes_used) if method == "residues" else None
+    labels = tuple(parsed) if parsed is not None else None
+    result = api_frf.identify_massline(
+        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels
+    )
     if json_path is not None:
         _write_json(json_path, massline_to_dict(result))
     if json_path != "-":

@@ -395,7 +395,7 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
     ml = result.massline
     out: dict[str, Any] = {
         "rigidid_version": __version__,
-        "route": "massline",
+        "route": result.route,
         "route_reason": result.reason,
         "units": dict(result.units),
         "mass_measured": float(ml.mass),

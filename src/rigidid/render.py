@@ -476,7 +476,8 @@ def massline_tables(result: MassLineResult) -> Group:
 
     ml = result.massline
     length, mass = result.units["length"], result.units["mass"]
-    table = Table(title="Mass line (route: massline)", title_justify="left", show_header=False, box=None)
+    title = "Mass line" if result.route == "massline" else "Scaled modes"
+    table = Table(title=f"{title} (route: {result.route})", title_justify="left", show_header=False, box=None)
     table.add_row("mass measured", f"{_fmt(ml.mass)} {mass}")
     if result.mass_given is not None:
         diff = ml.mass - result.mass_given
