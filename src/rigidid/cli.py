@@ -55,7 +55,17 @@ ModesUsed = Annotated[
     typer.Option("--modes", help="The six rigid-body mode labels, e.g. 1,2,3,5,6,7.", show_default=False),
 ]
 IdMethod = Annotated[
-    str, typer.Option(help="structured (default, robust) or paper (the paper's eqs. 25-26 and 36-40).")
+    str,
+    typer.Option(
+        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40); from --frf: massline, "
+        "or residues (scaled modes, with MODES)."
+    ),
+]
+FrfPath = Annotated[
+    Path | None, typer.Option("--frf", help="FRF CSV (accelerance) for --method massline.", show_default=False)
+]
+ReferencesPath = Annotated[
+    Path | None, typer.Option(help="references.json: force points and directions of the FRFs.", show_default=False)
 ]
 JsonPath = Annotated[
     str | None,
@@ -520,12 +530,21 @@ def identify(
     geometry: Geometry = None,
     force_unit: ForceUnit = None,
     csv: CsvDir = None,
+    frf: FrfPath = None,
+    references: ReferencesPath = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
         from rigidid.io.atomic import OutputSet
         from rigidid.jsonout import result_to_dict
 
+        if method in ("massline", "residues") or frf is not None:
+            _check_outputs({"--json": json_path})
+            _identify_massline(
+                layout, frf, references, mass=mass, band=band, method=method, json_path=json_path,
+                modes=inputs, modes_used=modes_used,
+            )  # fmt: skip
+            return
         force_unit = _force_unit(force_unit)
 
         _check_outputs({"--json": json_path, "--uff": uff}, {"--csv": csv})
@@ -650,6 +669,9 @@ def simulate(
     record_noise: Annotated[
         float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=_TIME)
     ] = 0.0,
+    frf: Annotated[Path | None, typer.Option("--frf", help="Also write accelerance FRFs as CSV to PATH.")] = None,
+    references: ReferencesPath = None,
+    frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
 ) -> None:
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
@@ -666,7 +688,7 @@ def simulate(
         ):
             check_number(value, name, nonnegative=True)
         _check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
-        _check_outputs({"--output": output}, {"--records": records})
+        _check_outputs({"--output": output, "--frf": frf}, {"--records": records})
         impacts = [_parse_impact(text) for text in impact] if impact else None
         with _naming(str(body)):
             table = api.simulate(
@@ -689,6 +711,8 @@ def simulate(
                     if exc.source == "sample_rate":
                         raise InputError(exc.message, source="--sample-rate/--duration") from None
                     raise
+            if frf is not None:
+                _simulate_frf(body, layout, frf, references, frf_noise, seed)
             if output == "-":
                 outs.stdout(text)
             else:
@@ -699,6 +723,63 @@ def simulate(
             sys.stderr.write(
                 f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
             )
+
+
+def _identify_massline(
+    layout: Path,
+    frf: Path | None,
+    references: Path | None,
+    *,
+    mass: float | None,
+    band: tuple[float, float] | None,
+    method: str,
+    json_path: str | None,
+    modes: list[Path] | None = None,
+    modes_used: str | None = None,
+) -> None:
+    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api_frf)."""
+    from rigidid import api_frf
+    from rigidid.jsonout import massline_to_dict
+
+    if method not in ("massline", "residues"):
+        raise InputError(f"FRFs are identified with --method massline or residues, not {method!r}", source="--method")
+    if frf is None:
+        raise InputError(f"--method {method} needs --frf FRF.csv", source="--frf")
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    modes_file = None
+    if method == "residues":
+        if not modes or len(modes) != 1:
+            raise InputError("--method residues needs the test's modes.csv (its rigid-body poles)", source="MODES")
+        modes_file = modes[0]
+    parsed = _parse_modes(modes_used) if method == "residues" else None
+    labels = tuple(parsed) if parsed is not None else None
+    result = api_frf.identify_massline(
+        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels
+    )
+    if json_path is not None:
+        _write_json(json_path, massline_to_dict(result))
+    if json_path != "-":
+        from rigidid.render import massline_tables
+
+        _console().print(massline_tables(result))
+
+
+def _simulate_frf(body: Path, layout: Path, out: Path, references: Path | None, noise: float, seed: int | None) -> None:
+    from rigidid import api_frf
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.io.frf import frf_csv_text
+
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    if not noise >= 0.0:
+        raise InputError(f"must be zero or positive, got {noise}", source="--frf-noise")
+    data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
+    write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+    sys.stderr.write(
+        f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
+        f"({data.frequencies.size} lines) to {out}\n"
+    )
 
 
 def _parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:

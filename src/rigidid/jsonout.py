@@ -19,6 +19,7 @@ from rigidid import __version__
 
 if TYPE_CHECKING:
     from rigidid.api import IdentifyResult, PlanResult
+    from rigidid.api_frf import MassLineResult
     from rigidid.core.layout_check import LayoutReport
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import PredictedFigures, Prediction, SensorPlan
@@ -30,6 +31,7 @@ __all__ = [
     "estimate_to_dict",
     "interval_to_dict",
     "layout_report_to_dict",
+    "massline_to_dict",
     "noise_to_dict",
     "plan_to_dict",
     "predicted_figures_to_dict",
@@ -386,3 +388,30 @@ def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
             for entry in estimate.diagram
         ],
     }
+
+
+def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
+    """The JSON of ``identify --method massline`` (FORMATS.md, "Mass line result")."""
+    ml = result.massline
+    out: dict[str, Any] = {
+        "rigidid_version": __version__,
+        "route": result.route,
+        "route_reason": result.reason,
+        "units": dict(result.units),
+        "mass_measured": float(ml.mass),
+        "center_of_gravity": _vec(ml.center_of_gravity),
+        "inertia_tensor": _rows(ml.inertia_tensor),
+        "band_hz": [float(ml.band[0]), float(ml.band[1])],
+        "band_source": ml.band_source,
+        "frequencies_used": int(ml.frequencies_used),
+        "relative_residual": float(ml.residual),
+        "corrections": list(ml.corrections),
+        "mass_given": None,
+        "mass_difference": None,
+        "mass_difference_relative": None,
+    }
+    if result.mass_given is not None:
+        out["mass_given"] = float(result.mass_given)
+        out["mass_difference"] = float(ml.mass - result.mass_given)
+        out["mass_difference_relative"] = float(ml.mass / result.mass_given - 1.0)
+    return out

@@ -18,6 +18,7 @@ __all__ = [
     "LayoutFile",
     "ModeRow",
     "MountSpec",
+    "ReferencesFile",
     "ResultFile",
     "SensorSpec",
     "Units",
@@ -126,6 +127,23 @@ class LayoutFile(_Strict):
             if sensor.id in seen:
                 raise ValueError(f"sensors.{i}.id: duplicate sensor id {sensor.id!r}")
             seen.add(sensor.id)
+        return self
+
+
+class ReferencesFile(_Strict):
+    """``references.json``: the reference (force, hammer) points of an FRF test."""
+
+    name: str | None = None
+    units: Units | None = Field(default=None, description="if given, must equal the layout's units")
+    references: Annotated[list[SensorSpec], Field(min_length=1, description="id, position, force direction")]
+
+    @model_validator(mode="after")
+    def _unique_ids(self) -> ReferencesFile:
+        seen: set[str] = set()
+        for i, ref in enumerate(self.references):
+            if ref.id in seen:
+                raise ValueError(f"references.{i}.id: duplicate reference id {ref.id!r}")
+            seen.add(ref.id)
         return self
 
 

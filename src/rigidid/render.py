@@ -15,9 +15,10 @@ if TYPE_CHECKING:
     from rich.console import Group
     from rich.table import Table
 
+    from rigidid.api_frf import MassLineResult
     from rigidid.core.timedomain import ModalEstimate
 
-__all__ = ["estimate_tables", "plan_tables", "result_csv_files", "result_tables"]
+__all__ = ["estimate_tables", "massline_tables", "plan_tables", "result_csv_files", "result_tables"]
 
 DOF = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -495,3 +496,24 @@ def result_csv_files(result: IdentifyResult, force_unit: str | None = None) -> d
         ["mode (fractions)", *DOF], [[str(label), *row] for label, row in zip(result.modes_used, energy, strict=True)]
     )
     return out
+
+
+def massline_tables(result: MassLineResult) -> Group:
+    """Rich tables of the mass-line result: mass (measured, given, difference), CG, inertia."""
+    from rich.console import Group
+    from rich.table import Table
+
+    ml = result.massline
+    length, mass = result.units["length"], result.units["mass"]
+    title = "Mass line" if result.route == "massline" else "Scaled modes"
+    table = Table(title=f"{title} (route: {result.route})", title_justify="left", show_header=False, box=None)
+    table.add_row("mass measured", f"{_fmt(ml.mass)} {mass}")
+    if result.mass_given is not None:
+        diff = ml.mass - result.mass_given
+        table.add_row("mass given", f"{_fmt(result.mass_given)} {mass}")
+        table.add_row("difference", f"{_fmt(diff)} {mass} ({100.0 * diff / result.mass_given:+.2f} %)")
+    table.add_row(f"CG ({length})", _vector(ml.center_of_gravity))
+    table.add_row("band", f"{ml.band[0]:.4g}-{ml.band[1]:.4g} Hz ({ml.band_source}, {ml.frequencies_used} lines)")
+    table.add_row("misfit", f"{100.0 * ml.residual:.2f} % RMS")
+    inertia = _matrix_table(f"Inertia tensor about the CG ({mass} {length}^2)", ml.inertia_tensor, ("x", "y", "z"))
+    return Group(table, inertia)

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from rigidid.models import BodyFile, LayoutFile, ResultFile
+from rigidid.models import BodyFile, LayoutFile, ReferencesFile, ResultFile
 
 __all__ = ["SCHEMA_FILES", "schema_texts", "write_schemas"]
 
@@ -21,6 +21,7 @@ SCHEMA_FILES: dict[str, type[BaseModel]] = {
     "layout.schema.json": LayoutFile,
     "body.schema.json": BodyFile,
     "result.schema.json": ResultFile,
+    "references.schema.json": ReferencesFile,
 }
 
 

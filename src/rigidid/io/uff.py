@@ -578,11 +578,10 @@ def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) ->
     here = f"{where}, node {node}"
     if func == 4:
         # --- hook for FRFs (function type 4) -----------------------------------------------
-        # FRFs are not time records; they go to modal estimation from FRFs (a reader of its
-        # own). Until that reader is wired here, say where they belong.
+        # FRFs are not time records; rigidid.io.frf.load_frf_uff reads them for the mass line.
         return reader.error(
             "function type 4 is a frequency response function (FRF), not a time record: "
-            "FRFs are read by `rigidid modes`, not as impact records",
+            "FRFs are read by `rigidid identify LAYOUT --frf FILE --references REFS.json --method massline`",
             here,
         )
     name = _FUNCTION_TYPES.get(func, "unknown")

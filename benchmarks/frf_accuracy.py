@@ -1,0 +1,160 @@
+"""Mass-line accuracy on simulated FRFs: free-free and on mounts, 1 % noise, one elastic mode.
+
+Run: ``.venv/bin/python benchmarks/frf_accuracy.py [--trials N]``
+
+Each trial: a random body (tests.bodies.random_body) whose mounts are softened so that
+the support frequencies are a tenth of the mass-line band ("free-free"), or left as
+drawn ("mounts"); 8 random sensors; 3 references at three corners of the sensor box
+hitting along x, y and z (moments of rank 3); accelerance 0.25-400 Hz (3200 lines) with one elastic mode at
+300 Hz (1 % damping, random shape of the mass-line size) and 1 % complex noise on every
+value. The band is chosen automatically; bands narrower than a factor 2 are refused
+(counted). Then the same tests on mounts by residues fitted with known rigid-body poles
+(rigidid.core.massline.mass_from_residues, the scaled-modes route), and last the mass line
+compared with identify() given the mass-line mass.
+Errors: mass (relative), CG (distance over the
+largest sensor-box edge), inertia diagonal (largest relative error). Worst and median
+over the trials are printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from tests.bodies import random_body, random_layout
+
+from rigidid.core.frf import accelerance, random_elastic_modes
+from rigidid.core.massline import mass_line
+from rigidid.core.simulate import Body, Mount
+from rigidid.errors import IdentificationError
+
+
+def scenario(seed: int, soften: float) -> tuple[float, float, float, float]:
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    mounts = tuple(Mount(m.position, m.stiffness * soften, m.damping * np.sqrt(soften)) for m in body.mounts)
+    body = dataclasses.replace(body, mounts=mounts)
+    assert isinstance(body, Body)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rdirs = np.eye(3)
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    t0 = time.perf_counter()
+    r = mass_line(f, h, pos, dirs, rpos, rdirs)
+    dt = time.perf_counter() - t0
+    span = float(np.ptp(pos, axis=0).max())
+    return (
+        abs(r.mass / body.mass - 1.0),
+        float(np.linalg.norm(r.center_of_gravity - body.center_of_gravity)) / span,
+        float(np.max(np.abs(np.diag(r.inertia_tensor) / np.diag(body.inertia_tensor) - 1.0))),
+        dt,
+    )
+
+
+def compare_with_modes(seed: int) -> tuple[float, float, float, float, float]:
+    """On mounts, elastic mode at 15x the highest rigid mode: mass line vs identify() given that mass.
+
+    identify() (eq. (18), the modal route) gets the six exact rigid-body modes with 0.1 %
+    frequency, 2 % damping and 1 % shape noise (standing in for modes fitted to the same
+    FRFs, which rigidid does not do yet) and the mass-line mass. Returns the mass-line mass
+    error, the CG distance between the two routes over the span, the largest relative
+    inertia-diagonal difference between them, and each route's inertia error.
+    """
+    from rigidid.core.identify import identify
+    from rigidid.core.simulate import add_noise, body_modes
+
+    rng = np.random.default_rng(1000 + seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    modes = body_modes(body, pos, dirs)
+    top = float(np.abs(modes.poles).max()) / (2.0 * np.pi)
+    f = np.linspace(top / 100.0, 25.0 * top, 4000)
+    elastic = random_elastic_modes(rng, [15.0 * top], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    ml = mass_line(f, h, pos, dirs, rpos, np.eye(3))
+    noisy = add_noise(modes, frequency=0.001, damping=0.02, shape=0.01, rng=rng)
+    ident = identify(pos, dirs, noisy.poles, noisy.shapes, mass=ml.mass, warn=False)
+    j_modal = ident.inertia_per_mass * ml.mass
+    span = float(np.ptp(pos, axis=0).max())
+    d_true = np.diag(body.inertia_tensor)
+    return (
+        abs(ml.mass / body.mass - 1.0),
+        float(np.linalg.norm(ml.center_of_gravity - ident.center_of_gravity)) / span,
+        float(np.max(np.abs(np.diag(ml.inertia_tensor) / np.diag(j_modal) - 1.0))),
+        float(np.max(np.abs(np.diag(ml.inertia_tensor) / d_true - 1.0))),
+        float(np.max(np.abs(np.diag(j_modal) / d_true - 1.0))),
+    )
+
+
+def residues_on_mounts(seed: int, pole_noise: bool) -> tuple[float, float, float]:
+    """On mounts as drawn, elastic mode at 300 Hz: mass from residues fitted with the rigid-body poles.
+
+    Poles exact, or with 0.1 % frequency and 2 % damping noise (as modes.csv would give them).
+    """
+    from rigidid.core.massline import mass_from_residues
+    from rigidid.core.simulate import add_noise, body_modes
+
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    modes = body_modes(body, pos, dirs)
+    if pole_noise:
+        modes = add_noise(modes, frequency=0.001, damping=0.02, rng=rng)
+    r = mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), modes.poles)
+    span = float(np.ptp(pos, axis=0).max())
+    return (
+        abs(r.mass / body.mass - 1.0),
+        float(np.linalg.norm(r.center_of_gravity - body.center_of_gravity)) / span,
+        float(np.max(np.abs(np.diag(r.inertia_tensor) / np.diag(body.inertia_tensor) - 1.0))),
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=20)
+    args = parser.parse_args()
+    for name, soften in (("free-free (supports 1/100 stiffness)", 0.01), ("on mounts (as drawn)", 1.0)):
+        rows, failed = [], 0
+        for seed in range(args.trials):
+            try:
+                rows.append(scenario(seed, soften))
+            except IdentificationError:
+                failed += 1
+        errs = np.array(rows)
+        print(f"{name}, {args.trials} trials, {failed} refused (IdentificationError)")
+        for k, label in enumerate(("mass", "CG / span", "inertia diag", "time s")):
+            print(f"  {label:13s} median {np.median(errs[:, k]):.4f}  worst {errs[:, k].max():.4f}")
+    for pole_noise in (False, True):
+        res = np.array([residues_on_mounts(seed, pole_noise) for seed in range(args.trials)])
+        which = "poles with 0.1 % frequency, 2 % damping noise" if pole_noise else "exact poles"
+        print(f"on mounts (as drawn), scaled modes (residues with {which}), {args.trials} trials")
+        for k, label in enumerate(("mass", "CG / span", "inertia diag")):
+            print(f"  {label:13s} median {np.median(res[:, k]):.4f}  worst {res[:, k].max():.4f}")
+    rows = np.array([compare_with_modes(seed) for seed in range(args.trials)])
+    print(
+        f"on mounts, elastic mode 15x the top rigid one: mass line vs identify() given its mass, {args.trials} trials"
+    )
+    labels = ("mass line mass", "CG apart/span", "inertia apart", "inertia ML", "inertia modal")
+    for k, label in enumerate(labels):
+        print(f"  {label:14s} median {np.median(rows[:, k]):.4f}  worst {rows[:, k].max():.4f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,206 @@
+"""The FRF routes of the Python API: simulated FRFs and the mass line.
+
+What ``rigidid simulate --frf`` and ``rigidid identify --method massline`` call;
+kept apart from :mod:`rigidid.api` so that the FRF work does not grow that module.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.errors import InputError
+from rigidid.io import files
+from rigidid.models import BodyFile, LayoutFile, ReferencesFile
+
+__all__ = ["FrfData", "MassLineResult", "identify_massline", "simulate_frf"]
+
+if TYPE_CHECKING:
+    from rigidid.core.massline import MassLine
+
+PathLike = str | os.PathLike[str]
+
+
+@dataclass(frozen=True)
+class FrfData:
+    """FRFs of a test with their sensors and references.
+
+    Attributes
+    ----------
+    frequencies : ndarray, shape (f,)
+        Hz.
+    frf : ndarray of complex, shape (p, q, f)
+        Accelerance (1 / mass unit).
+    sensor_ids, reference_ids : tuple of str
+    """
+
+    frequencies: NDArray[np.float64]
+    frf: NDArray[np.complex128]
+    sensor_ids: tuple[str, ...]
+    reference_ids: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class MassLineResult:
+    """``identify --method massline``: the mass line and how it compares with a given mass.
+
+    Attributes
+    ----------
+    massline : rigidid.core.massline.MassLine
+    units : dict
+        ``{"length": ..., "mass": ...}`` of the layout.
+    mass_given : float or None
+        The mass of the layout or of the ``mass`` parameter, if any.
+    reason : str
+        Why this route was used.
+    route : str
+        ``"massline"`` or ``"residues"`` (scaled modes).
+    """
+
+    massline: MassLine
+    units: dict[str, str]
+    mass_given: float | None
+    reason: str
+    route: str = "massline"
+
+
+def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
+    from rigidid.io.frf import load_references
+
+    refs = references if isinstance(references, ReferencesFile) else load_references(references)
+    if refs.units is not None and refs.units != layout.units:
+        source = None if isinstance(references, ReferencesFile) else str(references)
+        raise InputError("units differ from the layout's units", source=source, location="units")
+    return refs
+
+
+def simulate_frf(
+    body: BodyFile | PathLike,
+    layout: LayoutFile | PathLike,
+    references: ReferencesFile | PathLike,
+    *,
+    frequencies: NDArray[np.float64] | None = None,
+    noise: float = 0.0,
+    seed: int | None = None,
+) -> FrfData:
+    """Accelerance FRFs of a body on its mounts at the layout's sensors for the references.
+
+    Parameters
+    ----------
+    body, layout, references : file model or path-like
+        ``body.json``, ``layout.json`` and ``references.json``.
+    frequencies : ndarray, optional
+        Frequency lines (Hz). Default: 2000 lines up to 20 times the highest
+        rigid-body frequency.
+    noise : float
+        Complex noise relative to each value (0.01 = 1 %).
+    seed : int, optional
+        Seed of the noise.
+
+    Returns
+    -------
+    FrfData
+    """
+    from rigidid.api import _same_units, body_from_file
+    from rigidid.core.frf import accelerance
+    from rigidid.core.simulate import body_modes
+    from rigidid.io.frf import reference_arrays
+
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    refs = _references(references, lay)
+    ids, pos, dirs = files.layout_arrays(lay)
+    rids, rpos, rdirs = reference_arrays(refs)
+    truth = body_from_file(spec)
+    if frequencies is None:
+        top = 20.0 * float(np.abs(body_modes(truth, pos, dirs).poles).max()) / (2.0 * np.pi)
+        frequencies = np.linspace(top / 2000.0, top, 2000)
+    if not noise >= 0.0:
+        raise InputError(f"noise must be zero or positive, got {noise}")
+    rng = np.random.default_rng(seed)
+    h = accelerance(truth, pos, dirs, rpos, rdirs, frequencies, noise=noise, rng=rng)
+    return FrfData(np.asarray(frequencies, dtype=float), h, ids, rids)
+
+
+def identify_massline(
+    layout: LayoutFile | PathLike,
+    frf: PathLike,
+    references: ReferencesFile | PathLike,
+    *,
+    mass: float | None = None,
+    band: tuple[float, float] | None = None,
+    modes: PathLike | None = None,
+    modes_used: tuple[int, ...] | None = None,
+) -> MassLineResult:
+    """Mass, CG and inertia of a body from FRFs by the mass line, or from scaled modes.
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The sensors (responses).
+    frf : path-like
+        FRF CSV (see :func:`rigidid.io.frf.load_frf_csv`), or a UFF file
+        (``.uff``/``.unv``, :func:`rigidid.io.frf.load_frf_uff`).
+    references : ReferencesFile or path-like
+        The force points and directions.
+    mass : float, optional
+        A known mass to compare the measured one with (overrides the layout's).
+    band : (float, float), optional
+        Mass-line band (Hz); automatic by default.
+    modes : path-like, optional
+        ``modes.csv`` of the same test: its rigid-body poles turn the route into
+        scaled modes (:func:`rigidid.core.massline.mass_from_residues`).
+    modes_used : tuple of int, optional
+        The six rigid-body mode labels of `modes` (default: all, if there are six).
+
+    Returns
+    -------
+    MassLineResult
+    """
+    from rigidid.core.massline import mass_line
+    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
+
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
+    refs = _references(references, lay)
+    ids, pos, dirs = files.layout_arrays(lay)
+    rids, rpos, rdirs = reference_arrays(refs)
+    is_uff = str(frf).lower().endswith((".uff", ".unv"))
+    freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
+    if mass is not None and not mass > 0.0:
+        raise InputError(f"mass must be positive, got {mass}")
+    if modes is None:
+        result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+        reason = (
+            "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
+            "the mass is measured through the force, no mounts or mass needed"
+        )
+    else:
+        from rigidid.core.massline import mass_from_residues
+        from rigidid.core.statespace import poles_from_modal
+
+        table = files.load_modes(modes, ids)
+        labels = modes_used if modes_used is not None else table.labels
+        if len(labels) != 6 or any(label not in table.labels for label in labels):
+            raise InputError(
+                f"scaled modes need six rigid-body modes of the modes file, got labels {list(labels)}",
+                source="modes_used",
+            )
+        cols = [table.labels.index(label) for label in labels]
+        poles = poles_from_modal(table.frequency_hz[cols], table.damping_ratio[cols])
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
+        reason = (
+            "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
+            "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
+        )
+    return MassLineResult(
+        result,
+        {"length": lay.units.length, "mass": lay.units.mass},
+        mass if mass is not None else lay.mass,
+        reason,
+        "massline" if modes is None else "residues",
+    )

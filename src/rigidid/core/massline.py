@@ -1,0 +1,424 @@
+"""The mass line: mass, CG and inertia from accelerance FRFs between rigid and elastic modes.
+
+Far above the rigid-body modes and below the first elastic mode, the
+accelerance of a rigid body is its inverse mass matrix seen through the
+sensors and references, ``H(w) ~ T M^-1 T_f^T`` (the mass line). With mounts
+that are not negligible the next terms of the expansion in ``1/w`` are kept:
+
+``H(w) = T [M^-1 + M^-1 K M^-1 / w^2 + i M^-1 C M^-1 / w + ...] T_f^T``.
+
+Rigid coordinates ``Y(w) = T^+ H(w)`` (least squares over the sensors) then
+satisfy, for every frequency of the band,
+
+``M Y(w) = T_f^T + E / w^2 + i G / w + F w^2``
+
+which is **linear** in the ten inertial parameters (``m``, ``m c``, the
+inertia about the origin) and in the free correction matrices ``E`` (mount
+stiffness), ``G`` (mount damping) and ``F`` (upper residual of elastic modes
+above the band), all 6 x q. Fitting ``M`` rather than ``M^-1`` lets fewer
+than six references determine the body: ``M^-1`` has 21 free entries but only
+its product with the ``q`` reference columns is measured; ``M`` has ten
+parameters and ``q >= 2`` references in general position determine them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.core.geometry import sensor_matrix, skew
+from rigidid.errors import IdentificationError, InputError
+
+__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line"]
+
+Array = NDArray[np.float64]
+
+MIN_LINES = 10
+"""Fewest frequency lines in the band (the fit has up to six terms per rigid coordinate)."""
+
+MIN_BAND_RATIO = 2.0
+"""Narrowest band (upper over lower frequency) the mass line accepts: over narrower bands the
+constant and its correction terms cannot be told apart (benchmarks/frf_accuracy.py, on mounts:
+bands of ratio 1.3-1.6 gave mass errors of 18-99 %, ratio 1.8-2.2 about 1 %)."""
+
+
+@dataclass(frozen=True)
+class MassLine:
+    """What the mass line gives.
+
+    Attributes
+    ----------
+    mass : float
+        Mass (1 / accelerance unit, i.e. force / (length / s^2)).
+    center_of_gravity : ndarray, shape (3,)
+        CG in the layout coordinates (length).
+    inertia_tensor : ndarray, shape (3, 3)
+        Inertia tensor about the CG (mass length^2), off-diagonals minus the
+        products of inertia.
+    band : tuple of float
+        The frequency band used (Hz).
+    band_source : str
+        ``"given"`` or ``"automatic"``.
+    frequencies_used : int
+        Number of frequency lines in the band.
+    residual : float
+        RMS relative misfit of the model to the rigid coordinates in the band.
+    corrections : tuple of str
+        The correction terms fitted (``"stiffness"``, ``"damping"``, ``"upper_residual"``).
+    """
+
+    mass: float
+    center_of_gravity: Array
+    inertia_tensor: Array
+    band: tuple[float, float]
+    band_source: str
+    frequencies_used: int
+    residual: float
+    corrections: tuple[str, ...]
+
+
+def _peaks(s: Array) -> NDArray[np.intp]:
+    """Indices of local maxima of ``log s`` standing at least a factor 2 above both neighbours' valleys."""
+    from scipy.signal import find_peaks
+
+    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    return np.asarray(idx, dtype=np.intp)
+
+
+def auto_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float]:
+    """Choose the mass-line band from the FRF magnitude sum.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Frequencies (Hz), ascending.
+    frf : array_like, shape (p, q, f)
+        Accelerance FRFs.
+
+    Returns
+    -------
+    low, high : float
+        ``3 x`` the highest rigid-body peak and ``0.5 x`` the first elastic peak
+        (Hz); ``high`` is the last frequency when no elastic peak is seen.
+
+    Raises
+    ------
+    IdentificationError
+        If the peaks cannot be split into rigid and elastic ones with room for
+        a band between them (give the band instead).
+
+    Notes
+    -----
+    Peaks of ``sum |H|^2`` over all FRFs are split at the largest frequency
+    ratio between neighbouring peaks; that ratio must exceed 6 for the band
+    to exist. A single cluster of peaks is taken as the rigid-body modes.
+    """
+    return _auto_band(np.asarray(frequencies, dtype=float), np.asarray(frf))[0]
+
+
+def _auto_band(f: Array, h: NDArray[np.complex128]) -> tuple[tuple[float, float], float | None]:
+    """:func:`auto_band` and the first elastic peak (Hz, None if none is seen)."""
+    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    idx = _peaks(s)
+    if idx.size == 0:
+        raise IdentificationError("no resonance peak in the FRFs: give the band")
+    fp = f[idx]
+    ratios = fp[1:] / fp[:-1]
+    if ratios.size and ratios.max() > 6.0:
+        split = int(np.argmax(ratios))
+        low, high = 3.0 * fp[split], 0.5 * fp[split + 1]
+        elastic: float | None = float(fp[split + 1])
+    else:
+        low, high = 3.0 * fp[-1], float(f[-1])
+        elastic = None
+    if not high > low or np.count_nonzero((f >= low) & (f <= high)) < MIN_LINES:
+        raise IdentificationError(
+            f"no room for a mass-line band between the rigid-body peaks (up to {fp.max():.4g} Hz) "
+            "and the elastic ones: give the band"
+        )
+    return (float(low), float(high)), elastic
+
+
+def _mass_matrix(theta: Array) -> Array:
+    """``M`` at the origin from ``(m, m c_x, m c_y, m c_z, Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)`` (about the origin)."""
+    m = theta[0]
+    mc = theta[1:4]
+    jo = np.array([[theta[4], theta[7], theta[8]], [theta[7], theta[5], theta[9]], [theta[8], theta[9], theta[6]]])
+    out = np.zeros((6, 6))
+    out[:3, :3] = m * np.eye(3)
+    out[:3, 3:] = -skew(mc)
+    out[3:, :3] = skew(mc)
+    out[3:, 3:] = jo
+    return out
+
+
+def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) -> tuple[float, Array, Array]:
+    """Mass, CG and inertia about the CG from ``y0 = M^-1 T_f^T`` (scaled frame): ``M y0 = T_f^T``, linear."""
+    q = tf.shape[0]
+    a_mat = np.stack([(_mass_matrix(e) @ y0).reshape(-1) for e in np.eye(10)], axis=1)
+    b_vec = tf.T.reshape(-1)
+    norms = np.linalg.norm(a_mat, axis=0)
+    norms[norms == 0.0] = 1.0
+    sol, _, rank10, svals = np.linalg.lstsq(a_mat / norms, b_vec, rcond=None)
+    if rank10 < 10 or svals[-1] < 1e-4 * svals[0]:
+        raise IdentificationError(
+            f"the {q} reference(s) do not determine the mass, CG and inertia from the mass line "
+            "(at least 2 references at different points and in different directions are needed)"
+        )
+    theta = sol / norms
+    m = float(theta[0])
+    if not m > 0.0:
+        raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive")
+    c_scaled = theta[1:4] / m
+    j_o = _mass_matrix(theta)[3:, 3:]
+    j_g_scaled = j_o + m * skew(c_scaled) @ skew(c_scaled)
+    inertia = span**2 * j_g_scaled
+    return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
+
+
+def mass_line(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    stiffness: bool = True,
+    damping: bool = True,
+    upper_residual: bool = True,
+    elastic_frequency: float | None = None,
+) -> MassLine:
+    """Mass, CG and inertia from accelerance FRFs by the mass line.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Frequencies (Hz), ascending, positive.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance: sensor ``i`` per unit force at reference ``j``.
+    positions, directions : array_like, shape (p, 3)
+        Sensor locations (length) and unit measuring axes, ``p >= 6`` of rank 6.
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Force points and unit directions, ``q >= 2``.
+    band : (float, float), optional
+        Band (Hz). Default: :func:`auto_band`.
+    stiffness, damping, upper_residual : bool
+        Fit the mount-stiffness term (``1/w^2``), the mount-damping term
+        (``i/w``) and an upper residual of elastic modes above the band.
+    elastic_frequency : float, optional
+        The first elastic mode (Hz), above the band. The upper residual is then
+        that mode's own term ``x / (1 - x)``, ``x = (w / w_e)^2``, plus ``w^2``;
+        without it, ``w^2`` and ``w^4``. Found with the band when the band is
+        automatic.
+
+    Returns
+    -------
+    MassLine
+
+    Raises
+    ------
+    InputError
+        If shapes disagree or the band holds too few lines.
+    IdentificationError
+        If the sensors do not see six rigid-body motions, the references do
+        not determine the ten inertial parameters, or the band spans less than
+        :data:`MIN_BAND_RATIO`.
+
+    Notes
+    -----
+    One linear least-squares problem (real and imaginary parts stacked,
+    columns scaled to unit norm); rigid coordinates about the sensor
+    centroid, in a frame scaled by the sensor span, so that the problem is
+    well conditioned whatever the units. The fit is exact for a rigid body
+    on massless mounts to first order in ``(w_rigid / w)^2`` with the
+    stiffness term, and to first order in ``(w / w_elastic)^2`` with the
+    upper residual.
+    """
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    h = np.asarray(frf, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    rpos = np.asarray(reference_positions, dtype=float)
+    rdirs = np.asarray(reference_directions, dtype=float)
+    p, q = pos.shape[0], rpos.shape[0]
+    if h.shape != (p, q, f.size):
+        raise InputError(f"frf must have shape (sensors, references, frequencies) = {(p, q, f.size)}, got {h.shape}")
+    band_source = "given"
+    if band is None:
+        band, found = _auto_band(f, h)
+        band_source = "automatic"
+        if elastic_frequency is None:
+            elastic_frequency = found
+    lo, hi = float(band[0]), float(band[1])
+    sel = (f >= lo) & (f <= hi)
+    if hi < MIN_BAND_RATIO * lo:
+        raise IdentificationError(
+            f"the mass-line band {lo:.4g}-{hi:.4g} Hz spans less than a factor {MIN_BAND_RATIO:g}: the rigid-body "
+            "modes are too close to the elastic ones to separate the mass line from the mounts (use the modal route)"
+        )
+    n_f = int(np.count_nonzero(sel))
+    if n_f < MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {MIN_LINES}")
+    # scaled frame: origin at the sensor centroid, lengths in units of the span
+    origin = pos.mean(axis=0)
+    span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
+    t = sensor_matrix((pos - origin) / span, dirs)
+    tf = sensor_matrix((rpos - origin) / span, rdirs)
+    # in scaled coordinates rotations are per unit span: force columns T_f^T unchanged in form
+    sv = np.linalg.svd(t, compute_uv=False)
+    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
+        raise IdentificationError("the sensors do not see six independent rigid-body motions")
+    w = 2.0 * np.pi * f[sel]
+    y = np.linalg.lstsq(t, h[:, :, sel].reshape(p, q * n_f), rcond=None)[0].reshape(6 * q, n_f)
+    # per rigid coordinate and reference: constant (the mass line) plus correction terms
+    extra = tuple(
+        name for name, on in (("stiffness", stiffness), ("damping", damping), ("upper_residual", upper_residual)) if on
+    )
+    w0 = float(np.sqrt(w[0] * w[-1]))
+    u = w / w0
+    cols_re = [np.ones_like(u)]
+    cols_im = [np.zeros_like(u)]
+    for name in extra:
+        if name == "stiffness":
+            cols_re.append(1.0 / u**2)
+            cols_im.append(np.zeros_like(u))
+        elif name == "damping":
+            cols_re.append(np.zeros_like(u))
+            cols_im.append(1.0 / u)
+        elif elastic_frequency is not None:
+            x = (w / (2.0 * np.pi * elastic_frequency)) ** 2
+            cols_re.extend([x / (1.0 - x), u**2])
+            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
+        else:
+            cols_re.extend([u**2, u**4])
+            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
+    design = np.concatenate([np.stack(cols_re, axis=1), np.stack(cols_im, axis=1)])
+    target = np.concatenate([y.real, y.imag], axis=1).T  # (2 n_f, 6 q)
+    coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
+    if rank < design.shape[1]:
+        raise InputError(f"band {lo:g}-{hi:g} Hz is too narrow to separate the mass line from its corrections")
+    fitted = design @ coef
+    residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
+    y0 = coef[0].reshape(6, q)  # M^-1 T_f^T (scaled rigid coordinates per unit force)
+    m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+    return MassLine(
+        mass=m,
+        center_of_gravity=cg,
+        inertia_tensor=inertia,
+        band=(lo, hi),
+        band_source=band_source,
+        frequencies_used=n_f,
+        residual=residual,
+        corrections=extra,
+    )
+
+
+def mass_from_residues(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+) -> MassLine:
+    """Mass, CG and inertia from scaled rigid-body modes: residues fitted with known poles.
+
+    Parameters
+    ----------
+    frequencies, frf, positions, directions, reference_positions, reference_directions
+        As :func:`mass_line`.
+    poles : array_like of complex, shape (6,)
+        The six rigid-body poles (rad/s, ``Im > 0``), e.g. from ``modes.csv``.
+    band : (float, float), optional
+        Band (Hz) of the fit: it must hold the rigid-body modes and lie below the
+        first elastic mode. Default: from the lowest line to half the first
+        elastic peak (:func:`auto_band`), or the last line.
+
+    Returns
+    -------
+    MassLine
+        ``band_source`` as for :func:`mass_line`; ``corrections`` is
+        ``("residues", "upper_residual")``.
+
+    Notes
+    -----
+    The receptance is ``sum_k R_k / (i w - l_k) + conj``; the residues ``R_k``
+    (``p x q``, complex, the scaled shapes times their participations) are fitted
+    by linear least squares to the accelerance ``-w^2 x receptance`` with an
+    upper residual (``w^2``, ``w^4``). The high-frequency limit of the model,
+    ``sum_k 2 Re(l_k R_k) = T M^-1 T_f^T``, then gives the body as the mass
+    line does, but from every line of the band including the resonances.
+    """
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    h = np.asarray(frf, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    rpos = np.asarray(reference_positions, dtype=float)
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    p, q = pos.shape[0], rpos.shape[0]
+    if h.shape != (p, q, f.size):
+        raise InputError(f"frf must have shape (sensors, references, frequencies) = {(p, q, f.size)}, got {h.shape}")
+    if lam.size != 6 or np.any(lam.imag <= 0.0):
+        raise InputError("poles must be the six rigid-body poles with positive imaginary parts")
+    band_source = "given"
+    if band is None:
+        band_source = "automatic"
+        try:
+            _, elastic = _auto_band(f, h)
+        except IdentificationError:
+            elastic = None
+        band = (float(f[0]), 0.5 * elastic if elastic is not None else float(f[-1]))
+    lo, hi = float(band[0]), float(band[1])
+    sel = (f >= lo) & (f <= hi)
+    n_f = int(np.count_nonzero(sel))
+    if n_f < 3 * MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {3 * MIN_LINES}")
+    top = float(np.abs(lam).max()) / (2.0 * np.pi)
+    if hi < 2.0 * top:
+        raise IdentificationError(f"the band must reach beyond the rigid-body modes (up to {top:.4g} Hz)")
+    origin = pos.mean(axis=0)
+    span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
+    t = sensor_matrix((pos - origin) / span, dirs)
+    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    sv = np.linalg.svd(t, compute_uv=False)
+    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
+        raise IdentificationError("the sensors do not see six independent rigid-body motions")
+    w = 2.0 * np.pi * f[sel]
+    iw = 1j * w
+    w0 = float(w[-1])
+    cols = []
+    for lk in lam:
+        g1 = -(w**2) / (iw - lk)
+        g2 = -(w**2) / (iw - np.conj(lk))
+        cols.extend([g1 + g2, 1j * (g1 - g2)])  # real and imaginary part of R_k
+    cols.extend([(w / w0) ** 2 + 0j, (w / w0) ** 4 + 0j])
+    g = np.stack(cols, axis=1)
+    design = np.concatenate([g.real, g.imag])
+    y = h[:, :, sel].reshape(p * q, n_f).T
+    target = np.concatenate([y.real, y.imag])
+    coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
+    if rank < design.shape[1]:
+        raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
+    fitted = design @ coef
+    residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
+    r = coef[0:12:2] + 1j * coef[1:12:2]  # (6, p q)
+    h_inf = np.sum(2.0 * (lam[:, None] * r).real, axis=0).reshape(p, q)  # T M^-1 T_f^T
+    y0 = np.linalg.lstsq(t, h_inf, rcond=None)[0]
+    m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+    return MassLine(
+        mass=m,
+        center_of_gravity=cg,
+        inertia_tensor=inertia,
+        band=(lo, hi),
+        band_source=band_source,
+        frequencies_used=n_f,
+        residual=residual,
+        corrections=("residues", "upper_residual"),
+    )

@@ -1,0 +1,105 @@
+"""The mass line: known truth on simulated FRFs, free-free and with elastic modes."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rigidid.core.frf import accelerance, random_elastic_modes
+from rigidid.core.massline import auto_band, mass_line
+from rigidid.core.simulate import Mount
+from rigidid.errors import IdentificationError, InputError
+from tests.bodies import random_body, random_layout
+from tests.tolerances import MASSLINE_EXACT_REL, MASSLINE_FREE_FREE
+
+
+def _free_free(seed: int):
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    mounts = tuple(Mount(m.position, m.stiffness * 0.01, m.damping * 0.1) for m in body.mounts)
+    body = dataclasses.replace(body, mounts=mounts)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    return rng, body, pos, dirs, rpos, np.eye(3)
+
+
+def _errors(result, body, pos):
+    span = float(np.ptp(pos, axis=0).max())
+    return (
+        abs(result.mass / body.mass - 1.0),
+        float(np.linalg.norm(result.center_of_gravity - body.center_of_gravity)) / span,
+        float(np.max(np.abs(np.diag(result.inertia_tensor) / np.diag(body.inertia_tensor) - 1.0))),
+    )
+
+
+def test_noise_free_mass_line_is_exact():
+    _, body, pos, dirs, rpos, rdirs = _free_free(1)
+    f = np.linspace(0.25, 400.0, 800)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f)
+    r = mass_line(f, h, pos, dirs, rpos, rdirs, band=(20.0, 300.0))
+    assert r.band_source == "given"
+    assert max(_errors(r, body, pos)) < MASSLINE_EXACT_REL
+    atol = MASSLINE_EXACT_REL * np.abs(body.inertia_tensor).max()
+    np.testing.assert_allclose(r.inertia_tensor, body.inertia_tensor, atol=atol)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_free_free_with_noise_and_an_elastic_mode(seed):
+    rng, body, pos, dirs, rpos, rdirs = _free_free(seed)
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    low, high = auto_band(f, h)
+    assert 150.0 - 1.0 < high < 150.0 + 1.0  # half the elastic peak
+    r = mass_line(f, h, pos, dirs, rpos, rdirs)
+    assert r.band_source == "automatic" and r.band == (low, high)
+    mass, cg, inertia = _errors(r, body, pos)
+    assert mass < MASSLINE_FREE_FREE["mass"]
+    assert cg < MASSLINE_FREE_FREE["cg_span"]
+    assert inertia < MASSLINE_FREE_FREE["inertia"]
+    # without the upper residual the elastic mode biases the result far beyond that
+    bad = mass_line(f, h, pos, dirs, rpos, rdirs, upper_residual=False)
+    assert max(_errors(bad, body, pos)) > 2 * MASSLINE_FREE_FREE["inertia"]
+
+
+def test_one_reference_cannot_determine_the_body_and_a_narrow_band_is_refused():
+    _, body, pos, dirs, rpos, rdirs = _free_free(2)
+    f = np.linspace(0.25, 400.0, 800)
+    h = accelerance(body, pos, dirs, rpos[:1], rdirs[:1], f)
+    with pytest.raises(IdentificationError, match="1 reference"):
+        mass_line(f, h, pos, dirs, rpos[:1], rdirs[:1], band=(20.0, 300.0))
+    h3 = accelerance(body, pos, dirs, rpos, rdirs, f)
+    with pytest.raises(InputError, match="frequency lines"):
+        mass_line(f[::100], h3[:, :, ::100], pos, dirs, rpos, rdirs, band=(100.0, 201.0))
+    with pytest.raises(IdentificationError, match="less than a factor 2"):
+        mass_line(f, h3, pos, dirs, rpos, rdirs, band=(100.0, 150.0))
+    with pytest.raises(InputError, match="shape"):
+        mass_line(f, h3[:, :2], pos, dirs, rpos, rdirs)
+
+
+@pytest.mark.parametrize("seed", [1, 5])
+def test_mass_from_residues_on_mounts_with_noise_and_an_elastic_mode(seed):
+    from rigidid.core.massline import mass_from_residues
+    from rigidid.core.simulate import body_modes
+    from tests.tolerances import RESIDUES_ON_MOUNTS
+
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    poles = body_modes(body, pos, dirs).poles
+    r = mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles)
+    assert r.band[0] == f[0] and 149.0 < r.band[1] < 151.0
+    mass, cg, inertia = _errors(r, body, pos)
+    assert mass < RESIDUES_ON_MOUNTS["mass"]
+    assert cg < RESIDUES_ON_MOUNTS["cg_span"]
+    assert inertia < RESIDUES_ON_MOUNTS["inertia"]
+    with pytest.raises(InputError, match="six rigid-body poles"):
+        mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles[:5])
