@@ -13,7 +13,7 @@ import pytest
 from rigidid.models import ResultFile
 
 from .conftest import DATA, PAPER, SAMPLES
-from .tolerances import CSV_DIGITS_REL
+from .tolerances import CSV_DIGITS_REL, MOUNT_RATES_CSV_REL
 
 ENGINE = SAMPLES / "engine-on-mounts"
 
@@ -184,3 +184,20 @@ def test_warnings_come_before_the_error_they_led_to(tmp_path: Path) -> None:
     lines = out.stderr.splitlines()
     assert lines[0].startswith("rigidid: warning: sensor layout is ill-conditioned"), out.stderr
     assert lines[-1].startswith("rigidid: error: ") and "the inertia is not observable" in lines[-1], out.stderr
+
+
+def test_mounts_and_torque_roll_axis_from_the_command_line() -> None:
+    """The four-mount sample's rates come back from its modes (written with 10 digits)."""
+    case = SAMPLES / "four-mounts"
+    out = run("identify", case / "layout.json", case / "modes.csv", "--mounts", case / "mounts.json",
+              "--torque-axis", "1,0,0", "--json", "-")  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    ResultFile.model_validate(data)
+    body = json.loads((case / "body.json").read_text())
+    rates = np.array([m["stiffness"] for m in data["mounts"]["mounts"]])
+    np.testing.assert_allclose(rates, [m["stiffness"] for m in body["mounts"]], rtol=MOUNT_RATES_CSV_REL)
+    assert data["mounts"]["unique"] and data["mounts"]["mounts"][0]["id"] == "front-left"
+    assert data["torque_roll_axis"]["angle_to_torque_deg"] > 0.0
+    bad = run("identify", case / "layout.json", case / "modes.csv", "--torque-axis", "0,0,0")
+    assert bad.returncode == 2 and "--torque-axis" in bad.stderr

@@ -36,6 +36,11 @@ def test_sample_bodies_follow_the_schema(path: object) -> None:
     _validator("body.schema.json").validate(json.loads(path.read_text()))  # type: ignore[attr-defined]
 
 
+@pytest.mark.parametrize("path", sorted(SAMPLES.glob("*/mounts.json")), ids=lambda p: p.parent.name)
+def test_sample_mounts_follow_the_schema(path: object) -> None:
+    _validator("mounts.schema.json").validate(json.loads(path.read_text()))  # type: ignore[attr-defined]
+
+
 @pytest.mark.filterwarnings("ignore::rigidid.errors.PhysicalPlausibilityWarning")
 def test_result_follows_the_schema() -> None:
     data = result_to_dict(api.identify(PAPER / "layout.json", PAPER / "modes.csv", mass=None))

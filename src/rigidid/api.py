@@ -27,10 +27,11 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.atomic import write_text_atomic
 from rigidid.io.files import ModeTable
-from rigidid.models import BodyFile, LayoutFile
+from rigidid.models import BodyFile, LayoutFile, MountsFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
+    from rigidid.core.mounts import MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
@@ -57,6 +58,7 @@ __all__ = [
     "report_pngs",
     "simulate",
     "simulate_records",
+    "with_mounts",
     "with_record_spread",
 ]
 
@@ -94,6 +96,10 @@ class IdentifyResult:
         (:func:`with_record_spread`).
     layout_name : str or None
         The layout's ``name``.
+    mounts : Mounts or None
+        Per-mount rates fitted to the stiffness and damping (:func:`with_mounts`).
+    torque_roll_axis : TorqueRollAxis or None
+        The rotation under a torque about a given axis (:func:`with_mounts`).
     """
 
     identification: Identification
@@ -109,6 +115,30 @@ class IdentifyResult:
     uncertainty: Uncertainty | None = None
     record_spread: RecordSpread | None = None
     layout_name: str | None = None
+    mounts: Mounts | None = None
+    torque_roll_axis: TorqueRollAxis | None = None
+
+
+@dataclass(frozen=True)
+class Mounts:
+    """Per-mount rates of an identification, with the mounts' ids and positions.
+
+    Attributes
+    ----------
+    ids : tuple of str
+        Mount names (``"1"``, ``"2"``... when the file gives none).
+    positions : ndarray, shape (n, 3)
+        Where they act (length).
+    rates : MountRates
+        Rates along each mount's axes (force units come from the presentation).
+    nominal : ndarray, shape (n, 3) or None
+        The file's nominal rates along the same axes, when every mount gives them.
+    """
+
+    ids: tuple[str, ...]
+    positions: NDArray[np.float64]
+    rates: MountRates
+    nominal: NDArray[np.float64] | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -971,6 +1001,66 @@ def simulate_records(
             write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
         step("writing records", len(data), len(data))
     return written
+
+
+def with_mounts(
+    result: IdentifyResult, mounts: PathLike | MountsFile | None = None, *, torque_axis: Sequence[float] | None = None
+) -> IdentifyResult:
+    """Add per-mount rates (from ``mounts.json`` or a ``body.json``) and the torque roll axis.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        An identification with a mass (rates in force units) or without (per mass).
+    mounts : path-like or MountsFile, optional
+        Mount positions and optional principal axes, in the layout's units.
+    torque_axis : sequence of 3 floats, optional
+        Direction of a torque (for an engine, the crankshaft) for the torque roll axis.
+
+    Returns
+    -------
+    IdentifyResult
+        `result` with :attr:`IdentifyResult.mounts` and/or
+        :attr:`IdentifyResult.torque_roll_axis` set.
+
+    Raises
+    ------
+    InputError
+        A bad file, units that differ from the layout's, or a zero torque axis.
+    """
+    from dataclasses import replace as _replace
+
+    from rigidid.core.mounts import mount_rates, torque_roll_axis
+
+    ident = result.identification
+    out = result
+    if mounts is not None:
+        spec = mounts if isinstance(mounts, MountsFile) else files.load_mounts(mounts)
+        source = None if isinstance(mounts, MountsFile) else str(mounts)
+        if (spec.units.length, spec.units.mass) != (result.units["length"], result.units["mass"]):
+            raise InputError(
+                f"units ({spec.units.length}, {spec.units.mass}) differ from the layout's "
+                f"({result.units['length']}, {result.units['mass']})",
+                source=source,
+                location="units",
+            )
+        positions = np.array([m.position for m in spec.mounts], dtype=float)
+        axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
+        scale = 1.0 if ident.mass is None else ident.mass
+        rates = mount_rates(
+            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass
+        )
+        nominal = None
+        if all(m.stiffness is not None for m in spec.mounts):
+            nominal = np.array([
+                np.diag(rates.axes[k].T @ np.asarray(m.stiffness, dtype=float) @ rates.axes[k])
+                for k, m in enumerate(spec.mounts)
+            ])  # fmt: skip
+        ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
+        out = _replace(out, mounts=Mounts(ids, positions, rates, nominal))
+    if torque_axis is not None:
+        out = _replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
+    return out
 
 
 def with_record_spread(

@@ -148,6 +148,23 @@ Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
 ]
+MountsPath = Annotated[
+    Path | None,
+    typer.Option(
+        "--mounts",
+        help="mounts.json (or a body.json): mount positions and axes; adds per-mount rates fitted to K and C.",
+        metavar="FILE",
+        show_default=False,
+    ),
+]
+TorqueAxis = Annotated[
+    str | None,
+    typer.Option(
+        help="Axis of a pure torque (x, y, z or X,Y,Z; for an engine the crankshaft): adds the torque roll axis.",
+        metavar="AXIS",
+        show_default=False,
+    ),
+]
 Geometry = Annotated[
     Path | None,
     typer.Option(
@@ -265,6 +282,29 @@ def _parse_modes(text: str | None) -> list[int] | None:
         return [int(part) for part in text.replace(" ", "").split(",") if part]
     except ValueError:
         raise InputError(f"expected mode labels like 1,2,3,5,6,7, got {text!r}", source="--modes") from None
+
+
+def _with_mounts(result: IdentifyResult, mounts: Path | None, torque_axis: str | None) -> IdentifyResult:
+    """Per-mount rates and the torque roll axis, when --mounts or --torque-axis are given."""
+    if mounts is None and torque_axis is None:
+        return result
+    from rigidid import api
+
+    axis = None
+    if torque_axis is not None:
+        named = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+        try:
+            axis = named.get(torque_axis.strip().lower()) or tuple(float(v) for v in torque_axis.split(","))
+        except ValueError:
+            raise InputError(f"expected x, y, z or X,Y,Z, got {torque_axis!r}", source="--torque-axis") from None
+        if len(axis) != 3:
+            raise InputError(f"expected x, y, z or X,Y,Z, got {torque_axis!r}", source="--torque-axis")
+    try:
+        return api.with_mounts(result, mounts, torque_axis=axis)
+    except InputError as exc:
+        if exc.source == "torque_axis":
+            exc.source = "--torque-axis"
+        raise
 
 
 def _parse_units(text: str | None) -> dict[str, str] | None:
@@ -532,6 +572,8 @@ def identify(
     csv: CsvDir = None,
     frf: FrfPath = None,
     references: ReferencesPath = None,
+    mounts: MountsPath = None,
+    torque_axis: TorqueAxis = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
@@ -557,6 +599,7 @@ def identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry,
         )  # fmt: skip
+        result = _with_mounts(result, mounts, torque_axis)
         with OutputSet():  # every output or none
             if json_path is not None:
                 out = result_to_dict(result, force_unit)

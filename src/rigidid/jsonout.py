@@ -136,6 +136,16 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         },
     }
     out.update(_force_keys(result, force_unit))
+    if result.mounts is not None:
+        out["mounts"] = mounts_to_dict(result, force_unit)
+    if result.torque_roll_axis is not None:
+        tra = result.torque_roll_axis
+        out["torque_roll_axis"] = {
+            "torque_axis": _vec(tra.torque_axis),
+            "direction": _vec(tra.direction),
+            "angle_to_torque_deg": tra.angle_to_torque_deg,
+            "angle_to_principal_deg": _vec(tra.angle_to_principal_deg),
+        }
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
     if result.record_spread is not None:
@@ -179,6 +189,43 @@ def _force_keys(result: IdentifyResult, force_unit: str | None) -> dict[str, Any
         "stiffness_force": _rows(fu.factor * ident.stiffness_matrix),
         "damping_force": _rows(fu.factor * ident.damping_matrix),
         "quantity_units": units,
+    }
+
+
+def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
+    """Per-mount rates in force units (per mass without a mass), with the fit's residual and uniqueness."""
+    from rigidid.units import force_units
+
+    assert result.mounts is not None
+    m = result.mounts
+    rates = m.rates
+    length, mass = result.units["length"], result.units["mass"]
+    if result.identification.mass is None:
+        factor, units = 1.0, {"stiffness": "1/s^2 (per mass)", "damping": "1/s (per mass)"}
+    else:
+        fu = force_units(length, mass, force_unit)
+        factor = fu.factor
+        units = {"stiffness": f"{fu.force}/{length}", "damping": f"{fu.force} s/{length}"}
+    damping = rates.damping if rates.damping is not None else np.full_like(rates.stiffness, np.nan)
+    return {
+        "units": units,
+        "mounts": [
+            {
+                "id": m.ids[k],
+                "position": _vec(m.positions[k]),
+                "axes": _rows(rates.axes[k].T),
+                "stiffness": _vec(factor * rates.stiffness[k]),
+                "damping": _plain(factor * damping[k]),
+                "nominal_stiffness": None if m.nominal is None else _vec(factor * m.nominal[k]),
+            }
+            for k in range(len(m.ids))
+        ],
+        "stiffness_residual": rates.stiffness_residual,
+        "damping_residual": _none_if_inf(rates.damping_residual),
+        "unknowns": rates.unknowns,
+        "rank": rates.rank,
+        "unique": rates.unique,
+        "statement": rates.statement,
     }
 
 

@@ -197,6 +197,28 @@ class BodyFile(_Strict):
         return _finite(value)
 
 
+class MountEntry(_Strict):
+    """One mount of ``mounts.json``: where it acts and, optionally, its principal axes."""
+
+    id: Annotated[str, BeforeValidator(_text_id)] | None = Field(default=None, description="the mount's name")
+    position: Vector3 = Field(description="where the mount acts (length unit)")
+    axes: Matrix3 | None = Field(
+        default=None,
+        description="its principal axes, one unit vector per row (compression first, then the two shears); "
+        "default the layout's x, y, z",
+    )
+    stiffness: Matrix3Sym | None = Field(default=None, description="nominal rates (data sheet), mass/s^2")
+    damping: Matrix3Sym | None = Field(default=None, description="nominal damping, mass/s")
+
+
+class MountsFile(_Strict):
+    """``mounts.json``: the supports of a body, for per-mount rates. A ``body.json`` is read as one too."""
+
+    name: str | None = None
+    units: Units
+    mounts: Annotated[list[MountEntry], Field(min_length=1)]
+
+
 class ResultUnits(_Strict):
     """Units of the result; time is seconds."""
 
@@ -332,6 +354,43 @@ class ResultFile(_Strict):
     quantity_units: dict[str, str] | None = Field(
         default=None, description="the unit of every numeric key of the result (a text such as 'lb in^2')"
     )
+    mounts: MountsResult | None = Field(default=None, description="with --mounts: per-mount rates")
+    torque_roll_axis: TorqueRollAxisResult | None = Field(
+        default=None, description="with --torque-axis: the rotation under a pure torque"
+    )
+
+
+class MountResult(_Strict):
+    """One mount's identified rates along its axes."""
+
+    id: str
+    position: Vector3
+    axes: Matrix3 = Field(description="principal axes, one unit vector per row")
+    stiffness: Vector3 = Field(description="rates along the axes (mounts.units.stiffness)")
+    damping: Vector3 = Field(description="damping along the axes (mounts.units.damping)")
+    nominal_stiffness: Vector3 | None = Field(default=None, description="the file's nominal rates along the axes")
+
+
+class MountsResult(_Strict):
+    """Per-mount rates fitted to the identified stiffness and damping."""
+
+    units: dict[str, str] = Field(description="units of stiffness and damping")
+    mounts: list[MountResult]
+    stiffness_residual: float = Field(description="|K - K_mounts| / |K|: 0 when the mounts explain K")
+    damping_residual: float
+    unknowns: int
+    rank: int = Field(description="rates the mount layout determines (unique when equal to unknowns)")
+    unique: bool
+    statement: str
+
+
+class TorqueRollAxisResult(_Strict):
+    """The axis about which the body turns under a pure torque."""
+
+    torque_axis: Vector3
+    direction: Vector3 = Field(description="unit direction of J^-1 t")
+    angle_to_torque_deg: float
+    angle_to_principal_deg: Vector3 = Field(description="to each principal axis, ascending moments")
 
 
 class ModeRow(_Strict):

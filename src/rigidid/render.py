@@ -87,6 +87,7 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
     return Group(
         *_mass_tables(result),
         *_support_tables(result, force_unit),
+        *_mount_tables(result, force_unit),
         _energy_table(result),
         *_uncertainty_tables(result, force_unit),
         _modes_table(result),
@@ -122,6 +123,42 @@ def _mass_tables(result: IdentifyResult) -> list[Table]:
     for k in range(3):
         principal.add_row(_fmt(float(moments[k])), *(f"{float(v):+.4f}" for v in ident.principal_axes[:, k]))
     return [head, inertia, principal]
+
+
+def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]:
+    """Per-mount rates along each mount's axes, and the torque roll axis, when asked for."""
+    from rich.table import Table
+
+    from rigidid.jsonout import mounts_to_dict
+
+    tables = []
+    if result.mounts is not None:
+        data = mounts_to_dict(result, force_unit)
+        units = data["units"]
+        table = Table(
+            title=f"Mounts: rates along their axes (stiffness {units['stiffness']}, damping {units['damping']})",
+            caption=f"fit residual {data['stiffness_residual']:.2e} of |K|; {data['statement']}",
+            title_justify="left",
+            caption_justify="left",
+        )
+        for name in ("mount", "k1", "k2", "k3", "c1", "c2", "c3"):
+            table.add_column(name, justify="right")
+        for m in data["mounts"]:
+            damping = [_fmt(v) if v is not None else "-" for v in m["damping"]]
+            table.add_row(m["id"], *(_fmt(v) for v in m["stiffness"]), *damping)
+        tables.append(table)
+    if result.torque_roll_axis is not None:
+        tra = result.torque_roll_axis
+        table = Table(title="Torque roll axis", title_justify="left", show_header=False)
+        table.add_column("item")
+        table.add_column("value")
+        table.add_row("torque axis", _vector(tra.torque_axis))
+        table.add_row("rotation direction J^-1 t", _vector(tra.direction))
+        table.add_row("angle to the torque axis", f"{tra.angle_to_torque_deg:.2f} deg")
+        angles = ", ".join(f"{a:.2f}" for a in tra.angle_to_principal_deg)
+        table.add_row("angles to the principal axes", f"{angles} deg")
+        tables.append(table)
+    return tables
 
 
 def _energy_table(result: IdentifyResult) -> Table:

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from rigidid.models import BodyFile, LayoutFile, ReferencesFile, ResultFile
+from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile, ResultFile
 
 __all__ = ["SCHEMA_FILES", "schema_texts", "write_schemas"]
 
@@ -22,6 +22,7 @@ SCHEMA_FILES: dict[str, type[BaseModel]] = {
     "body.schema.json": BodyFile,
     "result.schema.json": ResultFile,
     "references.schema.json": ReferencesFile,
+    "mounts.schema.json": MountsFile,
 }
 
 

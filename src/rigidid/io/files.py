@@ -23,7 +23,7 @@ from pydantic import BaseModel, ValidationError
 
 from rigidid.errors import InputError
 from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
-from rigidid.models import BodyFile, LayoutFile, ModeRow
+from rigidid.models import BodyFile, LayoutFile, ModeRow, MountEntry, MountsFile
 
 __all__ = [
     "MODES_COLUMNS",
@@ -33,6 +33,7 @@ __all__ = [
     "load_body",
     "load_layout",
     "load_modes",
+    "load_mounts",
     "mode_table_from_rows",
     "modes_csv_text",
 ]
@@ -263,6 +264,27 @@ def load_body(path: str | os.PathLike[str]) -> BodyFile:
         As :func:`load_layout`.
     """
     return _load_json_model(Path(path), BodyFile)
+
+
+def load_mounts(path: str | os.PathLike[str]) -> MountsFile:
+    """Read ``mounts.json`` (or a ``body.json``, whose mounts act along the layout's axes).
+
+    Raises
+    ------
+    InputError
+        As :func:`load_layout`.
+    """
+    p = Path(path)
+    data = load_json(p)
+    if isinstance(data, dict) and "center_of_gravity" in data:
+        body = load_body(p)
+        entries = [MountEntry(position=m.position, stiffness=m.stiffness, damping=m.damping) for m in body.mounts]
+        return MountsFile(name=body.name, units=body.units, mounts=entries)
+    try:
+        return MountsFile.model_validate(data)
+    except ValidationError as exc:
+        loc, message = _first_error(exc)
+        raise InputError(message, source=str(p), location=loc or None) from None
 
 
 def _python_float(text: str) -> float | None:

@@ -1,0 +1,85 @@
+"""Per-mount rates and the torque roll axis (rigidid.core.mounts)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rigidid.core.identify import identify
+from rigidid.core.mounts import mount_rates, torque_roll_axis
+from rigidid.core.simulate import Body, Mount, body_modes, system_matrices
+from rigidid.errors import InputError
+
+from ..tolerances import MOUNT_RATES_REL
+
+
+def _rotation(seed: int) -> np.ndarray:
+    q, r = np.linalg.qr(np.random.default_rng(seed).standard_normal((3, 3)))
+    return q * np.sign(np.diag(r))
+
+
+def _body(n: int) -> tuple[Body, np.ndarray, np.ndarray, np.ndarray]:
+    where = np.array([[0.3, 0.2, -0.15], [-0.3, 0.25, -0.1], [-0.25, -0.2, -0.2], [0.35, -0.22, -0.05]])[:n]
+    rates = np.array([[4e4, 6e4, 2e5], [5e4, 3e4, 1.5e5], [7e4, 4e4, 2.5e5], [3e4, 5e4, 1.8e5]])[:n]
+    damp = 1e-3 * rates
+    axes = np.stack([_rotation(k) for k in range(n)])
+    mounts = [
+        Mount.from_values(p, u @ np.diag(k) @ u.T, u @ np.diag(c) @ u.T)
+        for p, u, k, c in zip(where, axes, rates, damp, strict=True)
+    ]
+    body = Body(45.0, np.array([0.02, -0.01, 0.08]), np.array([[1.5, 0.1, 0.0], [0.1, 2.0, 0.05], [0.0, 0.05, 2.6]]),
+                mounts)  # fmt: skip
+    return body, where, axes, rates
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_rates_of_an_exact_body_with_axes_given(n: int) -> None:
+    body, where, axes, rates = _body(n)
+    _, k, c = system_matrices(body)
+    fit = mount_rates(k, body.center_of_gravity, where, axes, c)
+    assert fit.unique and fit.stiffness_residual < MOUNT_RATES_REL
+    np.testing.assert_allclose(fit.stiffness, rates, rtol=MOUNT_RATES_REL)
+    assert fit.damping is not None
+    np.testing.assert_allclose(fit.damping, 1e-3 * rates, rtol=MOUNT_RATES_REL)
+    eta = fit.loss_factor([10.0])
+    np.testing.assert_allclose(eta[0], 2 * np.pi * 10.0 * 1e-3, rtol=MOUNT_RATES_REL)
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_rates_from_an_identified_body(n: int) -> None:
+    """Through the whole route: simulated modes -> identify -> K, C at the CG -> rates."""
+    body, where, axes, rates = _body(n)
+    pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
+    modes = body_modes(body, pos, dirs)
+    result = identify(pos, dirs, modes.poles, modes.shapes, mass=body.mass, warn=False)
+    assert result.stiffness_matrix is not None
+    fit = mount_rates(result.stiffness_matrix, result.center_of_gravity, where, axes, result.damping_matrix)
+    np.testing.assert_allclose(fit.stiffness, rates, rtol=MOUNT_RATES_REL)
+
+
+def test_an_extra_support_shows_in_the_residual() -> None:
+    body, where, axes, _ = _body(4)
+    extra = Body(body.mass, body.center_of_gravity, body.inertia_tensor,
+                 [*body.mounts, Mount.from_values([0.0, 0.4, 0.3], (8e4, 0.0, 0.0))])  # fmt: skip
+    _, k, _ = system_matrices(extra)
+    assert mount_rates(k, body.center_of_gravity, where, axes).stiffness_residual > 0.05
+
+
+def test_torque_roll_axis_of_a_principal_torque_is_the_torque_axis() -> None:
+    j = np.array([[1.5, 0.1, 0.0], [0.1, 2.0, 0.05], [0.0, 0.05, 2.6]])
+    _, vectors = np.linalg.eigh(j)
+    tra = torque_roll_axis(j, vectors[:, 1])
+    assert tra.angle_to_torque_deg < 1e-6
+    assert tra.angle_to_principal_deg[1] < 1e-6
+    np.testing.assert_allclose(tra.direction @ tra.direction, 1.0)
+    off = torque_roll_axis(j, [1.0, 0.0, 0.0])
+    expected = np.linalg.solve(j, [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(off.direction, expected / np.linalg.norm(expected))
+
+
+def test_bad_inputs_name_the_parameter() -> None:
+    with pytest.raises(InputError, match="torque_axis"):
+        torque_roll_axis(np.eye(3), [0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="axes"):
+        mount_rates(np.eye(6), np.zeros(3), [[1.0, 0.0, 0.0]], np.zeros((1, 3, 3)))
