@@ -31,7 +31,7 @@ from rigidid.models import BodyFile, LayoutFile, MountsFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
-    from rigidid.core.mounts import MountRates, TorqueRollAxis
+    from rigidid.core.mounts import MountModel, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
@@ -100,6 +100,8 @@ class IdentifyResult:
         Per-mount rates fitted to the stiffness and damping (:func:`with_mounts`).
     torque_roll_axis : TorqueRollAxis or None
         The rotation under a torque about a given axis (:func:`with_mounts`).
+    mount_model : MountModelFit or None
+        With ``method="mounts"``: the mount model's fit against the free route.
     """
 
     identification: Identification
@@ -117,6 +119,48 @@ class IdentifyResult:
     layout_name: str | None = None
     mounts: Mounts | None = None
     torque_roll_axis: TorqueRollAxis | None = None
+    mount_model: MountModelFit | None = None
+
+
+@dataclass(frozen=True)
+class MountModelFit:
+    """How well the mount model explains the modes, against the free 6x6 matrices.
+
+    Attributes
+    ----------
+    model : MountModel
+        The fit (rates per mass, residual, parameter count).
+    free_residual : float or None
+        The same eigenproblem residual for the free route (``method="structured"``),
+        when six modes allow it.
+    free_parameters : int
+        Unknowns of the free route: CG, ``J/m``, ``K/m`` and ``C/m`` (51).
+    """
+
+    model: MountModel
+    residual: float
+    free_residual: float | None
+    free_parameters: int = 51
+
+    def _aic(self, residual: float, parameters: int) -> float:
+        n = self.model.equations
+        return float(n * np.log(max(residual**2, 1e-30)) + 2 * parameters)
+
+    @property
+    def aic(self) -> float:
+        """Akaike's criterion ``N ln(RSS / N) + 2 P`` of the mount model (RSS floored at 1e-30 N)."""
+        return self._aic(self.residual, self.model.parameters)
+
+    @property
+    def free_aic(self) -> float | None:
+        """Akaike's criterion of the free route on the same equations."""
+        return None if self.free_residual is None else self._aic(self.free_residual, self.free_parameters)
+
+    @property
+    def adequate(self) -> bool | None:
+        """True when the mount model explains the modes as well as the free matrices (lower or equal AIC)."""
+        free = self.free_aic
+        return None if free is None else bool(self.aic <= free)
 
 
 @dataclass(frozen=True)
@@ -187,7 +231,11 @@ def load_arrays(layout: PathLike, modes: PathLike) -> Arrays:
 
 
 def _choose_modes(
-    modes: ModeTable, transformation: NDArray[np.float64], wanted: Sequence[int] | None, source: str | None
+    modes: ModeTable,
+    transformation: NDArray[np.float64],
+    wanted: Sequence[int] | None,
+    source: str | None,
+    fewest: int = 6,
 ) -> tuple[tuple[int, ...], Selection, dict[int, float] | None]:
     if wanted is not None:
         labels = tuple(int(m) for m in wanted)
@@ -196,13 +244,14 @@ def _choose_modes(
             raise InputError(
                 f"mode {unknown[0]} is not in the modes file (it has {list(modes.labels)})", source="modes_used"
             )
-        if len(labels) != 6 or len(set(labels)) != 6:
-            raise InputError(f"give six different mode labels, got {list(labels)}", source="modes_used")
+        if not fewest <= len(labels) <= 6 or len(set(labels)) != len(labels):
+            wanted_text = "six" if fewest == 6 else f"{fewest} or 6"
+            raise InputError(f"give {wanted_text} different mode labels, got {list(labels)}", source="modes_used")
         return labels, "given", None
     n = len(modes.labels)
-    if n < 6:
+    if n < fewest:
         raise InputError(f"{n} modes given; the six rigid-body modes are needed", source=source)
-    if n == 6:
+    if n <= 6:
         return modes.labels, "all", None
     if transformation.shape[0] <= 6:
         raise InputError(
@@ -221,11 +270,12 @@ def identify(
     *,
     mass: float | None = None,
     modes_used: Sequence[int] | None = None,
-    method: Method = "structured",
+    method: Method | Literal["mounts"] = "structured",
     uncertainty: int = 0,
     noise: NoiseLevels | Mapping[str, float] | None = None,
     seed: int | None = 0,
     progress: ProgressCallback | None = None,
+    mounts: PathLike | MountsFile | None = None,
 ) -> IdentifyResult:
     """Identify CG, inertia, stiffness and damping from a layout and its modes.
 
@@ -242,8 +292,10 @@ def identify(
         The six mode labels to use. Without it exactly six modes are used as
         given, or, with more than six modes and more than six sensors, the six
         whose shapes fit rigid-body motion best.
-    method : {"structured", "paper"}
-        See :func:`rigidid.core.identify.identify`.
+    method : {"structured", "paper", "mounts"}
+        See :func:`rigidid.core.identify.identify`; ``"mounts"``: CG, inertia and
+        per-mount rates fitted together (:func:`rigidid.core.mounts.identify_mount_model`),
+        which needs `mounts` and works with five modes.
     uncertainty : int
         Number of Monte Carlo draws for uncertainty intervals (0: none).
     noise : NoiseLevels or mapping, optional
@@ -282,12 +334,21 @@ def identify(
         raise InputError("the modes' sensors do not match the layout's sensors", source=source)
     frame = layout_frame(positions)
     t = sensor_matrix(frame.to_local(positions), directions)
-    labels, selection, residuals = _choose_modes(table, t, modes_used, source)
+    if method == "mounts" and mounts is None:
+        raise InputError("the mount model needs the mounts (a mounts.json or body.json)", source="mounts")
+    if method == "mounts" and uncertainty:
+        raise InputError("Monte Carlo intervals are computed for the structured method only", source="uncertainty")
+    labels, selection, residuals = _choose_modes(table, t, modes_used, source, 5 if method == "mounts" else 6)
     used = table.subset(labels)
     notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
-    result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+    fit = None
+    if method == "mounts":
+        assert mounts is not None
+        result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay)
+    else:
+        result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
     result = _check_result(result, labels, lay.units.length, notes)
     intervals = None
     if uncertainty:
@@ -318,6 +379,7 @@ def identify(
         shapes=used.shapes,
         uncertainty=intervals,
         layout_name=lay.name,
+        mount_model=fit,
     )
 
 
@@ -1003,6 +1065,59 @@ def simulate_records(
     return written
 
 
+def _mount_spec(
+    mounts: PathLike | MountsFile, units: Mapping[str, str]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], MountsFile]:
+    """Positions and axes (columns) of the mounts, checked against the layout's units."""
+    spec = mounts if isinstance(mounts, MountsFile) else files.load_mounts(mounts)
+    source = None if isinstance(mounts, MountsFile) else str(mounts)
+    if (spec.units.length, spec.units.mass) != (units["length"], units["mass"]):
+        raise InputError(
+            f"units ({spec.units.length}, {spec.units.mass}) differ from the layout's "
+            f"({units['length']}, {units['mass']})",
+            source=source,
+            location="units",
+        )
+    positions = np.array([m.position for m in spec.mounts], dtype=float)
+    axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
+    return positions, axes, spec
+
+
+def _mount_model(
+    positions: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    poles: NDArray[np.complex128],
+    shapes: NDArray[np.complex128],
+    mass: float | None,
+    mounts: PathLike | MountsFile,
+    layout: LayoutFile,
+) -> tuple[Identification, MountModelFit]:
+    """The mount model, started from the free route when six modes allow it, and the comparison with it."""
+    from rigidid.core.geometry import layout_frame
+    from rigidid.core.mounts import eigen_residual, identify_mount_model
+    from rigidid.errors import IdentificationError
+
+    where, axes, _ = _mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    free = None
+    if poles.size == 6:
+        try:
+            free = identify_core(positions, directions, poles, shapes, mass=mass, warn=False)
+        except IdentificationError:
+            free = None
+    start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
+    ident, model = identify_mount_model(positions, directions, poles, shapes, where, axes, mass=mass, start=start)
+    length = layout_frame(positions).scale
+    residual = eigen_residual(
+        poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length
+    )
+    free_residual = None
+    if free is not None:
+        free_residual = eigen_residual(
+            poles, free.mode_shapes_cg, free.inertia_per_mass, free.stiffness_per_mass, free.damping_per_mass, length
+        )
+    return ident, MountModelFit(model, residual, free_residual)
+
+
 def with_mounts(
     result: IdentifyResult, mounts: PathLike | MountsFile | None = None, *, torque_axis: Sequence[float] | None = None
 ) -> IdentifyResult:
@@ -1035,17 +1150,7 @@ def with_mounts(
     ident = result.identification
     out = result
     if mounts is not None:
-        spec = mounts if isinstance(mounts, MountsFile) else files.load_mounts(mounts)
-        source = None if isinstance(mounts, MountsFile) else str(mounts)
-        if (spec.units.length, spec.units.mass) != (result.units["length"], result.units["mass"]):
-            raise InputError(
-                f"units ({spec.units.length}, {spec.units.mass}) differ from the layout's "
-                f"({result.units['length']}, {result.units['mass']})",
-                source=source,
-                location="units",
-            )
-        positions = np.array([m.position for m in spec.mounts], dtype=float)
-        axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
+        positions, axes, spec = _mount_spec(mounts, result.units)
         scale = 1.0 if ident.mass is None else ident.mass
         rates = mount_rates(
             scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass

@@ -471,6 +471,7 @@ def _identify(
     resample: int = 0,
     geometry: Path | None = None,
     keep: dict[str, Any] | None = None,
+    mounts: Path | None = None,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share.
 
@@ -479,8 +480,10 @@ def _identify(
     from rigidid import api
     from rigidid.core.identify import METHODS
 
-    if method not in METHODS:
-        raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--method")
+    if method not in (*METHODS, "mounts"):
+        raise InputError(f"unknown method {method!r}; choose {', '.join(METHODS)} or mounts", source="--method")
+    if method == "mounts" and mounts is None:
+        raise InputError("--method mounts needs --mounts FILE (mounts.json or body.json)", source="--method")
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
@@ -512,6 +515,7 @@ def _identify(
             noise=noise,
             seed=seed,
             progress=progress,
+            mounts=mounts,
         )
     if resample:
         if not records:
@@ -597,7 +601,7 @@ def identify(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts,
         )  # fmt: skip
         result = _with_mounts(result, mounts, torque_axis)
         with OutputSet():  # every output or none

@@ -138,6 +138,18 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
     out.update(_force_keys(result, force_unit))
     if result.mounts is not None:
         out["mounts"] = mounts_to_dict(result, force_unit)
+    if result.mount_model is not None:
+        fit = result.mount_model
+        out["mount_model"] = {
+            "residual": fit.residual,
+            "parameters": fit.model.parameters,
+            "equations": fit.model.equations,
+            "aic": fit.aic,
+            "free_residual": fit.free_residual,
+            "free_parameters": fit.free_parameters,
+            "free_aic": fit.free_aic,
+            "adequate": fit.adequate,
+        }
     if result.torque_roll_axis is not None:
         tra = result.torque_roll_axis
         out["torque_roll_axis"] = {

@@ -355,6 +355,9 @@ class ResultFile(_Strict):
         default=None, description="the unit of every numeric key of the result (a text such as 'lb in^2')"
     )
     mounts: MountsResult | None = Field(default=None, description="with --mounts: per-mount rates")
+    mount_model: MountModelResult | None = Field(
+        default=None, description="with --method mounts: the mount model's fit against the free 6x6 matrices"
+    )
     torque_roll_axis: TorqueRollAxisResult | None = Field(
         default=None, description="with --torque-axis: the rotation under a pure torque"
     )
@@ -382,6 +385,19 @@ class MountsResult(_Strict):
     rank: int = Field(description="rates the mount layout determines (unique when equal to unknowns)")
     unique: bool
     statement: str
+
+
+class MountModelResult(_Strict):
+    """How well the mount model explains the modes, against the free 6x6 stiffness and damping."""
+
+    residual: float = Field(description="RMS eigenproblem residual (lambda^2 M + lambda C + K) phi, dimensionless")
+    parameters: int
+    equations: int
+    aic: float = Field(description="Akaike's criterion N ln(RSS/N) + 2 P")
+    free_residual: float | None = Field(description="the same for the free route (null with five modes)")
+    free_parameters: int
+    free_aic: float | None
+    adequate: bool | None = Field(description="the mount model's AIC is not worse than the free route's")
 
 
 class TorqueRollAxisResult(_Strict):

@@ -83,3 +83,54 @@ def test_bad_inputs_name_the_parameter() -> None:
         torque_roll_axis(np.eye(3), [0.0, 0.0, 0.0])
     with pytest.raises(InputError, match="axes"):
         mount_rates(np.eye(6), np.zeros(3), [[1.0, 0.0, 0.0]], np.zeros((1, 3, 3)))
+
+
+def test_mount_model_recovers_an_exact_body_from_five_modes() -> None:
+    """Five modes are enough for the mount model (the free route needs six)."""
+    from rigidid.core.mounts import identify_mount_model
+
+    body, where, axes, rates = _body(4)
+    pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
+    modes = body_modes(body, pos, dirs)
+    ident, model = identify_mount_model(pos, dirs, modes.poles[:5], modes.shapes[:, :5], where, axes, mass=body.mass)
+    np.testing.assert_allclose(ident.center_of_gravity, body.center_of_gravity, atol=MOUNT_RATES_REL)
+    assert ident.inertia_tensor is not None
+    np.testing.assert_allclose(ident.inertia_tensor, body.inertia_tensor, atol=MOUNT_RATES_REL * 3.0)
+    np.testing.assert_allclose(model.stiffness_per_mass * body.mass, rates, rtol=MOUNT_RATES_REL)
+    assert model.parameters == 9 + 6 * 4 and model.residual < MOUNT_RATES_REL
+
+
+def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
+    """An unmodelled support (a hose) makes the free matrices explain the modes better (AIC)."""
+    from rigidid import api
+
+    body, where, axes, _ = _body(4)
+    hidden = Body(body.mass, body.center_of_gravity, body.inertia_tensor,
+                  [*body.mounts, Mount.from_values([0.0, 0.4, 0.3], (3e4, 3e4, 0.0))])  # fmt: skip
+    pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
+    for truth, adequate in ((body, True), (hidden, False)):
+        modes = body_modes(truth, pos, dirs)
+        _, fit = api._mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
+        assert fit.adequate is adequate, (fit.residual, fit.free_residual)
+
+
+def _mounts_file(where: np.ndarray, axes: np.ndarray) -> object:
+    from rigidid.models import MountsFile
+
+    return MountsFile.model_validate(
+        {"units": {"length": "m", "mass": "kg"},
+         "mounts": [{"position": p.tolist(), "axes": u.T.tolist()} for p, u in zip(where, axes, strict=True)]}
+    )  # fmt: skip
+
+
+def _layout() -> object:
+    from rigidid.models import LayoutFile
+
+    return LayoutFile.model_validate({"units": {"length": "m", "mass": "kg"},
+                                      "sensors": [{"id": str(i), "position": [0, 0, i], "direction": "+x"}
+                                                  for i in range(6)]})  # fmt: skip
+
+
+_LAYOUT = _layout()

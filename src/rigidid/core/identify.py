@@ -42,6 +42,8 @@ __all__ = [
     "Identification",
     "identify",
     "inertia_observability",
+    "match_modes",
+    "model_modes",
     "physical_checks",
     "principal_axes",
     "solve_paper",
@@ -336,7 +338,7 @@ class Identification:
             Column ``k``: motion of the CG ``(x, y, z, rx, ry, rz)`` in mode
             ``k`` (length and rad), scaled to unit Euclidean norm.
         """
-        poles, shapes = _model_modes(self.inertia_per_mass, self.stiffness_per_mass, self.damping_per_mass)
+        poles, shapes = model_modes(self.inertia_per_mass, self.stiffness_per_mass, self.damping_per_mass)
         order = np.argsort(np.abs(poles))
         shapes = shapes[:, order]
         return poles[order], shapes / np.linalg.norm(shapes, axis=0)
@@ -384,7 +386,8 @@ def physical_checks(inertia_per_mass: Array, stiffness: Array, damping: Array) -
     return found
 
 
-def _model_modes(j: Array, k: Array, c: Array) -> tuple[CArray, CArray]:
+def model_modes(j: Array, k: Array, c: Array) -> tuple[CArray, CArray]:
+    """Poles (``Im > 0``) and CG motions of the model ``diag(I, j)``, ``k``, ``c`` (eq. (1) of [1])."""
     d = np.eye(6)
     d[3:, 3:] = j
     mu, vec = np.linalg.eig(state_matrix(d, k, c))
@@ -392,7 +395,7 @@ def _model_modes(j: Array, k: Array, c: Array) -> tuple[CArray, CArray]:
     return mu[upper], vec[6:, upper]
 
 
-def _match_modes(measured: CArray, model_poles: CArray, model_shapes: CArray) -> tuple[CArray, Array]:
+def match_modes(measured: CArray, model_poles: CArray, model_shapes: CArray) -> tuple[CArray, Array]:
     """Pair each measured mode with the model mode of best MAC; return model poles and MACs."""
     mac = mac_matrix(measured, model_shapes)
     chosen = np.argmax(mac, axis=1)
@@ -561,9 +564,9 @@ def _identify(
     notices.extend(Notice(PhysicalPlausibilityWarning, message) for message in physical_checks(j, k, c))
 
     centre, length = prep.centre[0], float(prep.scale[0])
-    model_poles, model_phi = _model_modes(j, k, c)
+    model_poles, model_phi = model_modes(j, k, c)
     model_psi = sensor_matrix((pos - centre) / length, dirs, g) @ model_phi
-    matched, mac = _match_modes(psi, model_poles, model_psi)
+    matched, mac = match_modes(psi, model_poles, model_psi)
     model_f, model_z = modal_from_poles(matched * omega)
     f, z = modal_from_poles(lam)
 

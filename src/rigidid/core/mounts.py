@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -24,7 +25,19 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.geometry import skew
 from rigidid.errors import InputError
 
-__all__ = ["MountRates", "TorqueRollAxis", "mount_rates", "torque_roll_axis"]
+if TYPE_CHECKING:
+    from rigidid.core.identify import Identification
+
+__all__ = [
+    "MountModel",
+    "MountRates",
+    "TorqueRollAxis",
+    "eigen_residual",
+    "fit_mount_model",
+    "identify_mount_model",
+    "mount_rates",
+    "torque_roll_axis",
+]
 
 Array = NDArray[np.float64]
 
@@ -274,3 +287,325 @@ def torque_roll_axis(inertia: ArrayLike, torque_axis: ArrayLike) -> TorqueRollAx
         w = -w
     principal = np.array([_angle(w, vectors[:, i]) for i in range(3)])
     return TorqueRollAxis(t, w, _angle(w, t), principal)
+
+
+@dataclass(frozen=True)
+class MountModel:
+    """CG, inertia and per-mount rates fitted together to the modes (:func:`fit_mount_model`).
+
+    Attributes
+    ----------
+    center_of_gravity : ndarray, shape (3,)
+        CG (length).
+    inertia_per_mass : ndarray, shape (3, 3)
+        ``J / m`` about the CG (length^2), positive definite by construction.
+    stiffness_per_mass, damping_per_mass : ndarray, shape (n, 3)
+        Rates of each mount along its axes, per unit mass (1/s^2 and 1/s).
+    axes : ndarray, shape (n, 3, 3)
+        Column ``a`` of ``axes[k]``: axis ``a`` of mount ``k``.
+    residual : float
+        RMS of the eigenproblem residual ``(lambda^2 M + lambda C + K) phi`` over the
+        modes, each mode's equations scaled by ``|lambda|^2 |phi|`` (dimensionless).
+    parameters : int
+        Unknowns of the model: 9 (CG, inertia) + 6 per mount.
+    equations : int
+        Real equations: 12 per mode.
+    """
+
+    center_of_gravity: Array
+    inertia_per_mass: Array
+    stiffness_per_mass: Array
+    damping_per_mass: Array
+    axes: Array
+    residual: float
+    parameters: int
+    equations: int
+
+    @property
+    def aic(self) -> float:
+        """Akaike's criterion ``N ln(RSS / N) + 2 P`` (RSS floored at 1e-30 N)."""
+        rss = max(self.residual**2 * self.equations, 1e-30 * self.equations)
+        return float(self.equations * math.log(rss / self.equations) + 2 * self.parameters)
+
+
+def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> NDArray[np.complex128]:
+    """Columns ``T_k^T u u^T T_k phi`` (6,) for each mount and axis: (6, 3 n)."""
+    cols = []
+    for r, u in zip(offsets, axes, strict=True):
+        t = np.hstack([np.eye(3), -skew(r)])
+        tphi = t @ phi
+        for a in range(3):
+            cols.append(t.T @ u[:, a] * (u[:, a] @ tphi))
+    return np.stack(cols, axis=1)
+
+
+def _inertia(params: Array) -> Array:
+    lower = np.zeros((3, 3))
+    lower[np.tril_indices(3)] = params
+    return lower @ lower.T
+
+
+def fit_mount_model(
+    positions: ArrayLike,
+    directions: ArrayLike,
+    poles: ArrayLike,
+    shapes: ArrayLike,
+    mount_positions: ArrayLike,
+    mount_axes: ArrayLike | None = None,
+    *,
+    start: tuple[ArrayLike, ArrayLike] | None = None,
+) -> MountModel:
+    """CG, inertia and per-mount rates fitted together to five or more rigid-body modes.
+
+    Parameters
+    ----------
+    positions, directions : array_like, shape (p, 3)
+        The sensors (length; unit measuring axes).
+    poles : array_like of complex, shape (n,)
+        Poles of the rigid-body modes used (rad/s), ``n >= 5``.
+    shapes : array_like of complex, shape (p, n)
+        Their shapes as the sensors read them.
+    mount_positions : array_like, shape (q, 3)
+        Where the mounts act (length).
+    mount_axes : array_like, shape (q, 3, 3), optional
+        Column ``a`` of ``mount_axes[k]``: axis ``a`` of mount ``k``; default x, y, z.
+    start : (cg, inertia_per_mass), optional
+        Starting point (e.g. from :func:`rigidid.core.identify.identify`); default
+        the sensor centroid and an inertia from the sensors' spread.
+
+    Returns
+    -------
+    MountModel
+
+    Raises
+    ------
+    InputError
+        Fewer than five modes, or arrays that do not match.
+
+    Notes
+    -----
+    Each measured mode, projected on rigid motion (eq. (30) of [1] in spirit) and
+    moved to the trial CG, must satisfy eq. (1): ``(lambda^2 M + lambda C + K) phi = 0``
+    with ``M = diag(I, J/m)`` and ``K``, ``C`` the sums of the mounts' rates. For a
+    trial CG and inertia the rates enter linearly and are solved by non-negative
+    least squares (variable projection); CG and the Cholesky factor of ``J / m``
+    are found by ``scipy.optimize.least_squares``. Far fewer unknowns than a free
+    6x6 ``K`` and ``C`` (9 + 6 per mount instead of 51), so five modes can do, and
+    noise is averaged over more equations per unknown. Computed in the frame of
+    :func:`rigidid.core.geometry.layout_frame`, times scaled by the RMS pole.
+    """
+    from scipy.optimize import least_squares, nnls
+
+    from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
+    from rigidid.core.selection import project_rigid
+
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    dirs = normalise_directions(directions)
+    lam = np.asarray(poles, dtype=complex).ravel()
+    psi = np.asarray(shapes, dtype=complex)
+    if lam.size < 5 or psi.shape != (pos.shape[0], lam.size):
+        raise InputError(f"need five or more modes with shapes (sensors, modes); got {psi.shape}", source="shapes")
+    mp = np.asarray(mount_positions, dtype=float).reshape(-1, 3)
+    q = mp.shape[0]
+    u = np.broadcast_to(np.eye(3), (q, 3, 3)).copy() if mount_axes is None else np.asarray(mount_axes, dtype=float)
+    u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    frame = layout_frame(pos)
+    length = frame.scale
+    omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
+    mu = lam / omega
+    coords, _ = project_rigid(sensor_matrix(frame.to_local(pos), dirs), psi)
+    coords = coords / np.linalg.norm(coords, axis=0)
+    local_mounts = frame.to_local(mp)
+
+    def rates_and_residual(x: Array) -> tuple[Array, Array]:
+        g, j = x[:3], _inertia(x[3:])
+        mass = np.eye(6)
+        mass[3:, 3:] = j
+        rows, rhs = [], []
+        for i in range(mu.size):
+            phi = transfer_matrix_local(g) @ coords[:, i]
+            cols = _mount_columns(phi, local_mounts - g, u)
+            scale = 1.0 / (abs(mu[i]) ** 2 * np.linalg.norm(phi))
+            block = np.hstack([cols, mu[i] * cols]) * scale
+            target = -(mu[i] ** 2) * (mass @ phi) * scale
+            rows.append(np.vstack([block.real, block.imag]))
+            rhs.append(np.concatenate([target.real, target.imag]))
+        a, b = np.vstack(rows), np.concatenate(rhs)
+        rates, _ = nnls(a, b)
+        return rates, a @ rates - b
+
+    if start is None:
+        g0 = np.zeros(3)
+        j0 = 0.3 * np.eye(3)
+    else:
+        g0 = frame.to_local(np.asarray(start[0], dtype=float))
+        j0 = np.asarray(start[1], dtype=float) / length**2
+    chol = np.linalg.cholesky(0.5 * (j0 + j0.T) + 1e-9 * np.eye(3))
+    x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
+    sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
+    rates, resid = rates_and_residual(sol.x)
+    g, j = sol.x[:3], _inertia(sol.x[3:])
+    k = rates[: 3 * q].reshape(q, 3) * omega**2
+    c = rates[3 * q :].reshape(q, 3) * omega
+    return MountModel(
+        center_of_gravity=frame.centre + length * g,
+        inertia_per_mass=length**2 * j,
+        stiffness_per_mass=k,
+        damping_per_mass=c,
+        axes=u,
+        residual=float(np.sqrt(np.mean(resid**2))),
+        parameters=9 + 6 * q,
+        equations=resid.size,
+    )
+
+
+def transfer_matrix_local(offset: Array) -> Array:
+    """``[[I, -S(offset)], [0, I]]``: rigid motion of a point at `offset` from the reference."""
+    out = np.eye(6)
+    out[:3, 3:] = -skew(offset)
+    return out
+
+
+def _support_matrix(rates: Array, offsets: Array, axes: Array) -> Array:
+    """``sum_k T_k^T U_k diag(rates_k) U_k^T T_k`` at the reference of `offsets`."""
+    out = np.zeros((6, 6))
+    for r, u, k in zip(offsets, axes, rates, strict=True):
+        t = np.hstack([np.eye(3), -skew(r)])
+        out += t.T @ (u @ np.diag(k) @ u.T) @ t
+    return out
+
+
+def eigen_residual(
+    poles: ArrayLike,
+    cg_motions: ArrayLike,
+    inertia_per_mass: ArrayLike,
+    stiffness: ArrayLike,
+    damping: ArrayLike,
+    length: float = 1.0,
+) -> float:
+    """RMS of ``(lambda^2 M + lambda C + K) phi / (|lambda|^2 |phi|)`` over the modes, ``M = diag(I, J/m)``.
+
+    Parameters
+    ----------
+    poles : array_like of complex, shape (n,)
+        Measured poles (rad/s).
+    cg_motions : array_like of complex, shape (6, n)
+        Measured rigid motions at the CG (length, rad).
+    inertia_per_mass : array_like, shape (3, 3)
+    stiffness, damping : array_like, shape (6, 6)
+        Per mass, at the CG.
+    length : float
+        Length scale (e.g. the sensors' RMS radius): translations are divided by
+        it and moments by its square, so that the figure does not depend on units.
+
+    Returns
+    -------
+    float
+        0 when the model reproduces every mode exactly (how well a model explains
+        the modes, comparable between the mount model and a free 6x6 ``K``).
+    """
+    lam = np.asarray(poles, dtype=complex).ravel()
+    phi = np.asarray(cg_motions, dtype=complex)
+    mass = np.eye(6)
+    mass[3:, 3:] = np.asarray(inertia_per_mass, dtype=float)
+    k, c = np.asarray(stiffness, dtype=float), np.asarray(damping, dtype=float)
+    rows = np.array([1.0, 1.0, 1.0, 1.0 / length, 1.0 / length, 1.0 / length]) / length
+    motion = np.array([1.0, 1.0, 1.0, length, length, length]) / length
+    r = []
+    for i in range(lam.size):
+        force = (lam[i] ** 2 * mass + lam[i] * c + k) @ phi[:, i]
+        r.append(rows * force / (abs(lam[i]) ** 2 * np.linalg.norm(motion * phi[:, i])))
+    stacked = np.concatenate([np.concatenate([x.real, x.imag]) for x in r])
+    return float(np.sqrt(np.mean(stacked**2)))
+
+
+def identify_mount_model(
+    positions: ArrayLike,
+    directions: ArrayLike,
+    poles: ArrayLike,
+    shapes: ArrayLike,
+    mount_positions: ArrayLike,
+    mount_axes: ArrayLike | None = None,
+    *,
+    mass: float | None = None,
+    start: tuple[ArrayLike, ArrayLike] | None = None,
+) -> tuple[Identification, MountModel]:
+    """The mount model as an :class:`~rigidid.core.identify.Identification` (method ``"mounts"``).
+
+    Parameters
+    ----------
+    positions, directions, poles, shapes, mount_positions, mount_axes, start
+        As :func:`fit_mount_model`.
+    mass : float, optional
+        The mass, for absolute results.
+
+    Returns
+    -------
+    identification : Identification
+        ``K`` and ``C`` built from the fitted rates (symmetric positive semi-definite
+        by construction), ``J / m`` positive definite, and the diagnostics of the
+        free route (layout, rigid fit, model modes against the measured ones).
+    model : MountModel
+        The rates and the fit's residual and parameter count.
+    """
+    from rigidid.core import estimator
+    from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, sensor_matrix
+    from rigidid.core.identify import (
+        FitDiagnostics,
+        Identification,
+        inertia_observability,
+        match_modes,
+        model_modes,
+    )
+    from rigidid.core.selection import project_rigid
+    from rigidid.core.statespace import modal_from_poles
+
+    model = fit_mount_model(positions, directions, poles, shapes, mount_positions, mount_axes, start=start)
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    dirs = normalise_directions(directions)
+    lam = np.asarray(poles, dtype=complex).ravel()
+    psi = np.asarray(shapes, dtype=complex)
+    g = model.center_of_gravity
+    offsets = np.asarray(mount_positions, dtype=float).reshape(-1, 3) - g
+    k = _support_matrix(model.stiffness_per_mass, offsets, model.axes)
+    c = _support_matrix(model.damping_per_mass, offsets, model.axes)
+    j = model.inertia_per_mass
+    cond, rank = layout_condition(pos, dirs)
+    frame = layout_frame(pos)
+    phi, fit = project_rigid(sensor_matrix(frame.to_local(pos), dirs), psi)
+    length = frame.scale
+    omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
+    dof = np.array([1.0, 1.0, 1.0, length, length, length])
+    d = np.eye(6)
+    d[3:, 3:] = j / length**2
+    q_g = np.asarray(np.linalg.solve(d, k / np.outer(dof, dof) / omega**2), dtype=np.float64)
+    g_local = frame.to_local(g)
+    q_o = estimator.at_cg(q_g[None], -g_local[None])[0]
+    observability = inertia_observability(q_o, g_local)
+    model_poles, model_phi = model_modes(j, k, c)
+    matched, mac = match_modes(psi, model_poles, sensor_matrix(pos, dirs, g) @ model_phi)
+    model_f, model_z = modal_from_poles(matched)
+    f, z = modal_from_poles(lam)
+    shapes_cg = transfer_matrix_local(g_local) @ phi * np.array([length, length, length, 1.0, 1.0, 1.0])[:, None]
+    ident = Identification(
+        center_of_gravity=g,
+        inertia_per_mass=j,
+        stiffness_per_mass=k,
+        damping_per_mass=c,
+        mass=None if mass is None else float(mass),
+        frequency_hz=f,
+        damping_ratio=z,
+        mode_shapes_cg=shapes_cg / np.linalg.norm(shapes_cg, axis=0),
+        method="mounts",
+        diagnostics=FitDiagnostics(
+            layout_condition=cond,
+            layout_rank=rank,
+            rigid_fit_residual=fit,
+            structure_residual=0.0,
+            inertia_observability=observability,
+            model_frequency_hz=model_f,
+            model_damping_ratio=model_z,
+            model_mac=mac,
+        ),
+    )
+    return ident, model
