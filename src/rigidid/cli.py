@@ -725,12 +725,17 @@ def convert(
     output: Annotated[Path, typer.Option("-o", "--output", help="Folder to write into.")] = Path("."),
     units: Units = None,
     geometry: Geometry = None,
+    records_format: Annotated[
+        str, typer.Option("--records-format", help="Format of the record files: csv, npz or h5 (needs h5py).")
+    ] = "csv",
 ) -> None:
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""
     with _reported():
         from rigidid import api
 
-        for path in api.convert(uff_file, output, units=_parse_units(units), geometry=geometry):
+        for path in api.convert(
+            uff_file, output, units=_parse_units(units), geometry=geometry, records_format=records_format
+        ):
             sys.stderr.write(f"rigidid: wrote {path}\n")
 
 
