@@ -130,3 +130,13 @@ def test_convert_writes_npz_records_that_modes_reads(tmp_path: Path) -> None:
     bad = run("convert", uff, "-o", tmp_path / "x", "--records-format", "tdms")
     assert bad.returncode == 2 and "tdms" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_channel_energy_row_blocked_equals_the_column_sum() -> None:
+    from rigidid.core.timedomain import preprocess
+
+    rng = np.random.default_rng(4)
+    record = rng.normal(size=(70_001, 5)) * np.array([1.0, 1e3, 1e-3, 0.0, 2.0])
+    expected = sum((record[:, i] / np.max(np.abs(record[:, i]))) ** 2 for i in (0, 1, 2, 4))
+    np.testing.assert_allclose(preprocess.channel_energy(record), expected, rtol=1e-12)
+    assert preprocess.channel_energy(np.empty((0, 3))).shape == (0,)
