@@ -140,3 +140,60 @@ def test_channel_energy_row_blocked_equals_the_column_sum() -> None:
     expected = sum((record[:, i] / np.max(np.abs(record[:, i]))) ** 2 for i in (0, 1, 2, 4))
     np.testing.assert_allclose(preprocess.channel_energy(record), expected, rtol=1e-12)
     assert preprocess.channel_energy(np.empty((0, 3))).shape == (0,)
+
+
+def test_spreadsheet_csv_gives_the_plain_csv_modes(engine_csv: tuple[Path, list[str], list[Path]]) -> None:
+    """';' separators, decimal commas, a 'Time (s)' header and a force column: the same modes."""
+    from rigidid.errors import NonSensorColumnWarning
+
+    folder, _, paths = engine_csv
+    converted = []
+    for path in paths:
+        lines = path.read_text().splitlines()
+        header = lines[0].split(",")
+        rows = [line.split(",") for line in lines[1:]]
+        out = [";".join(["Time (s)", "Force [N]", *header[1:], "trigger"])]
+        for k, cells in enumerate(rows):
+            out.append(";".join([cells[0], f"{0.5 * (k < 3):g}", *cells[1:], "1"]).replace(".", ","))
+        target = folder / f"{path.stem}-excel.csv"
+        target.write_text("\n".join(out) + "\n")
+        converted.append(target)
+    with pytest.warns(NonSensorColumnWarning, match="'Force \\[N\\]', 'trigger'"):
+        modes = _modes(converted)
+    np.testing.assert_allclose(modes, _modes(paths), rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize(
+    ("text", "location", "message"),
+    [
+        ("time,a,b\n0,1,2\n0.1,,2\n", "row 3, column 'a'", "empty cell"),
+        ("time;a;b\n0;1;2\n\n0,1;1;nan\n", "row 4, column 'b'", "NaN or infinite"),
+        ("time,a,b\n0,1,2\n0.1,1,2,3\n", "row 3", "4 fields, the header has 3"),
+        ("time,a,b\n0,1,2\n0.1,1\n", "row 3", "2 fields, the header has 3"),
+        ("time,a,b\n0,1,2\n0.1,1,x2\n", "row 3, column 'b'", "'x2' is not a number"),
+        ("Time (ms),a,b\n0,1,2\n", "column 'Time (ms)'", "time must be in seconds"),
+        ("time,a,b,Force (N)\n0,1,2,3\n", "", "16"),
+    ],
+)
+def test_bad_csv_cell_names_row_and_column(tmp_path: Path, text: str, location: str, message: str) -> None:
+    import warnings
+
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(InputError) as info:
+            read_record(path, ["a", "b"])
+    err = info.value
+    assert location in (err.location or "") and message in err.message and "\n" not in str(err)
+
+
+def test_endless_inputs_end_with_one_line(tmp_path: Path) -> None:
+    with pytest.raises(InputError, match="not a regular file"):
+        read_record("/dev/zero", ["a", "b"])
+    path = tmp_path / "zeros.csv"
+    with path.open("wb") as fh:
+        fh.truncate(3 << 20)  # 3 MiB of NUL bytes, no line break
+    with pytest.raises(InputError, match="no line break") as info:
+        read_record(path, ["a", "b"])
+    assert "\n" not in str(info.value)
