@@ -16,6 +16,17 @@ when it would need more than 4 GB (about five times ``H0``: ``H0``, ``H1``,
 baseline, of the pole nearest each true mode).
 
 Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method era]``
+
+``--floor [CHANNELSxSAMPLES]`` (default 32x1000000) instead times the whole
+command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as
+CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
+Python that reads the CSV with ``pandas.read_csv``, decimates with the
+project's FIR ``decimate`` by ``decimation_for(40 Hz)``, forms the Gram matrix
+with ``lagged_gram`` (20 block rows) and realises 12 states with
+``era_basis``/``era_modes``), interleaved, ``--repeat`` times (3); it prints
+medians of wall time (start-up included) and of peak resident memory (the
+child's ``ru_maxrss`` from ``os.wait4``), and their ratios to the floor: the
+machine is shared, ratios measured in one run are the figures to compare.
 """
 
 from __future__ import annotations
@@ -130,12 +141,107 @@ def _run(kind: str, path: Path, channels: int, method: str) -> dict[str, float]:
     return result
 
 
+FLOOR_CODE = """
+import sys, numpy as np, pandas as pd
+from rigidid.core.timedomain.preprocess import decimate, decimation_for
+from rigidid.core.timedomain.gram import lagged_gram
+from rigidid.core.timedomain.era import era_basis, era_modes
+table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
+time, data = table[:, 0], table[:, 1:]
+del table
+dt = (time[-1] - time[0]) / (time.shape[0] - 1)
+q = decimation_for(40.0, dt)
+low = decimate(data, q)
+del data
+gram, _ = lagged_gram([low], 21)
+poles, _ = era_modes(era_basis(gram, low.shape[1]), 12, dt * q)
+f = np.sort(np.abs(poles[poles.imag > 0]) / (2 * np.pi))
+print(" ".join(f"{v:.3f}" for v in f))
+"""
+
+
+def _run_rusage(cmd: list[str]) -> tuple[float, float, str]:
+    """Like :func:`_timed`, with the child's own peak resident memory from ``os.wait4``."""
+    import os
+
+    start = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    assert proc.stdout is not None
+    out = proc.stdout.read().decode()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    wall = time.perf_counter() - start
+    if proc.returncode:
+        raise SystemExit(f"{' '.join(cmd)} failed with exit status {proc.returncode}")
+    return wall, usage.ru_maxrss / 1024.0, out
+
+
+def floor_comparison(channels: int, samples: int, repeat: int) -> None:
+    """`rigidid modes` on CSV and .npz against the numpy floor; medians of `repeat` interleaved runs."""
+    import shutil
+
+    from records_scenario import layout
+    from rigidid.io.binary_records import write_binary
+    from rigidid.io.records import read_record
+
+    exe = shutil.which("rigidid", path=str(Path(sys.executable).parent)) or "rigidid"
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        t0 = time.perf_counter()
+        csv = _write_case(folder, channels, samples)
+        ids = [f"s{i + 1}" for i in range(channels)]
+        pos, dirs = layout(channels)
+        sensors = [
+            {"id": sid, "position": p.tolist(), "direction": d.tolist()}
+            for sid, p, d in zip(ids, pos, dirs, strict=True)
+        ]
+        lay = folder / "layout.json"
+        lay.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "sensors": sensors}))
+        data, dt = read_record(csv, ids)
+        npz = folder / "record.npz"
+        write_binary(npz, np.arange(data.shape[0]) * dt, data, ids)
+        del data
+        print(f"{channels} channels x {samples} samples: CSV {csv.stat().st_size / 1e6:.0f} MB, "
+              f"npz {npz.stat().st_size / 1e6:.0f} MB (written in {time.perf_counter() - t0:.0f} s); "
+              f"medians of {repeat} interleaved runs")  # fmt: skip
+        runs: dict[str, list[tuple[float, float]]] = {"floor (pandas + FIR + Gram ERA)": [], "rigidid modes CSV": [],
+                                                      "rigidid modes .npz": []}  # fmt: skip
+        commands = {
+            "floor (pandas + FIR + Gram ERA)": [sys.executable, "-c", FLOOR_CODE, str(csv)],
+            "rigidid modes CSV": [exe, "modes", str(lay), str(csv), "-o", str(folder / "m1.csv")],
+            "rigidid modes .npz": [exe, "modes", str(lay), str(npz), "-o", str(folder / "m2.csv")],
+        }
+        for _ in range(repeat):
+            for name, cmd in commands.items():
+                wall, peak, _out = _run_rusage(cmd)
+                runs[name].append((wall, peak))
+        same = np.allclose(
+            np.loadtxt(folder / "m1.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
+            np.loadtxt(folder / "m2.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
+            rtol=1e-9,
+        )
+    floor_wall = float(np.median([w for w, _ in runs["floor (pandas + FIR + Gram ERA)"]]))
+    floor_peak = float(np.median([m for _, m in runs["floor (pandas + FIR + Gram ERA)"]]))
+    print(f"{'contender':<34} {'wall s':>7} {'x floor':>8} {'peak MB':>8} {'x floor':>8}")
+    for name, values in runs.items():
+        wall = float(np.median([w for w, _ in values]))
+        peak = float(np.median([m for _, m in values]))
+        print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
+    print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; CSV and .npz modes equal to 1e-9: {same}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--cases", help="comma-separated CHANNELSxSAMPLES (default: 8 and 32 x 1e4, 1e5, 1e6)")
     parser.add_argument("--method", default=None, help="estimator (default: the package default)")
     parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--floor", nargs="?", const="32x1000000", help="rigidid modes (CSV, .npz) against the floor")
+    parser.add_argument("--repeat", type=int, default=3, help="runs per contender for --floor (medians)")
     args = parser.parse_args()
+    if args.floor:
+        c, n = args.floor.split("x")
+        floor_comparison(int(c), int(n), args.repeat)
+        return
     if args.child:
         kind, path, channels, method = args.child
         _child(kind, path, int(channels), method)
