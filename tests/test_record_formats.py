@@ -197,3 +197,24 @@ def test_endless_inputs_end_with_one_line(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="no line break") as info:
         read_record(path, ["a", "b"])
     assert "\n" not in str(info.value)
+
+
+def test_a_file_growing_while_read_stops_with_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+    from types import SimpleNamespace
+
+    from rigidid.io import csv_records
+
+    t = np.arange(2000) / 100.0
+    path = tmp_path / "live.csv"
+    path.write_text("time,a,b\n" + "".join(f"{x:.2f},{np.exp(-x):.6f},{np.sin(x):.6f}\n" for x in t))
+    real = os.fstat
+
+    def smaller(fd: int) -> SimpleNamespace:  # the size when opened: a quarter of what is there when read
+        info = real(fd)
+        return SimpleNamespace(st_mode=info.st_mode, st_size=info.st_size // 4)
+
+    monkeypatch.setattr(csv_records.os, "fstat", smaller)
+    with pytest.raises(InputError, match="grew while it was read") as info:
+        read_record(path, ["a", "b"])
+    assert "\n" not in str(info.value) and str(path) in str(info.value)
