@@ -23,9 +23,11 @@ CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
 Python that reads the CSV with ``pandas.read_csv``, decimates with the
 project's FIR ``decimate`` by ``decimation_for(40 Hz)``, forms the Gram matrix
 with ``lagged_gram`` (20 block rows) and realises 12 states with
-``era_basis``/``era_modes``), interleaved, ``--repeat`` times (3); it prints
+``era_basis``/``era_modes``; and the same floor loading the ``.npz``
+with ``numpy.load``), interleaved, ``--repeat`` times (3); it prints
 medians of wall time (start-up included) and of peak resident memory (the
-child's ``ru_maxrss`` from ``os.wait4``), and their ratios to the floor: the
+child's own ``VmHWM``, written at exit; ``ru_maxrss`` would include the
+benchmark process's memory at fork time), and their ratios to the floor: the
 machine is shared, ratios measured in one run are the figures to compare.
 """
 
@@ -141,14 +143,33 @@ def _run(kind: str, path: Path, channels: int, method: str) -> dict[str, float]:
     return result
 
 
-FLOOR_CODE = """
+PEAK_PREAMBLE = """
+import atexit, os
+def _peak():  # VmHWM: this process's own peak resident set (reset by exec, unlike ru_maxrss)
+    with open("/proc/self/status") as fh, open(os.environ["RIGIDID_BENCH_PEAK"], "w") as out:
+        out.write(next(line.split()[1] for line in fh if line.startswith("VmHWM:")))
+atexit.register(_peak)
+"""
+
+CLI_CODE = PEAK_PREAMBLE + """
+import sys
+from rigidid.cli import main
+sys.argv = ["rigidid", *sys.argv[1:]]
+main()
+"""
+
+FLOOR_CODE = PEAK_PREAMBLE + """
 import sys, numpy as np, pandas as pd
 from rigidid.core.timedomain.preprocess import decimate, decimation_for
 from rigidid.core.timedomain.gram import lagged_gram
 from rigidid.core.timedomain.era import era_basis, era_modes
-table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
-time, data = table[:, 0], table[:, 1:]
-del table
+if sys.argv[1].endswith(".npz"):
+    with np.load(sys.argv[1]) as npz:
+        time, data = npz["time"], npz["data"]
+else:
+    table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
+    time, data = table[:, 0], table[:, 1:]
+    del table
 dt = (time[-1] - time[0]) / (time.shape[0] - 1)
 q = decimation_for(40.0, dt)
 low = decimate(data, q)
@@ -160,31 +181,25 @@ print(" ".join(f"{v:.3f}" for v in f))
 """
 
 
-def _run_rusage(cmd: list[str]) -> tuple[float, float, str]:
-    """Like :func:`_timed`, with the child's own peak resident memory from ``os.wait4``."""
+def _run_peak(cmd: list[str], folder: Path) -> tuple[float, float]:
+    """Wall time (s) and peak resident memory (MB, the child's VmHWM) of a child process."""
     import os
 
+    peak_file = folder / "peak.txt"
     start = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
-    assert proc.stdout is not None
-    out = proc.stdout.read().decode()
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
+    out = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "RIGIDID_BENCH_PEAK": str(peak_file)})
     wall = time.perf_counter() - start
-    if proc.returncode:
-        raise SystemExit(f"{' '.join(cmd)} failed with exit status {proc.returncode}")
-    return wall, usage.ru_maxrss / 1024.0, out
+    if out.returncode:
+        raise SystemExit(f"{' '.join(cmd[:3])}... failed with exit status {out.returncode}: {out.stderr.strip()}")
+    return wall, float(peak_file.read_text()) / 1024.0
 
 
 def floor_comparison(channels: int, samples: int, repeat: int) -> None:
     """`rigidid modes` on CSV and .npz against the numpy floor; medians of `repeat` interleaved runs."""
-    import shutil
-
     from records_scenario import layout
     from rigidid.io.binary_records import write_binary
     from rigidid.io.records import read_record
 
-    exe = shutil.which("rigidid", path=str(Path(sys.executable).parent)) or "rigidid"
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         t0 = time.perf_counter()
@@ -204,16 +219,17 @@ def floor_comparison(channels: int, samples: int, repeat: int) -> None:
         print(f"{channels} channels x {samples} samples: CSV {csv.stat().st_size / 1e6:.0f} MB, "
               f"npz {npz.stat().st_size / 1e6:.0f} MB (written in {time.perf_counter() - t0:.0f} s); "
               f"medians of {repeat} interleaved runs")  # fmt: skip
-        runs: dict[str, list[tuple[float, float]]] = {"floor (pandas + FIR + Gram ERA)": [], "rigidid modes CSV": [],
-                                                      "rigidid modes .npz": []}  # fmt: skip
+        cli = [sys.executable, "-c", CLI_CODE, "modes", str(lay)]
         commands = {
             "floor (pandas + FIR + Gram ERA)": [sys.executable, "-c", FLOOR_CODE, str(csv)],
-            "rigidid modes CSV": [exe, "modes", str(lay), str(csv), "-o", str(folder / "m1.csv")],
-            "rigidid modes .npz": [exe, "modes", str(lay), str(npz), "-o", str(folder / "m2.csv")],
+            "floor from .npz (np.load)": [sys.executable, "-c", FLOOR_CODE, str(npz)],
+            "rigidid modes CSV": [*cli, str(csv), "-o", str(folder / "m1.csv")],
+            "rigidid modes .npz": [*cli, str(npz), "-o", str(folder / "m2.csv")],
         }
+        runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
         for _ in range(repeat):
             for name, cmd in commands.items():
-                wall, peak, _out = _run_rusage(cmd)
+                wall, peak = _run_peak(cmd, folder)
                 runs[name].append((wall, peak))
         same = np.allclose(
             np.loadtxt(folder / "m1.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
