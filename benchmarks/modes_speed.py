@@ -21,8 +21,9 @@ Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method e
 command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as
 CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
 Python that reads the CSV with ``pandas.read_csv``, decimates with the
-project's FIR ``decimate`` by ``decimation_for(40 Hz)``, forms the Gram matrix
-with ``lagged_gram`` (20 block rows) and realises 12 states with
+project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12
+leading principal directions, forms the Gram matrix with ``lagged_gram`` (20
+block rows) and realises 12 states with
 ``era_basis``/``era_modes``; and the same floor loading the ``.npz``
 with ``numpy.load``), interleaved, ``--repeat`` times (3); it prints
 medians of wall time (start-up included) and of peak resident memory (the
@@ -174,8 +175,10 @@ dt = (time[-1] - time[0]) / (time.shape[0] - 1)
 q = decimation_for(40.0, dt)
 low = decimate(data, q)
 del data
-gram, _ = lagged_gram([low], 21)
-poles, _ = era_modes(era_basis(gram, low.shape[1]), 12, dt * q)
+_, _, vt = np.linalg.svd(low.T @ low)
+fitted = low @ vt[:12].T  # the 12 leading principal directions, as rigidid fits at most 2 x 6 channels
+gram, _ = lagged_gram([fitted], 20)
+poles, _ = era_modes(era_basis(gram, fitted.shape[1]), 12, dt * q)
 f = np.sort(np.abs(poles[poles.imag > 0]) / (2 * np.pi))
 print(" ".join(f"{v:.3f}" for v in f))
 """
