@@ -16,6 +16,20 @@ when it would need more than 4 GB (about five times ``H0``: ``H0``, ``H1``,
 baseline, of the pole nearest each true mode).
 
 Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method era]``
+
+``--floor [CHANNELSxSAMPLES]`` (default 32x1000000) instead times the whole
+command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as
+CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
+Python that reads the CSV with ``pandas.read_csv``, decimates with the
+project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12
+leading principal directions, forms the Gram matrix with ``lagged_gram`` (20
+block rows) and realises 12 states with
+``era_basis``/``era_modes``; and the same floor loading the ``.npz``
+with ``numpy.load``), interleaved, ``--repeat`` times (3); it prints
+medians of wall time (start-up included) and of peak resident memory (the
+child's own ``VmHWM``, written at exit; ``ru_maxrss`` would include the
+benchmark process's memory at fork time), and their ratios to the floor: the
+machine is shared, ratios measured in one run are the figures to compare.
 """
 
 from __future__ import annotations
@@ -130,12 +144,123 @@ def _run(kind: str, path: Path, channels: int, method: str) -> dict[str, float]:
     return result
 
 
+PEAK_PREAMBLE = """
+import atexit, os
+def _peak():  # VmHWM: this process's own peak resident set (reset by exec, unlike ru_maxrss)
+    with open("/proc/self/status") as fh, open(os.environ["RIGIDID_BENCH_PEAK"], "w") as out:
+        out.write(next(line.split()[1] for line in fh if line.startswith("VmHWM:")))
+atexit.register(_peak)
+"""
+
+CLI_CODE = PEAK_PREAMBLE + """
+import sys
+from rigidid.cli import main
+sys.argv = ["rigidid", *sys.argv[1:]]
+main()
+"""
+
+FLOOR_CODE = PEAK_PREAMBLE + """
+import sys, numpy as np, pandas as pd
+from rigidid.core.timedomain.preprocess import decimate, decimation_for
+from rigidid.core.timedomain.gram import lagged_gram
+from rigidid.core.timedomain.era import era_basis, era_modes
+if sys.argv[1].endswith(".npz"):
+    with np.load(sys.argv[1]) as npz:
+        time, data = npz["time"], npz["data"]
+else:
+    table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
+    time, data = table[:, 0], table[:, 1:]
+    del table
+dt = (time[-1] - time[0]) / (time.shape[0] - 1)
+q = decimation_for(40.0, dt)
+low = decimate(data, q)
+del data
+_, _, vt = np.linalg.svd(low.T @ low)
+fitted = low @ vt[:12].T  # the 12 leading principal directions, as rigidid fits at most 2 x 6 channels
+gram, _ = lagged_gram([fitted], 20)
+poles, _ = era_modes(era_basis(gram, fitted.shape[1]), 12, dt * q)
+f = np.sort(np.abs(poles[poles.imag > 0]) / (2 * np.pi))
+print(" ".join(f"{v:.3f}" for v in f))
+"""
+
+
+def _run_peak(cmd: list[str], folder: Path) -> tuple[float, float]:
+    """Wall time (s) and peak resident memory (MB, the child's VmHWM) of a child process."""
+    import os
+
+    peak_file = folder / "peak.txt"
+    start = time.perf_counter()
+    out = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "RIGIDID_BENCH_PEAK": str(peak_file)})
+    wall = time.perf_counter() - start
+    if out.returncode:
+        raise SystemExit(f"{' '.join(cmd[:3])}... failed with exit status {out.returncode}: {out.stderr.strip()}")
+    return wall, float(peak_file.read_text()) / 1024.0
+
+
+def floor_comparison(channels: int, samples: int, repeat: int) -> None:
+    """`rigidid modes` on CSV and .npz against the numpy floor; medians of `repeat` interleaved runs."""
+    from records_scenario import layout
+    from rigidid.io.binary_records import write_binary
+    from rigidid.io.records import read_record
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        t0 = time.perf_counter()
+        csv = _write_case(folder, channels, samples)
+        ids = [f"s{i + 1}" for i in range(channels)]
+        pos, dirs = layout(channels)
+        sensors = [
+            {"id": sid, "position": p.tolist(), "direction": d.tolist()}
+            for sid, p, d in zip(ids, pos, dirs, strict=True)
+        ]
+        lay = folder / "layout.json"
+        lay.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "sensors": sensors}))
+        data, dt = read_record(csv, ids)
+        npz = folder / "record.npz"
+        write_binary(npz, np.arange(data.shape[0]) * dt, data, ids)
+        del data
+        print(f"{channels} channels x {samples} samples: CSV {csv.stat().st_size / 1e6:.0f} MB, "
+              f"npz {npz.stat().st_size / 1e6:.0f} MB (written in {time.perf_counter() - t0:.0f} s); "
+              f"medians of {repeat} interleaved runs")  # fmt: skip
+        cli = [sys.executable, "-c", CLI_CODE, "modes", str(lay)]
+        commands = {
+            "floor (pandas + FIR + Gram ERA)": [sys.executable, "-c", FLOOR_CODE, str(csv)],
+            "floor from .npz (np.load)": [sys.executable, "-c", FLOOR_CODE, str(npz)],
+            "rigidid modes CSV": [*cli, str(csv), "-o", str(folder / "m1.csv")],
+            "rigidid modes .npz": [*cli, str(npz), "-o", str(folder / "m2.csv")],
+        }
+        runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
+        for _ in range(repeat):
+            for name, cmd in commands.items():
+                wall, peak = _run_peak(cmd, folder)
+                runs[name].append((wall, peak))
+        same = np.allclose(
+            np.loadtxt(folder / "m1.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
+            np.loadtxt(folder / "m2.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
+            rtol=1e-9,
+        )
+    floor_wall = float(np.median([w for w, _ in runs["floor (pandas + FIR + Gram ERA)"]]))
+    floor_peak = float(np.median([m for _, m in runs["floor (pandas + FIR + Gram ERA)"]]))
+    print(f"{'contender':<34} {'wall s':>7} {'x floor':>8} {'peak MB':>8} {'x floor':>8}")
+    for name, values in runs.items():
+        wall = float(np.median([w for w, _ in values]))
+        peak = float(np.median([m for _, m in values]))
+        print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
+    print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; CSV and .npz modes equal to 1e-9: {same}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--cases", help="comma-separated CHANNELSxSAMPLES (default: 8 and 32 x 1e4, 1e5, 1e6)")
     parser.add_argument("--method", default=None, help="estimator (default: the package default)")
     parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--floor", nargs="?", const="32x1000000", help="rigidid modes (CSV, .npz) against the floor")
+    parser.add_argument("--repeat", type=int, default=3, help="runs per contender for --floor (medians)")
     args = parser.parse_args()
+    if args.floor:
+        c, n = args.floor.split("x")
+        floor_comparison(int(c), int(n), args.repeat)
+        return
     if args.child:
         kind, path, channels, method = args.child
         _child(kind, path, int(channels), method)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigidid.errors import InputError
-from rigidid.io import records
+from rigidid.io import csv_records
 from rigidid.io.records import read_record, write_record
 
 from .conftest import DATA
@@ -114,7 +114,7 @@ def test_crlf_bom_and_blank_lines_are_accepted(tmp_path: Path) -> None:
 
 
 def test_row_numbers_count_blank_lines_and_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(records, "_CHUNK_ROWS", 7)
+    monkeypatch.setattr(csv_records, "CHUNK_ROWS", 7)
     t, x = _decay(100)
     lines = ["time,1,2,9"] + [f"{ti:.6f}," + ",".join(f"{v:.8g}" for v in xi) for ti, xi in zip(t, x, strict=True)]
     lines.insert(5, "")  # line 6 is blank
@@ -147,7 +147,7 @@ def test_time_rounding_is_tolerated_but_not_too_few_digits(tmp_path: Path) -> No
 
 
 def test_large_record_is_read_in_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(records, "_CHUNK_ROWS", 1000)
+    monkeypatch.setattr(csv_records, "CHUNK_ROWS", 1000)
     t, x = _decay(5003, dt=1e-4)
     path = tmp_path / "long.csv"
     write_record(path, t, x, IDS)

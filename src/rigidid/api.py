@@ -661,7 +661,7 @@ class TestData:
 
 
 def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[NDArray[np.float64], float]]:
-    """Read impact records (``records.csv``, one per impact), columns in layout order.
+    """Read impact records (CSV, .npy, .npz, .mat or .h5 files, one per impact), columns in layout order.
 
     Parameters
     ----------
@@ -939,7 +939,12 @@ def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
 
 
 def convert(
-    path: PathLike, directory: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None
+    path: PathLike,
+    directory: PathLike,
+    *,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
+    records_format: str = "csv",
 ) -> list[Path]:
     """Turn a universal file into ``layout.json``, ``modes.csv`` and ``record-<k>.csv`` files.
 
@@ -953,6 +958,8 @@ def convert(
         ``{"length", "mass"}`` when the file has no dataset 164.
     geometry : path-like, optional
         A UFF file completing `path` (see :func:`load_uff`).
+    records_format : {"csv", "npz", "h5"}
+        File format of the records (``record-<k>.<format>``; layouts in ``docs/FORMATS.md``).
 
     Returns
     -------
@@ -961,6 +968,8 @@ def convert(
     """
     import json
 
+    if records_format not in ("csv", "npz", "h5"):
+        raise InputError(f"records format {records_format!r}: one of csv, npz, h5", source="records_format")
     from rigidid.io.atomic import check_folder, transaction
     from rigidid.io.records import write_record
 
@@ -977,8 +986,13 @@ def convert(
             write_text_atomic(written[-1], files.modes_csv_text(data.modes, digits=17))
         ids = [s.id for s in data.layout.sensors]
         for k, (values, dt) in enumerate(data.records, start=1):
-            written.append(folder / f"record-{k}.csv")
-            write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+            written.append(folder / f"record-{k}.{records_format}")
+            if records_format == "csv":
+                write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+            else:
+                from rigidid.io.binary_records import write_binary
+
+                write_binary(written[-1], np.arange(values.shape[0]) * dt, values, ids)
     return written
 
 

@@ -990,6 +990,9 @@ def convert(
     output: Annotated[Path, typer.Option("-o", "--output", help="Folder to write into.")] = Path("."),
     units: Units = None,
     geometry: Geometry = None,
+    records_format: Annotated[
+        str, typer.Option("--records-format", help="Format of the record files: csv, npz or h5 (needs h5py).")
+    ] = "csv",
 ) -> None:
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""
     with _reported():
@@ -998,7 +1001,9 @@ def convert(
 
         _check_outputs({}, {"--output": output})
         with OutputSet():  # every file or none
-            written = api.convert(uff_file, output, units=_parse_units(units), geometry=geometry)
+            written = api.convert(
+                uff_file, output, units=_parse_units(units), geometry=geometry, records_format=records_format
+            )
         for path in written:
             sys.stderr.write(f"rigidid: wrote {path}\n")
 

@@ -17,6 +17,7 @@ __all__ = [
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
+    "NonSensorColumnWarning",
     "Notice",
     "PhysicalPlausibilityWarning",
     "RigididError",
@@ -96,3 +97,7 @@ class SensorFitWarning(RigididWarning):
 
 class DampingUnitWarning(RigididWarning):
     """Damping ratios that look like percentages (0.39 meant as 0.39 %)."""
+
+
+class NonSensorColumnWarning(RigididWarning):
+    """A record has columns that are not sensors (force, trigger...): they are left out."""

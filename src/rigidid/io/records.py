@@ -14,10 +14,9 @@ whole or not at all.
 
 from __future__ import annotations
 
-import itertools
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
 from rigidid.io.atomic import atomic_path
+from rigidid.io.binary_records import BINARY_SUFFIXES
 
 __all__ = [
     "DECAY_RATIO",
@@ -51,8 +51,6 @@ by their peak value, then summed)."""
 MIN_ROWS = 16
 """Fewest data rows a record may have."""
 
-_CHUNK_ROWS = 1 << 16
-_TOKEN_ROWS = 200
 
 
 def _where(line: int) -> str:
@@ -61,10 +59,6 @@ def _where(line: int) -> str:
 
 def _column(name: str) -> str:
     return f"column {name!r}"
-
-
-def _split_header(text: str) -> list[str]:
-    return [cell.strip().strip('"').strip("'").strip() for cell in text.rstrip("\r\n").split(",")]
 
 
 def _resolution(token: str) -> float:
@@ -81,27 +75,7 @@ def _resolution(token: str) -> float:
     return float(10.0 ** (exponent - decimals))
 
 
-def _locate_bad_row(lines: list[str], first_line: int, n_fields: int, src: str, header: list[str]) -> InputError:
-    """The precise error for a chunk numpy could not parse (ragged row, non-numeric value)."""
-    line = first_line
-    for text in lines:
-        stripped = text.strip()
-        if stripped:
-            cells = stripped.split(",")
-            if len(cells) != n_fields:
-                return InputError(f"{len(cells)} fields, the header has {n_fields}", source=src, location=_where(line))
-            for name, cell in zip(header, cells, strict=True):
-                try:
-                    float(cell)
-                except ValueError:
-                    return InputError(
-                        f"{cell.strip()!r} is not a number", source=src, location=f"{_where(line)}, {_column(name)}"
-                    )
-        line += 1
-    return InputError("cannot read the data rows", source=src, location=_where(first_line))
-
-
-def _check_time(time: Array, lines: NDArray[np.int64], time_tokens: list[str], src: str) -> float:
+def _check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callable[[], list[str]], src: str) -> float:
     n = time.shape[0]
     dt: float = float(time[-1] - time[0]) / (n - 1)
     if not dt > 0.0:
@@ -113,7 +87,7 @@ def _check_time(time: Array, lines: NDArray[np.int64], time_tokens: list[str], s
     bad = np.flatnonzero(deviation > tolerance)
     if bad.size:
         # allow the rounding of the digits written (two roundings of half a unit each)
-        resolution = min((_resolution(token) for token in time_tokens), default=0.0)
+        resolution = min((_resolution(token) for token in time_tokens()), default=0.0)
         if resolution > 0.5 * typical:
             raise InputError(
                 f"time is written with too few digits (to {resolution:g} s) for the sample interval {typical:.6g} s",
@@ -128,16 +102,15 @@ def _check_time(time: Array, lines: NDArray[np.int64], time_tokens: list[str], s
             f"time step {steps[k]:.6g} s differs from the sample interval {typical:.6g} s by more than "
             f"{100 * TIME_TOLERANCE:g} % (time must be uniformly sampled and increasing)",
             source=src,
-            location=_where(int(lines[k + 1])),
+            location=_where(line_of(k + 1)),
         )
     return dt
 
 
-def _check_decay(data: Array, lines: NDArray[np.int64], src: str) -> None:
-    energy = np.zeros(data.shape[0])
-    for i in range(data.shape[1]):
-        column = data[:, i]
-        energy += (column / np.max(np.abs(column))) ** 2
+def _check_decay(data: Array, line_of: Callable[[int], int], src: str) -> None:
+    from rigidid.core.timedomain.preprocess import channel_energy
+
+    energy = channel_energy(data)
     peak = int(np.argmax(energy))
     after = energy[peak:]
     k = after.shape[0] // 10
@@ -145,18 +118,69 @@ def _check_decay(data: Array, lines: NDArray[np.int64], src: str) -> None:
         raise InputError(
             f"the largest sample is at the end of the record ({after.shape[0]} samples follow it): no free decay",
             source=src,
-            location=_where(int(lines[peak])),
+            location=_where(line_of(peak)),
         )
     head = math.sqrt(float(np.mean(after[:k])))
     tail = math.sqrt(float(np.mean(after[-k:])))
     if not tail < DECAY_RATIO * head:
-        first, last = int(lines[-k]), int(lines[-1])
+        first, last = line_of(data.shape[0] - k), line_of(data.shape[0] - 1)
         raise InputError(
-            f"the signal does not decay: after the peak (row {int(lines[peak])}) the RMS of the last 10 % of the "
+            f"the signal does not decay: after the peak (row {line_of(peak)}) the RMS of the last 10 % of the "
             f"samples is {100 * tail / head:.0f} % of that of the first 10 % (must be below {100 * DECAY_RATIO:g} %)",
             source=src,
             location=f"rows {first}-{last}",
         )
+
+
+def _match_columns(names: Sequence[str], wanted: list[str], src: str, where: str) -> list[int]:
+    """Column index of each of `wanted` in `names`; errors for an unnamed, repeated, unknown or missing name."""
+    seen: dict[str, int] = {}
+    for k, name in enumerate(names):
+        if not name:
+            raise InputError("a column has no name", source=src, location=where)
+        if name in seen:
+            raise InputError(f"column {name!r} appears twice", source=src, location=f"{where}, {_column(name)}")
+        if name not in wanted:
+            raise InputError(
+                f"column {name!r} is not a sensor of the layout", source=src, location=f"{where}, {_column(name)}"
+            )
+        seen[name] = k
+    missing = [s for s in wanted if s not in seen]
+    if missing:
+        raise InputError(
+            f"sensor {missing[0]!r} of the layout has no column"
+            + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
+            source=src,
+            location=where,
+        )
+    return [seen[s] for s in wanted]
+
+
+def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array, float]:
+    """A binary record (layouts in :mod:`rigidid.io.binary_records`), checked like a CSV one.
+
+    Row numbers in messages count samples from 1.
+    """
+    from rigidid.io.binary_records import read_binary
+
+    raw = read_binary(path)
+    if raw.names is None:
+        if raw.data.shape[1] != len(wanted):
+            raise InputError(
+                f"{raw.data.shape[1]} sensor columns after time, the layout has {len(wanted)} sensors",
+                source=src,
+                location=raw.field,
+            )
+        data = raw.data
+    else:
+        order = _match_columns(raw.names, wanted, src, raw.field)
+        data = raw.data if order == list(range(len(order))) else np.ascontiguousarray(raw.data[:, order])
+    n = data.shape[0]
+    if n < MIN_ROWS:
+        raise InputError(f"{n} samples; a record needs at least {MIN_ROWS}", source=src, location=raw.field)
+    time: Array = raw.time if raw.time is not None else np.arange(n, dtype=float) * float(raw.dt or 0.0)
+    data, dt = _validate(data, time, lambda k: (k if k >= 0 else n + k) + 1, list, src, wanted)
+    return data, (float(raw.dt) if raw.time is None and raw.dt is not None else dt)
 
 
 def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tuple[Array, float]:
@@ -165,7 +189,7 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     Parameters
     ----------
     path : str or path-like
-        The ``records.csv`` file of one impact.
+        The record of one impact: ``records.csv`` or a binary file.
     sensor_ids : sequence of str
         The layout's sensor ids: every one must have a column, and every
         column but ``time`` must be one of them.
@@ -192,122 +216,56 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
 
     Notes
     -----
-    The file is read twice: once to count its lines, then in chunks of 65536
-    rows parsed by :func:`numpy.loadtxt` straight into a preallocated array,
-    so memory is the result plus one chunk. Blank lines are skipped (but
-    counted in row numbers).
+    The suffix chooses the reader: ``.npy``, ``.npz``, ``.mat``, ``.h5`` and
+    ``.hdf5`` are binary records (:mod:`rigidid.io.binary_records`, row
+    numbers then count samples from 1); anything else is CSV, parsed in
+    chunks by pandas' C engine into one preallocated array
+    (:mod:`rigidid.io.csv_records`: ``;``/tab separators, decimal comma,
+    ``Time (s)`` headers, force/trigger columns left out with a
+    :class:`~rigidid.errors.NonSensorColumnWarning`), so memory is the result
+    plus one chunk. Blank lines are skipped (but counted in row numbers).
     """
     src = str(path)
     wanted = [str(s) for s in sensor_ids]
     if len(set(wanted)) != len(wanted):
         raise InputError("the layout has a sensor id twice", source=src)
     p = Path(path)
-    try:
-        with p.open("rb") as raw:
-            n_lines = 0
-            last_byte = b""
-            while block := raw.read(1 << 24):
-                n_lines += block.count(b"\n")
-                last_byte = block[-1:]
-        if last_byte and last_byte != b"\n":
-            n_lines += 1
-        fh = p.open("r", encoding="utf-8-sig", newline="")
-    except FileNotFoundError:
-        raise InputError("file not found", source=src) from None
-    except IsADirectoryError:
-        raise InputError("is a folder, not a file", source=src) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror}", source=src) from None
+    if p.suffix.lower() in BINARY_SUFFIXES:
+        return _read_binary_record(p, wanted, src)
+    from rigidid.io.csv_records import read_csv_columns
 
-    with fh:
-        try:
-            header_text = fh.readline()
-        except UnicodeDecodeError:
-            raise InputError("not a text file (UTF-8)", source=src, location=_where(1)) from None
-        if not header_text.strip():
-            raise InputError("the file is empty (no header)", source=src, location=_where(1))
-        header = _split_header(header_text)
-        if header[0].lower() != "time":
-            where = _column(header[0]) if "time" not in [h.lower() for h in header] else _column("time")
-            raise InputError(
-                "the first column must be 'time' (header: time,<sensor id>,<sensor id>,...)",
-                source=src,
-                location=f"{_where(1)}, {where}",
-            )
-        names = header[1:]
-        seen: set[str] = set()
-        for name in names:
-            if not name:
-                raise InputError("a column has no name", source=src, location=_where(1))
-            if name in seen:
-                raise InputError(f"column {name!r} appears twice", source=src, location=f"{_where(1)}, {_column(name)}")
-            seen.add(name)
-            if name not in wanted:
-                raise InputError(
-                    f"column {name!r} is not a sensor of the layout",
-                    source=src,
-                    location=f"{_where(1)}, {_column(name)}",
-                )
-        missing = [s for s in wanted if s not in seen]
-        if missing:
-            raise InputError(
-                f"sensor {missing[0]!r} of the layout has no column"
-                + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
-                source=src,
-                location=_where(1),
-            )
-        n_fields = len(header)
-        order = [names.index(s) + 1 for s in wanted]
+    raw = read_csv_columns(p, wanted)
+    n = raw.time.shape[0]
+    if n < MIN_ROWS:
+        last = raw.line_of(n - 1) if n else 1
+        raise InputError(f"{n} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(last))
+    return _validate(raw.data, raw.time, raw.line_of, raw.time_tokens, src, wanted)
 
-        capacity = max(n_lines - 1, 0)
-        data = np.empty((capacity, len(wanted)))
-        time = np.empty(capacity)
-        lines = np.empty(capacity, dtype=np.int64)
-        filled = 0
-        line = 2
-        time_tokens: list[str] = []
-        try:
-            while chunk := list(itertools.islice(fh, _CHUNK_ROWS)):
-                try:
-                    values = np.loadtxt(chunk, delimiter=",", dtype=float, ndmin=2)
-                except ValueError:
-                    raise _locate_bad_row(chunk, line, n_fields, src, header) from None
-                if values.shape[0] and values.shape[1] != n_fields:
-                    raise _locate_bad_row(chunk, line, n_fields, src, header)
-                rows = values.shape[0]
-                if rows == len(chunk):
-                    row_lines = np.arange(line, line + rows)
-                else:
-                    row_lines = np.array([line + i for i, text in enumerate(chunk) if text.strip()], dtype=np.int64)
-                if rows:
-                    if filled + rows > capacity:
-                        raise InputError("the file changed while it was read", source=src)
-                    data[filled : filled + rows] = values[:, order]
-                    time[filled : filled + rows] = values[:, 0]
-                    lines[filled : filled + rows] = row_lines
-                    filled += rows
-                    tail = [text for text in chunk[-_TOKEN_ROWS:] if text.strip()]
-                    time_tokens = [text.split(",", 1)[0] for text in tail]
-                line += len(chunk)
-        except UnicodeDecodeError:
-            raise InputError("not a text file (UTF-8)", source=src, location=_where(line)) from None
 
-    data, time, lines = data[:filled], time[:filled], lines[:filled]
-    if filled < MIN_ROWS:
-        raise InputError(
-            f"{filled} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(max(line - 1, 1))
-        )
-    finite = np.isfinite(data)
-    if not np.isfinite(time).all() or not finite.all():
+def _validate(
+    data: Array,
+    time: Array,
+    line_of: Callable[[int], int],
+    time_tokens: Callable[[], list[str]],
+    src: str,
+    wanted: list[str],
+) -> tuple[Array, float]:
+    """The checks every record passes whatever its format: finite, uniform time, no dead channel, decay."""
+    if not np.isfinite(time).all() or not np.isfinite(data).all():
+        finite = np.isfinite(data)
         bad_rows = np.flatnonzero(~np.isfinite(time) | ~finite.all(axis=1))
         k = int(bad_rows[0])
         name = "time" if not np.isfinite(time[k]) else wanted[int(np.argmin(finite[k]))]
-        raise InputError("a value is NaN or infinite", source=src, location=f"{_where(int(lines[k]))}, {_column(name)}")
-    dt = _check_time(time, lines, time_tokens, src)
+        raise InputError("a value is NaN or infinite", source=src, location=f"{_where(line_of(k))}, {_column(name)}")
+    dt = _check_time(time, line_of, time_tokens, src)
+    peaks = np.zeros(data.shape[1])
+    step = max(1, (1 << 16) // max(1, data.shape[1]))
+    for start in range(0, data.shape[0], step):
+        np.maximum(peaks, np.max(np.abs(data[start : start + step]), axis=0), out=peaks)
     for i, name in enumerate(wanted):
-        if not np.any(data[:, i]):
+        if not peaks[i] > 0.0:
             raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
-    _check_decay(data, lines, src)
+    _check_decay(data, line_of, src)
     return data, dt
 
 

@@ -1,0 +1,266 @@
+"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat`` and HDF5 ``.h5``.
+
+The layouts (also in ``docs/FORMATS.md``):
+
+``.npy``
+    One 2-D float array, samples x (1 + sensors): column 0 is time (s), the
+    other columns are the layout's sensors **in layout order** (a ``.npy``
+    file has no room for names).
+``.npz``, ``.mat``, ``.h5``/``.hdf5``
+    Named arrays (``.h5``: datasets at the root of the file), either
+
+    - ``data`` (samples x channels) and ``channels`` (the channel names, one
+      per column: an array of strings, a MATLAB cell array or char matrix), or
+    - one 1-D array per channel, named by its sensor id;
+
+    and the sampling, one of
+
+    - ``time`` (1-D, s, uniformly sampled; checked like the CSV time column),
+    - ``dt`` (scalar, s) or ``sample_rate`` (scalar, Hz): time starts at 0.
+
+    In ``.h5`` files ``dt`` and ``sample_rate`` may also be attributes of the
+    root or of the ``data`` dataset. Names are matched exactly (surrounding
+    spaces removed), as the CSV reader matches its header.
+
+This module only opens the file and returns the named columns; the checks
+shared with the CSV reader (sensor ids, finite values, uniform time, decay)
+are in :mod:`rigidid.io.records`. ``h5py`` is an optional dependency (the
+``hdf5`` extra), imported only when an HDF5 file is read.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.errors import InputError
+
+__all__ = ["BINARY_SUFFIXES", "RawRecord", "read_binary", "write_binary"]
+
+Array = NDArray[np.float64]
+
+BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5")
+
+_RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
+
+
+@dataclass(frozen=True)
+class RawRecord:
+    """The columns of a binary record before they are checked against the layout.
+
+    Attributes
+    ----------
+    names : list of str or None
+        Channel names, one per column of `data`; None for ``.npy`` (layout order).
+    data : ndarray, shape (n, k)
+    time : ndarray, shape (n,), or None
+    dt : float or None
+        From ``dt`` or ``1 / sample_rate`` when there is no `time`.
+    field : str
+        Where the channels came from, for messages (``"field 'data'"``).
+    """
+
+    names: list[str] | None
+    data: Array
+    time: Array | None
+    dt: float | None
+    field: str
+
+
+def _field(name: str) -> str:
+    return f"field {name!r}"
+
+
+def _floats(value: Any, src: str, name: str) -> Array:
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("is not numeric", source=src, location=_field(name)) from None
+
+
+def _scalar(value: Any, src: str, name: str) -> float:
+    arr = _floats(value, src, name)
+    if arr.size != 1:
+        raise InputError(f"must be one number, has {arr.size} values", source=src, location=_field(name))
+    number = float(arr.reshape(-1)[0])
+    if not (math.isfinite(number) and number > 0.0):
+        raise InputError(f"must be a positive number, is {number:g}", source=src, location=_field(name))
+    return number
+
+
+def _names(value: Any, src: str) -> list[str]:
+    arr = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
+    if arr.dtype.kind in "SU" and arr.ndim == 2:  # MATLAB char matrix: one name per row
+        return ["".join(str(c) for c in row).strip() for row in arr]
+    out = []
+    for item in np.ravel(arr):
+        if isinstance(item, np.ndarray):  # MATLAB cell array element
+            item = item.item() if item.size == 1 else "".join(str(c) for c in np.ravel(item))
+        if isinstance(item, bytes):
+            item = item.decode("utf-8", errors="replace")
+        out.append(str(item).strip())
+    return out
+
+
+def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> RawRecord:
+    """A record from named arrays (npz, mat, h5 root)."""
+    time: Array | None = None
+    dt: float | None = None
+    if "time" in fields:
+        time = _floats(fields["time"], src, "time").reshape(-1) if np.ndim(fields["time"]) else None
+        if time is None:
+            raise InputError("must be a 1-D array of sample times", source=src, location=_field("time"))
+    for key in ("dt", "sample_rate"):
+        for where in (fields, attrs):
+            if key in where and time is None and dt is None:
+                value = _scalar(where[key], src, key)
+                dt = value if key == "dt" else 1.0 / value
+    if time is None and dt is None:
+        raise InputError("no sampling: give an array 'time', or a scalar 'dt' or 'sample_rate'", source=src)
+    if "data" in fields:
+        data = _floats(fields["data"], src, "data")
+        if data.ndim == 1:
+            data = data.reshape(-1, 1)
+        if data.ndim != 2:
+            raise InputError(
+                f"must be 2-D (samples x channels), is {data.ndim}-D", source=src, location=_field("data")
+            )
+        if "channels" not in fields:
+            raise InputError(
+                "'data' needs 'channels', the names of its columns", source=src, location=_field("channels")
+            )
+        names = _names(fields["channels"], src)
+        if len(names) != data.shape[1]:
+            if len(names) == data.shape[0] and data.shape[1] != len(names):
+                data = data.T  # channels x samples, as MATLAB users often store it
+            else:
+                raise InputError(
+                    f"{len(names)} names for {data.shape[1]} columns of 'data'", source=src, location=_field("channels")
+                )
+        field = _field("data")
+    else:
+        names = [k for k in fields if k not in _RESERVED and not k.startswith("__")]
+        if not names:
+            raise InputError("no channels: give 'data' and 'channels', or one array per sensor id", source=src)
+        columns = []
+        n = None
+        for name in names:
+            col = _floats(fields[name], src, name).reshape(-1)
+            if n is not None and col.shape[0] != n:
+                raise InputError(f"has {col.shape[0]} samples, others {n}", source=src, location=_field(name))
+            n = col.shape[0]
+            columns.append(col)
+        data = np.column_stack(columns)
+        names = [n.strip() for n in names]
+        field = "the channel arrays"
+    if time is not None and time.shape[0] != data.shape[0]:
+        raise InputError(
+            f"has {time.shape[0]} samples, the channels {data.shape[0]}", source=src, location=_field("time")
+        )
+    return RawRecord(names, np.ascontiguousarray(data), time, dt, field)
+
+
+def _read_h5(path: Path, src: str) -> RawRecord:
+    try:
+        import h5py
+    except ImportError:
+        raise InputError("reading HDF5 needs h5py: pip install 'rigidid[hdf5]'", source=src) from None
+    try:
+        fh = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not an HDF5 file ({exc})", source=src) from None
+    with fh:
+        fields: dict[str, Any] = {}
+        for key, item in fh.items():
+            if isinstance(item, h5py.Dataset):
+                fields[key] = item[()]
+        attrs: dict[str, Any] = dict(fh.attrs)
+        if "data" in fh and isinstance(fh["data"], h5py.Dataset):
+            attrs.update({k: v for k, v in fh["data"].attrs.items() if k in ("dt", "sample_rate")})
+    return _from_mapping(fields, attrs, src)
+
+
+def read_binary(path: str | os.PathLike[str]) -> RawRecord:
+    """Open a binary record and return its named columns (layouts in the module documentation).
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the field: missing file, not a file of
+        its suffix's format, missing or misshapen fields, h5py not installed.
+    """
+    src = str(path)
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if not p.exists():
+        raise InputError("file not found", source=src)
+    if p.is_dir():
+        raise InputError("is a folder, not a file", source=src)
+    if suffix in (".h5", ".hdf5"):
+        return _read_h5(p, src)
+    if suffix == ".npy":
+        try:
+            arr = np.load(p, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            raise InputError(f"not a .npy file ({exc})", source=src) from None
+        arr = _floats(arr, src, "array")
+        if arr.ndim != 2 or arr.shape[1] < 2:
+            raise InputError(
+                f"must be 2-D, samples x (time + sensors), is {arr.shape}", source=src, location=_field("array")
+            )
+        return RawRecord(None, np.ascontiguousarray(arr[:, 1:]), np.ascontiguousarray(arr[:, 0]), None, "columns")
+    if suffix == ".npz":
+        try:
+            with np.load(p, allow_pickle=False) as npz:
+                fields = {key: npz[key] for key in npz.files}
+        except (ValueError, OSError, EOFError) as exc:
+            raise InputError(f"not a .npz file ({exc})", source=src) from None
+        return _from_mapping(fields, {}, src)
+    if suffix == ".mat":
+        from scipy.io import loadmat
+
+        try:
+            mat = loadmat(p, squeeze_me=True, chars_as_strings=True)
+        except Exception as exc:  # scipy raises several unrelated types on a bad file
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(f"not a MATLAB file ({reason})", source=src) from None
+        return _from_mapping({k: v for k, v in mat.items() if not k.startswith("__")}, {}, src)
+    raise InputError(f"unknown record suffix {suffix!r} (one of .csv {' '.join(BINARY_SUFFIXES)})", source=src)
+
+
+def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike, sensor_ids: Sequence[str]) -> None:
+    """Write a record as ``.npz`` or ``.h5`` (``time``, ``data``, ``channels``), atomically.
+
+    Raises
+    ------
+    InputError
+        For another suffix, or ``.h5`` without h5py.
+    """
+    from rigidid.io.atomic import atomic_path
+
+    p = Path(path)
+    suffix = p.suffix.lower()
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(data, dtype=float)
+    names = np.array([str(s) for s in sensor_ids])
+    if suffix == ".npz":
+        with atomic_path(p) as tmp, tmp.open("wb") as fh:
+            np.savez(fh, time=t, data=x, channels=names)
+    elif suffix in (".h5", ".hdf5"):
+        try:
+            import h5py
+        except ImportError:
+            raise InputError("writing HDF5 needs h5py: pip install 'rigidid[hdf5]'", source=str(p)) from None
+        with atomic_path(p) as tmp, h5py.File(tmp, "w") as fh:
+            fh.create_dataset("time", data=t)
+            fh.create_dataset("data", data=x)
+            fh.create_dataset("channels", data=[s.encode("utf-8") for s in names])
+    else:
+        raise InputError(f"records are written as .csv, .npz or .h5, not {suffix!r}", source=str(p))
