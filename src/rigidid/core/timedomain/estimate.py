@@ -19,12 +19,12 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.timedomain.ar import ar_fits, ar_modes, f_test_order
 from rigidid.core.timedomain.era import era_basis, era_modes
 from rigidid.core.timedomain.gram import lagged_gram
-from rigidid.core.timedomain.preprocess import Impact, auto_decimation, band_limit, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import Impact, band_limit, content_range, decimation_for, find_impact
 from rigidid.core.timedomain.preprocess import decimate as decimate_record
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
 
-__all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "estimate_modes"]
+__all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "block_rows", "decimation_factors", "estimate_modes"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -37,6 +37,8 @@ DEFAULT_METHOD: Method = "era"
 _DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest frequency kept
 _MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
 _MIN_BLOCK_ROWS = 20  # ERA: block rows of the Hankel matrix, at least
+_ROW_PERIODS = 2.0  # ERA: block rows span this many periods of the lowest mode
+_MAX_GRAM = 768  # ERA: block rows x channels fitted, at most (the Gram matrix is its square)
 _RANK_PER_MODE = 2  # principal components kept per mode sought
 _AR_EXTRA_STATES = 256  # AR: lags beyond the minimum, times the channels fitted
 _AR_SWEEP_MODELS = 16  # AR: about this many orders are solved for poles
@@ -297,18 +299,12 @@ def estimate_modes(
         decays.append(rec[impact.start :])
 
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
+    content = content_range(decays, dt)
     if decimate is not None:
         factors = [decimate]
     else:
-        if band is not None:
-            first = decimation_for(float(band[1]), dt, margin=_DECIMATION_MARGIN)
-        else:
-            first = auto_decimation(decays, dt, margin=_DECIMATION_MARGIN)
-        shortest = min(d.shape[0] for d in decays)
-        factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
-        while factors[-1] > 1 and band is None:
-            factors.append(max(1, factors[-1] // 3))
-    options = _Options(method, n_modes, band, max_order, crit)
+        factors = decimation_factors(decays, dt, band, content)
+    options = _Options(method, n_modes, band, max_order, crit, content)
     for attempt, factor in enumerate(factors):
         try:
             result = _estimate(decays, dt, factor, options)
@@ -320,6 +316,83 @@ def estimate_modes(
     raise AssertionError("unreachable")
 
 
+def decimation_factors(
+    decays: Sequence[Array], dt: float, band: tuple[float, float] | None, content: tuple[float, float]
+) -> list[int]:
+    """Decimation factors to try, first the largest the band allows.
+
+    Parameters
+    ----------
+    decays : sequence of ndarray, shape (n_k, p)
+        Free decays.
+    dt : float
+        Sample interval (s).
+    band : (float, float) or None
+        The user's band (Hz).
+    content : (float, float)
+        Lowest and highest frequency standing out of the noise floor
+        (:func:`~rigidid.core.timedomain.preprocess.content_range`).
+
+    Returns
+    -------
+    list of int
+        Descending factors, ending at 1: the first keeps the new Nyquist
+        frequency 4 times above the highest frequency kept, which is the
+        band's upper edge or, if lower, the detected content (a band reaching
+        beyond the content must not cost resolution); each next one is a
+        third of the previous. The first leaves at least 1000 samples in the
+        shortest record.
+
+    Notes
+    -----
+    A band only ever lowers the highest frequency kept, so passing a band
+    never decimates less than passing none.
+    """
+    f_high = content[1]
+    if band is not None:
+        f_high = min(float(band[1]), f_high)
+    first = decimation_for(f_high, dt, margin=_DECIMATION_MARGIN)
+    shortest = min(d.shape[0] for d in decays)
+    factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
+    while factors[-1] > 1:
+        factors.append(max(1, factors[-1] // 3))
+    return factors
+
+
+def block_rows(n_states: int, channels: int, n_modes: int, samples: int, dt: float, f_low: float) -> int:
+    """Block rows of the ERA Hankel matrix.
+
+    Parameters
+    ----------
+    n_states : int
+        Largest model order of the sweep.
+    channels : int
+        Channels (principal components) fitted.
+    n_modes : int
+        Modes sought.
+    samples : int
+        Samples in the shortest (decimated) record.
+    dt : float
+        Sample interval after decimation (s).
+    f_low : float
+        Lowest frequency of interest (Hz), 0 if unknown.
+
+    Returns
+    -------
+    int
+        At least enough rows for the model order and 20; raised so the rows
+        span two periods of the lowest frequency (what separates close
+        modes there: their resolution grows with the span of lags), but at
+        most a quarter of the shortest record and 768 rows x channels.
+    """
+    rows = max(math.ceil(n_states / channels) + 1, math.ceil(8 * n_modes / channels), _MIN_BLOCK_ROWS)
+    if f_low > 0.0:
+        span = math.ceil(_ROW_PERIODS / (f_low * dt))
+        cap = min(samples // 4, _MAX_GRAM // max(channels, 1))
+        rows = max(rows, min(span, cap))
+    return rows
+
+
 @dataclass(frozen=True)
 class _Options:
     method: str
@@ -327,6 +400,7 @@ class _Options:
     band: tuple[float, float] | None
     max_order: int | None
     criteria: Criteria
+    content: tuple[float, float] = (0.0, math.inf)
 
 
 def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
@@ -381,7 +455,8 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     else:
         n_max = max_order if max_order is not None else max(8 * n_modes, 48)
         n_max += n_max % 2
-        rows = max(math.ceil(n_max / r) + 1, math.ceil(8 * n_modes / r), _MIN_BLOCK_ROWS)
+        f_low = max(fit_band[0], options.content[0]) if band is not None else options.content[0]
+        rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, f_low)
         if min_samples <= 2 * rows + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
         gram, _ = lagged_gram(fitted, rows)
