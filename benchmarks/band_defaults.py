@@ -20,10 +20,14 @@ from pathlib import Path
 import numpy as np
 
 from rigidid import api
-from rigidid.io.files import ModeTable, layout_arrays, load_body, load_layout
+from rigidid.io.files import layout_arrays, load_body, load_layout
 
 ROOT = Path(__file__).resolve().parent.parent
-PAPER_IMPACTS = [((6.75, 1.5, 0.0), (0.3, 0.5, -1.0)), ((-8.4, 0.75, -3.25), (1.0, 0.7, 0.2)), ((4.5, -4.0, 0.0), (-0.5, 1.0, 0.6))]
+PAPER_IMPACTS = [
+    ((6.75, 1.5, 0.0), (0.3, 0.5, -1.0)),
+    ((-8.4, 0.75, -3.25), (1.0, 0.7, 0.2)),
+    ((4.5, -4.0, 0.0), (-0.5, 1.0, 0.6)),
+]
 
 
 def case(body_path: Path, layout_path: Path, impacts, rate, duration, noise, seed):  # type: ignore[no-untyped-def]
@@ -35,7 +39,9 @@ def case(body_path: Path, layout_path: Path, impacts, rate, duration, noise, see
     if impacts is None:
         far = int(np.argmax(np.linalg.norm(pos - pos[0], axis=1)))
         impacts = [(pos[0], (1.0, 1.0, 1.0)), (pos[far], (-1.0, 1.0, -1.0))]
-    recs = impulse_records(body, pos, dirs, impacts, sample_rate=rate, duration=duration, pretrigger=0.1, noise=noise, seed=seed)
+    recs = impulse_records(
+        body, pos, dirs, impacts, sample_rate=rate, duration=duration, pretrigger=0.1, noise=noise, seed=seed
+    )
     return body, lay, [(r, 1.0 / rate) for r in recs]
 
 
@@ -44,7 +50,7 @@ def run(body, lay, records, band, refine):  # type: ignore[no-untyped-def]
 
     try:
         table, est = api.estimate_modes(lay, records, band=band)
-    except Exception as exc:  # noqa: BLE001 - a benchmark reports every failure
+    except Exception as exc:
         return None, f"{type(exc).__name__}: {exc}"
     result = api.identify(lay, table)
     ident = result.identification
@@ -77,7 +83,8 @@ def table(title, body_path, layout_path, impacts, rate, duration, noise, bands, 
         med, worst = np.median(a, axis=0), np.max(a, axis=0)
         name = "default" if band is None else f"{band[0]:g} {band[1]:g}"
         print(
-            f"| {name} | {len(rows)}/{seeds} | {100 * med[0]:.2f} ({100 * worst[0]:.2f}) | {med[1]:.4f} ({worst[1]:.4f}) "
+            f"| {name} | {len(rows)}/{seeds} | {100 * med[0]:.2f} ({100 * worst[0]:.2f}) "
+            f"| {med[1]:.4f} ({worst[1]:.4f}) "
             f"| {100 * med[2]:.3f} ({100 * worst[2]:.3f}) | {sorted(set(int(x) for x in a[:, 3] if np.isfinite(x)))} |"
         )
         for why in sorted(set(fails)):
@@ -94,13 +101,27 @@ def main() -> None:
     print(f"refinement on the records: {refine}")
     table(
         "paper-like regime (in, lb; body 20 in across), 6 sensors, 3 impacts, 256 Hz, 30 s, 3 % noise",
-        ROOT / "benchmarks" / "paper_like_body.json", ROOT / "samples" / "paper-1994" / "layout.json",
-        PAPER_IMPACTS, 256.0, 30.0, 0.03, [None, (1.0, 20.0), (4.0, 10.0), (2.0, 40.0)], args.seeds, refine,
+        ROOT / "benchmarks" / "paper_like_body.json",
+        ROOT / "samples" / "paper-1994" / "layout.json",
+        PAPER_IMPACTS,
+        256.0,
+        30.0,
+        0.03,
+        [None, (1.0, 20.0), (4.0, 10.0), (2.0, 40.0)],
+        args.seeds,
+        refine,
     )
     table(
         "engine-on-mounts (mm, kg), 12 sensors, 2 impacts, 512 Hz, 8 s, 1 % noise",
-        ROOT / "samples" / "engine-on-mounts" / "body.json", ROOT / "samples" / "engine-on-mounts" / "layout.json",
-        None, 512.0, 8.0, 0.01, [None, (2.0, 40.0), (5.0, 25.0)], args.seeds, refine,
+        ROOT / "samples" / "engine-on-mounts" / "body.json",
+        ROOT / "samples" / "engine-on-mounts" / "layout.json",
+        None,
+        512.0,
+        8.0,
+        0.01,
+        [None, (2.0, 40.0), (5.0, 25.0)],
+        args.seeds,
+        refine,
     )
     print(f"\n{time.perf_counter() - t0:.0f} s", file=sys.stderr)
 

@@ -55,3 +55,11 @@ estimated from records (1 % noise); observed below 2 % (AR), 0.4 % (ERA)."""
 
 TIMEDOMAIN_EXACT_REL = 1e-6
 """Relative error allowed on modes estimated from noise-free simulated records."""
+
+REGIME_DAMPING_REL = 0.05
+"""Record route on the paper-like regime (tests/core/test_regimes.py): relative damping error of
+every mode, from the issue's requirement (observed worst 0.6 % over 5 seeds)."""
+
+REGIME_CG_ABS_IN = 0.05
+"""Record route on the paper-like regime: CG error (in) of a 20 in body, the issue's requirement
+(observed median 0.005 in, worst 0.016 in over 5 seeds)."""

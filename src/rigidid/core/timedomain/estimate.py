@@ -198,10 +198,13 @@ def estimate_modes(
         Number of modes to return (6 for the rigid-body modes).
     band : (float, float), optional
         Frequency band of interest (Hz): only poles strictly inside it are
-        kept, and the decimated records are band-pass filtered (zero-phase
-        Butterworth, order 4) with edges 25 % outside it, so that the
-        filter's shaping of the noise does not put poles inside the band.
-        Default: 0 to the Nyquist frequency after decimation.
+        kept, and, when the records hold content more than 25 % above the
+        band, the decimated records are low-pass filtered (zero-phase
+        Butterworth, order 4) 25 % above it. A band that holds all the
+        content changes nothing but the poles kept (no high-pass or
+        band-pass filter: its start-up transient on the abrupt start of a
+        free decay costs accuracy). Default: 0 to the Nyquist frequency
+        after decimation.
     max_order : int, optional
         Highest model order of the sweep: the number of lags of the AR model,
         or the number of states of the ERA realization. Default: AR
@@ -210,12 +213,14 @@ def estimate_modes(
         fitted (see Notes).
     decimate : int, optional
         Decimation factor. Default: chosen so that the new Nyquist frequency
-        is at least 4 times the band's upper edge, or, without a band, 4 times
-        the highest frequency standing out of the noise floor of the spectrum
-        (:func:`~rigidid.core.timedomain.preprocess.content_range`); if fewer
-        than `n_modes` modes are then found, the estimation is repeated with
-        the factor divided by 3 until it is 1. An automatic factor leaves at
-        least 1000 samples in the shortest record. 1 disables decimation.
+        is at least 4 times the highest frequency standing out of the noise
+        floor of the spectrum
+        (:func:`~rigidid.core.timedomain.preprocess.content_range`), or the
+        band's upper edge if that is lower (:func:`decimation_factors`: a band
+        never decimates less than no band); if fewer than `n_modes` modes are
+        then found, the estimation is repeated with the factor divided by 3
+        until it is 1. An automatic factor leaves at least 1000 samples in the
+        shortest record. 1 disables decimation.
     trim : bool
         Find the impact in each record and keep only the free decay after it
         (:func:`~rigidid.core.timedomain.preprocess.find_impact`). With false
@@ -300,10 +305,7 @@ def estimate_modes(
 
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
     content = content_range(decays, dt)
-    if decimate is not None:
-        factors = [decimate]
-    else:
-        factors = decimation_factors(decays, dt, band, content)
+    factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
     options = _Options(method, n_modes, band, max_order, crit, content)
     for attempt, factor in enumerate(factors):
         try:
@@ -414,8 +416,13 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     # (3) band limit
     if band is not None:
         fit_band = (float(band[0]), min(float(band[1]), nyquist_fit))
-        filter_band = (fit_band[0] / _FILTER_WIDENING, fit_band[1] * _FILTER_WIDENING)
-        decays = [band_limit(d, dt_fit, filter_band) for d in decays]
+        # low-pass only, and only with content above the band: a high-pass or
+        # band-pass filter's start-up transient on the abrupt start of a free
+        # decay costs accuracy (offsets and drift give poles at 0 Hz, outside
+        # the band, anyway), so a band holding all the content filters nothing
+        high_edge = fit_band[1] * _FILTER_WIDENING
+        if options.content[1] > high_edge and high_edge < nyquist_fit:
+            decays = [band_limit(d, dt_fit, (0.0, high_edge)) for d in decays]
     else:
         fit_band = (0.0, nyquist_fit)
 
@@ -455,7 +462,7 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     else:
         n_max = max_order if max_order is not None else max(8 * n_modes, 48)
         n_max += n_max % 2
-        f_low = max(fit_band[0], options.content[0]) if band is not None else options.content[0]
+        f_low = options.content[0]
         rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, f_low)
         if min_samples <= 2 * rows + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
