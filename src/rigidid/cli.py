@@ -120,6 +120,14 @@ Decimate = Annotated[
 NModes = Annotated[
     int, typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).")
 ]
+Refine = Annotated[
+    bool,
+    typer.Option(
+        "--refine/--no-refine",
+        help="With --records: refine the body by an output-error fit to the records, with Cramér-Rao intervals.",
+        rich_help_panel=_TIME,
+    ),
+]
 Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
@@ -257,6 +265,7 @@ def _identify(
     noise: dict[str, float],
     seed: int,
     resample: int = 0,
+    refine: bool = True,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share."""
     from rigidid import api
@@ -285,6 +294,11 @@ def _identify(
         noise=noise,
         seed=seed,
     )
+    if refine and estimate is not None and method == "structured":
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            result = api.with_refinement(result, data.records, estimate, progress=progress)
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
@@ -339,6 +353,7 @@ def identify(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    refine: Refine = True,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
@@ -351,7 +366,7 @@ def identify(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample,
+            noise=noise, seed=seed, resample=resample, refine=refine,
         )  # fmt: skip
         if json_path is not None:
             out = result_to_dict(result)
@@ -568,6 +583,7 @@ def report(
     max_order: MaxOrder = None,
     decimate: Decimate = None,
     units: Units = None,
+    refine: Refine = True,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
@@ -582,7 +598,7 @@ def report(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample,
+            noise=noise, seed=seed, resample=resample, refine=refine,
         )  # fmt: skip
         mounts = None
         if body is not None:

@@ -13,6 +13,7 @@ __all__ = [
     "IllConditionedWarning",
     "InputError",
     "PhysicalPlausibilityWarning",
+    "RefinementWarning",
     "RigididError",
     "RigididWarning",
 ]
@@ -60,3 +61,7 @@ class PhysicalPlausibilityWarning(RigididWarning):
 
 class IllConditionedWarning(RigididWarning):
     """A step of the computation is badly conditioned; results may be inaccurate."""
+
+
+class RefinementWarning(RigididWarning):
+    """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""

@@ -104,6 +104,10 @@ def result_to_dict(result: IdentifyResult) -> dict[str, Any]:
         from rigidid.core.record_spread import record_spread_to_dict
 
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
+    if result.record_bound is not None:
+        from rigidid.core.timedomain.refine import record_bound_to_dict
+
+        out["uncertainty_records_crb"] = record_bound_to_dict(result.record_bound)
     return out
 
 
@@ -209,6 +213,14 @@ def result_tables(result: IdentifyResult) -> Group:
         )
         caption = "spread of the segment estimates scaled to all the data; noise only, not sensor placement errors"
         parts.append(_interval_table(result, spread, title, caption))
+    if result.record_bound is not None:
+        bound = result.record_bound
+        title = "Uncertainty from the records (Cramér-Rao bound at the output-error fit, 95 % intervals)"
+        caption = (
+            f"{bound.residuals} residuals, normalised cost {bound.normalised_cost:.3g} (about 1 at a good fit), "
+            f"noise levels from the {bound.noise_from}; noise only, not sensor placement errors"
+        )
+        parts.append(_interval_table(result, bound, title, caption))
 
     diag = ident.diagnostics
     modes = Table(title="Modes used", title_justify="left")
