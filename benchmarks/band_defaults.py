@@ -46,13 +46,19 @@ def case(body_path: Path, layout_path: Path, impacts, rate, duration, noise, see
 
 
 def run(body, lay, records, band, refine):  # type: ignore[no-untyped-def]
+    import warnings
+
     from rigidid.core.simulate import body_modes
+
+    warnings.simplefilter("ignore")
 
     try:
         table, est = api.estimate_modes(lay, records, band=band)
     except Exception as exc:
         return None, f"{type(exc).__name__}: {exc}"
     result = api.identify(lay, table)
+    if refine:
+        result = api.with_refinement(result, records, est)
     ident = result.identification
     _, pos, dirs = layout_arrays(lay)
     truth = body_modes(body, pos, dirs)

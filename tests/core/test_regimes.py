@@ -73,5 +73,5 @@ def test_band_never_decimates_less_than_no_band() -> None:
 def test_block_rows_span_the_lowest_period_within_caps() -> None:
     assert block_rows(48, 6, 6, 10000, 1.0 / 64.0, 5.0) == 26  # two periods of 5 Hz at 64 Hz
     assert block_rows(48, 6, 6, 10000, 1.0 / 64.0, 0.0) == 20  # no frequency: the old minimum
-    assert block_rows(48, 12, 6, 10000, 1.0 / 512.0, 0.1) == 64  # capped at 768 rows x channels
+    assert block_rows(48, 12, 6, 10000, 1.0 / 512.0, 0.1) == 32  # capped at 384 rows x channels
     assert block_rows(48, 6, 6, 100, 1.0 / 512.0, 0.1) == 25  # capped at a quarter of the record

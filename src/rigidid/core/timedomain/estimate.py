@@ -38,7 +38,7 @@ _DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest freq
 _MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
 _MIN_BLOCK_ROWS = 20  # ERA: block rows of the Hankel matrix, at least
 _ROW_PERIODS = 2.0  # ERA: block rows span this many periods of the lowest mode
-_MAX_GRAM = 768  # ERA: block rows x channels fitted, at most (the Gram matrix is its square)
+_MAX_GRAM = 384  # ERA: block rows x channels fitted, at most (the Gram matrix is its square)
 _RANK_PER_MODE = 2  # principal components kept per mode sought
 _AR_EXTRA_STATES = 256  # AR: lags beyond the minimum, times the channels fitted
 _AR_SWEEP_MODELS = 16  # AR: about this many orders are solved for poles
@@ -385,7 +385,7 @@ def block_rows(n_states: int, channels: int, n_modes: int, samples: int, dt: flo
         At least enough rows for the model order and 20; raised so the rows
         span two periods of the lowest frequency (what separates close
         modes there: their resolution grows with the span of lags), but at
-        most a quarter of the shortest record and 768 rows x channels.
+        most a quarter of the shortest record and 384 rows x channels.
     """
     rows = max(math.ceil(n_states / channels) + 1, math.ceil(8 * n_modes / channels), _MIN_BLOCK_ROWS)
     if f_low > 0.0:

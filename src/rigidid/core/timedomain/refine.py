@@ -348,7 +348,8 @@ def refine_body(
         The start: the structured identification from the estimated modes
         (layout units, per mass, at the CG).
     max_evaluations : int
-        Largest number of residual evaluations.
+        Largest number of residual evaluations; 0 evaluates the start only
+        (its Cramér-Rao bound, e.g. at the truth of a simulation).
 
     Returns
     -------
@@ -430,8 +431,11 @@ def refine_body(
     def jac(theta: Array) -> Array:
         return both(theta)[1]
 
-    fit = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=max_evaluations)
-    theta, nfev = fit.x, int(fit.nfev)
+    if max_evaluations > 0:
+        fit = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=max_evaluations)
+        theta, nfev = fit.x, int(fit.nfev)
+    else:
+        theta, nfev = theta0, 0
     r, jm = both(theta)
     n_res = r.size
     dof = max(n_res - N_PARAMETERS - len(data.decays) * (12 + pos.shape[0]), 1)
