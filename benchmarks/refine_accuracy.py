@@ -18,8 +18,8 @@ import time
 import warnings
 
 import numpy as np
-from records_scenario import BODY, CG, IMPACTS, INERTIA, MASS, layout
 
+from records_scenario import BODY, CG, IMPACTS, INERTIA, MASS, layout
 from rigidid.core.identify import identify
 from rigidid.core.simulate import system_matrices
 from rigidid.core.timedomain import estimate_modes, impulse_records
@@ -31,7 +31,9 @@ def one(noise: float, seed: int, duration: float, rate: float, pos, dirs, body=B
                            noise=noise, seed=seed)  # fmt: skip
     est = estimate_modes(recs, 1.0 / rate)
     ident = identify(pos, dirs, est.poles, est.shapes, mass=body.mass)
-    common = dict(starts=[i.start for i in est.impacts], onsets=[i.onset for i in est.impacts], decimation=est.decimation)
+    common = dict(
+        starts=[i.start for i in est.impacts], onsets=[i.onset for i in est.impacts], decimation=est.decimation
+    )
     t0 = time.perf_counter()
     ref = refine_body(recs, 1.0 / rate, pos, dirs, center_of_gravity=ident.center_of_gravity,
                       inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
@@ -56,7 +58,8 @@ def main() -> None:
     span = float(np.max(np.ptp(pos, axis=0)))
     jd = np.diag(INERTIA)
     print(f"four-mounts, 8 sensors, 2 impacts, {args.duration:g} s at {args.rate:g} Hz, {args.seeds} seeds")
-    print("| noise | route | CG % span median (worst) | inertia diag % median (worst) | good fits | coverage 95 % | s/fit |")
+    head = "| noise | route | CG % span median (worst) | inertia diag % median (worst) | good fits | coverage 95 %"
+    print(head + " | s/fit |")
     print("|---|---|---|---|---|---|---|")
     for noise in args.noise:
         rows: dict[str, list[tuple[float, float]]] = {"1 structured": [], "3 output error": [], "CRB at truth": []}
@@ -67,7 +70,8 @@ def main() -> None:
             good += good_fit(ref)
             for name, g, j in (("1 structured", ident.center_of_gravity, ident.inertia_per_mass),
                                ("3 output error", ref.center_of_gravity, ref.inertia_per_mass)):  # fmt: skip
-                rows[name].append((100 * np.linalg.norm(g - CG) / span, 100 * np.max(np.abs(np.diag(j) * MASS / jd - 1))))
+                j_err = 100 * np.max(np.abs(np.diag(j) * MASS / jd - 1))
+                rows[name].append((100 * np.linalg.norm(g - CG) / span, j_err))
             # CRB at the truth: the error of a draw at the bound (norm of the CG std, largest diagonal std)
             rows["CRB at truth"].append((100 * np.linalg.norm(truth.std["center_of_gravity"]) / span,
                                          100 * np.max(np.diag(truth.std["inertia_per_mass"]) * MASS / jd)))  # fmt: skip
@@ -77,7 +81,9 @@ def main() -> None:
             total += 6
         for name, vals in rows.items():
             a = np.array(vals)
-            extra = f"{good}/{args.seeds} | {covered / total:.3f} | {np.median(times):.1f}" if name.startswith("3") else " | |"
+            extra = " | |"
+            if name.startswith("3"):
+                extra = f"{good}/{args.seeds} | {covered / total:.3f} | {np.median(times):.1f}"
             print(f"| {100 * noise:g} % | {name} | {np.median(a[:, 0]):.4f} ({a[:, 0].max():.4f}) "
                   f"| {np.median(a[:, 1]):.3f} ({a[:, 1].max():.3f}) | {extra} |")  # fmt: skip
 

@@ -588,6 +588,7 @@ def estimate_modes(
     band: tuple[float, float] | None = None,
     max_order: int | None = None,
     decimate: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modal parameters from impact records (the paper's time-domain step).
 
@@ -609,6 +610,8 @@ def estimate_modes(
         Highest model order of the stabilisation sweep.
     decimate : int, optional
         Decimation factor (default chosen from the records' spectrum).
+    progress : ProgressCallback, optional
+        Progress of the decimation and the model-order sweep.
 
     Returns
     -------
@@ -651,6 +654,7 @@ def estimate_modes(
         band=band,
         max_order=max_order,
         decimate=decimate,
+        progress=progress,
     )
     ids = tuple(s.id for s in lay.sensors)
     table = ModeTable(tuple(range(1, n_modes + 1)), result.frequency_hz, result.damping_ratio, ids, result.shapes)

@@ -245,9 +245,13 @@ def _estimate(
 
     if method is not None and method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source="--modal-method")
-    _, estimate = api.estimate_modes(
-        data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order, decimate=decimate
-    )
+    from rigidid.progress import terminal_progress
+
+    with terminal_progress() as progress:
+        _, estimate = api.estimate_modes(
+            data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
+            decimate=decimate, progress=progress,
+        )  # fmt: skip
     return estimate
 
 

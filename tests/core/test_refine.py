@@ -39,7 +39,7 @@ def rig() -> tuple[object, np.ndarray, np.ndarray]:
 
 
 def _truth_per_mass(body) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
-    m, k, c = system_matrices(body)
+    _, k, c = system_matrices(body)
     return body.inertia_tensor / body.mass, k / body.mass, c / body.mass
 
 
@@ -60,7 +60,8 @@ def test_jacobian_matches_finite_differences(rig) -> None:  # type: ignore[no-un
         up, down = theta.copy(), theta.copy()
         up[i] += h
         down[i] -= h
-        fd = (_evaluate(up, data, pos_l, dirs, 60.0, False)[0] - _evaluate(down, data, pos_l, dirs, 60.0, False)[0]) / (2 * h)
+        r_up = _evaluate(up, data, pos_l, dirs, 60.0, False)[0]
+        fd = (r_up - _evaluate(down, data, pos_l, dirs, 60.0, False)[0]) / (2 * h)
         # Kaufman's Jacobian drops a term that vanishes at a zero residual; near it they agree closely
         assert np.linalg.norm(jac[:, i] - fd) <= REFINE_JACOBIAN_REL * np.linalg.norm(fd) + 1e-9
 
@@ -80,7 +81,9 @@ def test_model_poles_are_the_bodys(rig) -> None:  # type: ignore[no-untyped-def]
 
 def test_refinement_recovers_the_body_from_exact_records(rig) -> None:  # type: ignore[no-untyped-def]
     body, pos, dirs = rig
-    records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=128.0, duration=3.0, pretrigger=0.4, noise=1e-6, seed=0)
+    records = impulse_records(
+        body, pos, dirs, IMPACTS, sample_rate=128.0, duration=3.0, pretrigger=0.4, noise=1e-6, seed=0
+    )
     est = estimate_modes(records, 1.0 / 128.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -88,7 +91,8 @@ def test_refinement_recovers_the_body_from_exact_records(rig) -> None:  # type: 
     ref = refine_body(
         records, 1.0 / 128.0, pos, dirs, starts=[i.start for i in est.impacts], onsets=[i.onset for i in est.impacts],
         decimation=est.decimation, center_of_gravity=start.center_of_gravity, inertia_per_mass=start.inertia_per_mass,
-        stiffness_per_mass=start.stiffness_per_mass, damping_per_mass=start.damping_per_mass, max_evaluations=8,
+        stiffness_per_mass=start.stiffness_per_mass, damping_per_mass=start.damping_per_mass,
+        max_evaluations=8,
     )  # fmt: skip
     j, _, _ = _truth_per_mass(body)
     assert good_fit(ref)
@@ -104,7 +108,9 @@ def test_refinement_recovers_the_body_from_exact_records(rig) -> None:  # type: 
 
 def test_a_bad_start_is_flagged_by_the_cost(rig) -> None:  # type: ignore[no-untyped-def]
     body, pos, dirs = rig
-    records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=256.0, duration=4.0, pretrigger=0.2, noise=0.01, seed=0)
+    records = impulse_records(
+        body, pos, dirs, IMPACTS, sample_rate=256.0, duration=4.0, pretrigger=0.2, noise=0.01, seed=0
+    )
     j, k, c = _truth_per_mass(body)
     ref = refine_body(
         records, 1.0 / 256.0, pos, dirs, starts=[52, 52], onsets=[51, 51], decimation=1,

@@ -23,6 +23,7 @@ from rigidid.core.timedomain.preprocess import Impact, band_limit, content_range
 from rigidid.core.timedomain.preprocess import decimate as decimate_record
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
+from rigidid.progress import ProgressCallback
 
 __all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "block_rows", "decimation_factors", "estimate_modes"]
 
@@ -174,6 +175,7 @@ def estimate_modes(
     trim: bool = True,
     pulse_width: float = 0.005,
     criteria: Criteria | None = None,
+    progress: ProgressCallback | None = None,
 ) -> ModalEstimate:
     """Natural frequencies, damping ratios and complex mode shapes from impact records.
 
@@ -230,6 +232,9 @@ def estimate_modes(
     criteria : Criteria, optional
         Stabilisation tolerances (default: frequency 0.5 %, damping 5 %, MAC
         0.98, damping ratio below 30 %).
+    progress : ProgressCallback, optional
+        Called with ``("decimating", done, records)`` and ``("model-order
+        sweep", done, orders)`` (:mod:`rigidid.progress`).
 
     Returns
     -------
@@ -306,7 +311,7 @@ def estimate_modes(
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
     content = content_range(decays, dt)
     factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
-    options = _Options(method, n_modes, band, max_order, crit, content)
+    options = _Options(method, n_modes, band, max_order, crit, content, progress)
     for attempt, factor in enumerate(factors):
         try:
             result = _estimate(decays, dt, factor, options)
@@ -403,13 +408,21 @@ class _Options:
     max_order: int | None
     criteria: Criteria
     content: tuple[float, float] = (0.0, math.inf)
+    progress: ProgressCallback | None = None
 
 
 def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
     """Steps (2)-(7) of :func:`estimate_modes` at one decimation factor."""
     n_modes, band, max_order = options.n_modes, options.band, options.max_order
     if factor > 1:
-        decays = [decimate_record(d, factor) for d in decays]
+        done: list[Array] = []
+        for d in decays:
+            if options.progress is not None:
+                options.progress("decimating", len(done), len(decays))
+            done.append(decimate_record(d, factor))
+        decays = done
+        if options.progress is not None:
+            options.progress("decimating", len(decays), len(decays))
     dt_fit = dt * factor
     nyquist_fit = 0.5 / dt_fit
 
@@ -469,6 +482,8 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
         gram, _ = lagged_gram(fitted, rows)
         basis_era = era_basis(gram, r)
         for n in range(2, n_max + 1, 2):
+            if options.progress is not None:
+                options.progress("model-order sweep", n // 2 - 1, n_max // 2)
             poles, shapes = era_modes(basis_era, n, dt_fit)
             models.append((n, poles, to_sensors @ shapes))
 

@@ -288,7 +288,7 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
     res_parts, jac_parts = [], []
     for y in data.decays:
         n, p = y.shape
-        t = np.arange(n) * data.dt * omega
+        t: Array = np.arange(n, dtype=float) * (data.dt * omega)
         design, ex = _design(lam, phi * w[:, None], t)
         q, rr = np.linalg.qr(design)
         yw = (y * w).reshape(-1)
