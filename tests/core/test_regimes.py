@@ -75,3 +75,21 @@ def test_block_rows_span_the_lowest_period_within_caps() -> None:
     assert block_rows(48, 6, 6, 10000, 1.0 / 64.0, 0.0) == 20  # no frequency: the old minimum
     assert block_rows(48, 12, 6, 10000, 1.0 / 512.0, 0.1) == 32  # capped at 384 rows x channels
     assert block_rows(48, 6, 6, 100, 1.0 / 512.0, 0.1) == 25  # capped at a quarter of the record
+
+
+def _pole(f: float, z: float) -> complex:
+    w = 2 * np.pi * f
+    return complex(w * (-z + 1j * np.sqrt(1 - z * z)))
+
+
+def test_lightly_damped_poles_are_stable_within_the_damping_floor() -> None:
+    from rigidid.core.timedomain.stabilisation import Criteria, stabilise
+
+    shape = np.ones((3, 1), dtype=complex)
+    # 0.10 % then 0.11 %: 10 % relative, 0.01 % absolute: stable by the floor only
+    models = [(n, np.array([_pole(6.0, z)]), shape) for n, z in ((2, 0.0010), (4, 0.0011))]
+    assert bool(stabilise(models, (0.0, 50.0), Criteria())[1].stable[0])
+    assert not bool(stabilise(models, (0.0, 50.0), Criteria(damping_floor=0.0))[1].stable[0])
+    # 2 % then 2.2 %: 10 % relative, 0.2 % absolute: not stable
+    models = [(n, np.array([_pole(6.0, z)]), shape) for n, z in ((2, 0.020), (4, 0.022))]
+    assert not bool(stabilise(models, (0.0, 50.0), Criteria())[1].stable[0])
