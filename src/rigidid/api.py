@@ -36,6 +36,7 @@ if TYPE_CHECKING:
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.uncertainty import Uncertainty
     from rigidid.progress import ProgressCallback
 
@@ -60,6 +61,7 @@ __all__ = [
     "simulate_records",
     "with_mounts",
     "with_record_spread",
+    "with_refinement",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -102,6 +104,10 @@ class IdentifyResult:
         The rotation under a torque about a given axis (:func:`with_mounts`).
     mount_model : MountModelFit or None
         With ``method="mounts"``: the mount model's fit against the free route.
+    record_bound : RecordBound or None
+        Cramér-Rao intervals of the output-error refinement on the records
+        (:func:`with_refinement`); set when the refinement replaced the
+        structured answer.
     """
 
     identification: Identification
@@ -116,6 +122,7 @@ class IdentifyResult:
     shapes: NDArray[np.complex128] | None = None
     uncertainty: Uncertainty | None = None
     record_spread: RecordSpread | None = None
+    record_bound: RecordBound | None = None
     layout_name: str | None = None
     mounts: Mounts | None = None
     torque_roll_axis: TorqueRollAxis | None = None
@@ -747,6 +754,7 @@ def estimate_modes(
     band: tuple[float, float] | None = None,
     max_order: int | None = None,
     decimate: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modal parameters from impact records (the paper's time-domain step).
 
@@ -768,6 +776,8 @@ def estimate_modes(
         Highest model order of the stabilisation sweep.
     decimate : int, optional
         Decimation factor (default chosen from the records' spectrum).
+    progress : ProgressCallback, optional
+        Progress of the decimation and the model-order sweep.
 
     Returns
     -------
@@ -810,6 +820,7 @@ def estimate_modes(
         band=band,
         max_order=max_order,
         decimate=decimate,
+        progress=progress,
     )
     ids = tuple(s.id for s in lay.sensors)
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
@@ -1226,3 +1237,80 @@ def with_record_spread(
         estimate_options=dict(estimate_options or {}),
     )
     return replace(result, record_spread=spread)
+
+
+def with_refinement(
+    result: IdentifyResult,
+    records: Sequence[tuple[NDArray[np.float64], float]],
+    estimate: ModalEstimate,
+    *,
+    progress: ProgressCallback | None = None,
+) -> IdentifyResult:
+    """Refine the body on the records by output error (maximum likelihood), started from `result`.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The structured identification from the records' estimated modes.
+    records : sequence of (ndarray, float)
+        The records (samples x sensors in layout order, sample interval).
+    estimate : ModalEstimate
+        The modal estimate the modes came from (impacts found, decimation).
+    progress : ProgressCallback, optional
+        Called with ``("refit", done, total)``.
+
+    Returns
+    -------
+    IdentifyResult
+        With CG, inertia, stiffness and damping from the refinement and
+        ``record_bound`` (Cramér-Rao intervals) set; or `result` unchanged,
+        with a :class:`~rigidid.errors.RefinementWarning`, when the fit fails
+        or its normalised cost says it is not at the global minimum.
+    """
+    import warnings
+
+    from rigidid.core.timedomain.refine import good_fit, record_bound, refine_body
+    from rigidid.errors import RefinementWarning
+
+    ident = result.identification
+    if progress is not None:
+        progress("refit", 0, 1)
+    try:
+        refinement = refine_body(
+            [data for data, _ in records],
+            records[0][1],
+            result.positions,
+            result.directions,
+            starts=[impact.start for impact in estimate.impacts],
+            onsets=[impact.onset for impact in estimate.impacts],
+            decimation=estimate.decimation,
+            center_of_gravity=ident.center_of_gravity,
+            inertia_per_mass=ident.inertia_per_mass,
+            stiffness_per_mass=ident.stiffness_per_mass,
+            damping_per_mass=ident.damping_per_mass,
+        )
+    except (np.linalg.LinAlgError, InputError, ValueError) as exc:
+        warnings.warn(
+            f"refinement on the records failed ({exc}); kept the answer from the modes", RefinementWarning, stacklevel=2
+        )
+        return result
+    finally:
+        if progress is not None:
+            progress("refit", 1, 1)
+    if not good_fit(refinement):
+        warnings.warn(
+            f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
+            "(about 1 at a good fit): a local minimum or a model that does not fit the records; "
+            "kept the answer from the modes",
+            RefinementWarning,
+            stacklevel=2,
+        )
+        return result
+    refined = replace(
+        ident,
+        center_of_gravity=refinement.center_of_gravity,
+        inertia_per_mass=refinement.inertia_per_mass,
+        stiffness_per_mass=refinement.stiffness_per_mass,
+        damping_per_mass=refinement.damping_per_mass,
+    )
+    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))

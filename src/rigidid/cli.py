@@ -144,6 +144,14 @@ CsvDir = Annotated[
         "--csv", help="Also write each result matrix as a CSV file (for spreadsheets) into DIR.", metavar="DIR"
     ),
 ]
+Refine = Annotated[
+    bool,
+    typer.Option(
+        "--refine/--no-refine",
+        help="With --records: refine the body by an output-error fit to the records, with Cramér-Rao intervals.",
+        rich_help_panel=_TIME,
+    ),
+]
 Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
@@ -433,10 +441,12 @@ def _estimate(
     if method is not None and method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source=option)
     _check_options(n_modes=n_modes, band=band, max_order=max_order, decimate=decimate)
-    with _naming(source):
+    from rigidid.progress import terminal_progress
+
+    with _naming(source), terminal_progress() as progress:
         return api.estimate_modes(
             data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
-            decimate=decimate,
+            decimate=decimate, progress=progress,
         )  # fmt: skip
 
 
@@ -472,6 +482,7 @@ def _identify(
     geometry: Path | None = None,
     keep: dict[str, Any] | None = None,
     mounts: Path | None = None,
+    refine: bool = True,
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share.
 
@@ -517,6 +528,9 @@ def _identify(
             progress=progress,
             mounts=mounts,
         )
+    if refine and estimate is not None and method == "structured":
+        with _naming(src), terminal_progress() as progress:
+            result = api.with_refinement(result, data.records, estimate, progress=progress)
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
@@ -578,6 +592,7 @@ def identify(
     references: ReferencesPath = None,
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
+    refine: Refine = True,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with _reported():
@@ -601,7 +616,7 @@ def identify(
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
         )  # fmt: skip
         result = _with_mounts(result, mounts, torque_axis)
         with OutputSet():  # every output or none
@@ -932,6 +947,7 @@ def report(
     units: Units = None,
     geometry: Geometry = None,
     force_unit: ForceUnit = None,
+    refine: Refine = True,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
@@ -949,7 +965,7 @@ def report(
         kept: dict[str, Any] = {}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept, refine=refine,
         )  # fmt: skip
         spec = None
         if body is not None:

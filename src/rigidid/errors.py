@@ -20,6 +20,7 @@ __all__ = [
     "NonSensorColumnWarning",
     "Notice",
     "PhysicalPlausibilityWarning",
+    "RefinementWarning",
     "RigididError",
     "RigididWarning",
     "SensorFitWarning",
@@ -101,3 +102,7 @@ class DampingUnitWarning(RigididWarning):
 
 class NonSensorColumnWarning(RigididWarning):
     """A record has columns that are not sensors (force, trigger...): they are left out."""
+
+
+class RefinementWarning(RigididWarning):
+    """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""

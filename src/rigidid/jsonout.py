@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from rigidid.core.plan import PredictedFigures, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "plan_to_dict",
     "predicted_figures_to_dict",
     "prediction_to_dict",
+    "record_bound_to_dict",
     "record_spread_to_dict",
     "result_to_dict",
     "sensor_plan_to_dict",
@@ -162,6 +164,8 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
     if result.record_spread is not None:
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
+    if result.record_bound is not None:
+        out["uncertainty_records_crb"] = record_bound_to_dict(result.record_bound)
     return out
 
 
@@ -304,6 +308,22 @@ def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:
         ("inertia_per_mass" if spread.per_mass else "inertia_tensor"): interval_to_dict(spread.inertia),
         "principal_moments" + suffix: interval_to_dict(spread.principal_moments),
         "stiffness_diagonal" + suffix: interval_to_dict(spread.stiffness_diagonal),
+    }
+
+
+def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
+    """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
+    ``normalised_cost``, ``noise_from``, ``residuals`` and per quantity ``{"estimate", "std", "ci95"}``."""
+    suffix = "_per_mass" if bound.per_mass else ""
+    return {
+        "method": "Cramér-Rao bound at the output-error estimate on the records",
+        "normalised_cost": bound.normalised_cost,
+        "noise_from": bound.noise_from,
+        "residuals": bound.residuals,
+        "center_of_gravity": interval_to_dict(bound.center_of_gravity),
+        ("inertia_per_mass" if bound.per_mass else "inertia_tensor"): interval_to_dict(bound.inertia),
+        "principal_moments" + suffix: interval_to_dict(bound.principal_moments),
+        "stiffness_diagonal" + suffix: interval_to_dict(bound.stiffness_diagonal),
     }
 
 

@@ -314,11 +314,23 @@ class ForceUnitsResult(_Strict):
     damping: dict[str, str] = Field(description="units of the translation, coupling and rotation blocks")
 
 
+class RecordBoundResult(BaseModel):
+    """Cramér-Rao intervals of the output-error refinement on the records (``--refine``, the default)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, defer_build=True)
+
+    method: str
+    normalised_cost: float
+    noise_from: Literal["pretrigger", "residual"]
+    residuals: int
+    center_of_gravity: Interval
+
+
 class ResultFile(_Strict):
     """The result JSON of ``rigidid identify`` (FORMATS.md); matrices are lists of rows, DOF x, y, z, rx, ry, rz."""
 
     rigidid_version: str
-    method: Literal["structured", "paper"]
+    method: Literal["structured", "paper", "mounts"]
     units: ResultUnits
     mass: float | None
     center_of_gravity: list[float]
@@ -339,6 +351,9 @@ class ResultFile(_Strict):
     diagnostics: Diagnostics
     uncertainty: UncertaintyResult | None = None
     uncertainty_records: RecordSpreadResult | None = None
+    uncertainty_records_crb: RecordBoundResult | None = Field(
+        default=None, description="with --records and --refine: Cramér-Rao bound at the output-error fit"
+    )
     modal_estimation: dict[str, Any] | None = Field(
         default=None, description="with --records: estimator, impacts found, modes and stabilisation diagram"
     )

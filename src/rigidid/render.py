@@ -204,6 +204,14 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
         )
         caption = "spread of the segment estimates scaled to all the data; noise only, not sensor placement errors"
         tables.append(_interval_table(result, spread, title, caption, force_unit))
+    if result.record_bound is not None:
+        bound = result.record_bound
+        title = "Uncertainty from the records (Cramér-Rao bound at the output-error fit, 95 % intervals)"
+        caption = (
+            f"{bound.residuals} residuals, normalised cost {bound.normalised_cost:.3g} (about 1 at a good fit), "
+            f"noise levels from the {bound.noise_from}; noise only, not sensor placement errors"
+        )
+        tables.append(_interval_table(result, bound, title, caption, force_unit))
     return tables
 
 

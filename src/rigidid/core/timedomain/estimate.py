@@ -19,12 +19,13 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.timedomain.ar import ar_fits, ar_modes, f_test_order
 from rigidid.core.timedomain.era import era_basis, era_modes
 from rigidid.core.timedomain.gram import lagged_gram
-from rigidid.core.timedomain.preprocess import Impact, auto_decimation, band_limit, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import Impact, band_limit, content_range, decimation_for, find_impact
 from rigidid.core.timedomain.preprocess import decimate as decimate_record
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
+from rigidid.progress import ProgressCallback
 
-__all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "estimate_modes"]
+__all__ = ["DEFAULT_METHOD", "METHODS", "ModalEstimate", "block_rows", "decimation_factors", "estimate_modes"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -37,6 +38,8 @@ DEFAULT_METHOD: Method = "era"
 _DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest frequency kept
 _MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
 _MIN_BLOCK_ROWS = 20  # ERA: block rows of the Hankel matrix, at least
+_ROW_PERIODS = 2.0  # ERA: block rows span this many periods of the lowest mode
+_MAX_GRAM = 384  # ERA: block rows x channels fitted, at most (the Gram matrix is its square)
 _RANK_PER_MODE = 2  # principal components kept per mode sought
 _AR_EXTRA_STATES = 256  # AR: lags beyond the minimum, times the channels fitted
 _AR_SWEEP_MODELS = 16  # AR: about this many orders are solved for poles
@@ -172,6 +175,7 @@ def estimate_modes(
     trim: bool = True,
     pulse_width: float = 0.005,
     criteria: Criteria | None = None,
+    progress: ProgressCallback | None = None,
 ) -> ModalEstimate:
     """Natural frequencies, damping ratios and complex mode shapes from impact records.
 
@@ -196,10 +200,13 @@ def estimate_modes(
         Number of modes to return (6 for the rigid-body modes).
     band : (float, float), optional
         Frequency band of interest (Hz): only poles strictly inside it are
-        kept, and the decimated records are band-pass filtered (zero-phase
-        Butterworth, order 4) with edges 25 % outside it, so that the
-        filter's shaping of the noise does not put poles inside the band.
-        Default: 0 to the Nyquist frequency after decimation.
+        kept, and, when the records hold content more than 25 % above the
+        band, the decimated records are low-pass filtered (zero-phase
+        Butterworth, order 4) 25 % above it. A band that holds all the
+        content changes nothing but the poles kept (no high-pass or
+        band-pass filter: its start-up transient on the abrupt start of a
+        free decay costs accuracy). Default: 0 to the Nyquist frequency
+        after decimation.
     max_order : int, optional
         Highest model order of the sweep: the number of lags of the AR model,
         or the number of states of the ERA realization. Default: AR
@@ -208,12 +215,14 @@ def estimate_modes(
         fitted (see Notes).
     decimate : int, optional
         Decimation factor. Default: chosen so that the new Nyquist frequency
-        is at least 4 times the band's upper edge, or, without a band, 4 times
-        the highest frequency standing out of the noise floor of the spectrum
-        (:func:`~rigidid.core.timedomain.preprocess.content_range`); if fewer
-        than `n_modes` modes are then found, the estimation is repeated with
-        the factor divided by 3 until it is 1. An automatic factor leaves at
-        least 1000 samples in the shortest record. 1 disables decimation.
+        is at least 4 times the highest frequency standing out of the noise
+        floor of the spectrum
+        (:func:`~rigidid.core.timedomain.preprocess.content_range`), or the
+        band's upper edge if that is lower (:func:`decimation_factors`: a band
+        never decimates less than no band); if fewer than `n_modes` modes are
+        then found, the estimation is repeated with the factor divided by 3
+        until it is 1. An automatic factor leaves at least 1000 samples in the
+        shortest record. 1 disables decimation.
     trim : bool
         Find the impact in each record and keep only the free decay after it
         (:func:`~rigidid.core.timedomain.preprocess.find_impact`). With false
@@ -223,6 +232,9 @@ def estimate_modes(
     criteria : Criteria, optional
         Stabilisation tolerances (default: frequency 0.5 %, damping 5 %, MAC
         0.98, damping ratio below 30 %).
+    progress : ProgressCallback, optional
+        Called with ``("decimating", done, records)`` and ``("model-order
+        sweep", done, orders)`` (:mod:`rigidid.progress`).
 
     Returns
     -------
@@ -297,18 +309,9 @@ def estimate_modes(
         decays.append(rec[impact.start :])
 
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
-    if decimate is not None:
-        factors = [decimate]
-    else:
-        if band is not None:
-            first = decimation_for(float(band[1]), dt, margin=_DECIMATION_MARGIN)
-        else:
-            first = auto_decimation(decays, dt, margin=_DECIMATION_MARGIN)
-        shortest = min(d.shape[0] for d in decays)
-        factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
-        while factors[-1] > 1 and band is None:
-            factors.append(max(1, factors[-1] // 3))
-    options = _Options(method, n_modes, band, max_order, crit)
+    content = content_range(decays, dt)
+    factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
+    options = _Options(method, n_modes, band, max_order, crit, content, progress)
     for attempt, factor in enumerate(factors):
         try:
             result = _estimate(decays, dt, factor, options)
@@ -320,6 +323,83 @@ def estimate_modes(
     raise AssertionError("unreachable")
 
 
+def decimation_factors(
+    decays: Sequence[Array], dt: float, band: tuple[float, float] | None, content: tuple[float, float]
+) -> list[int]:
+    """Decimation factors to try, first the largest the band allows.
+
+    Parameters
+    ----------
+    decays : sequence of ndarray, shape (n_k, p)
+        Free decays.
+    dt : float
+        Sample interval (s).
+    band : (float, float) or None
+        The user's band (Hz).
+    content : (float, float)
+        Lowest and highest frequency standing out of the noise floor
+        (:func:`~rigidid.core.timedomain.preprocess.content_range`).
+
+    Returns
+    -------
+    list of int
+        Descending factors, ending at 1: the first keeps the new Nyquist
+        frequency 4 times above the highest frequency kept, which is the
+        band's upper edge or, if lower, the detected content (a band reaching
+        beyond the content must not cost resolution); each next one is a
+        third of the previous. The first leaves at least 1000 samples in the
+        shortest record.
+
+    Notes
+    -----
+    A band only ever lowers the highest frequency kept, so passing a band
+    never decimates less than passing none.
+    """
+    f_high = content[1]
+    if band is not None:
+        f_high = min(float(band[1]), f_high)
+    first = decimation_for(f_high, dt, margin=_DECIMATION_MARGIN)
+    shortest = min(d.shape[0] for d in decays)
+    factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
+    while factors[-1] > 1:
+        factors.append(max(1, factors[-1] // 3))
+    return factors
+
+
+def block_rows(n_states: int, channels: int, n_modes: int, samples: int, dt: float, f_low: float) -> int:
+    """Block rows of the ERA Hankel matrix.
+
+    Parameters
+    ----------
+    n_states : int
+        Largest model order of the sweep.
+    channels : int
+        Channels (principal components) fitted.
+    n_modes : int
+        Modes sought.
+    samples : int
+        Samples in the shortest (decimated) record.
+    dt : float
+        Sample interval after decimation (s).
+    f_low : float
+        Lowest frequency of interest (Hz), 0 if unknown.
+
+    Returns
+    -------
+    int
+        At least enough rows for the model order and 20; raised so the rows
+        span two periods of the lowest frequency (what separates close
+        modes there: their resolution grows with the span of lags), but at
+        most a quarter of the shortest record and 384 rows x channels.
+    """
+    rows = max(math.ceil(n_states / channels) + 1, math.ceil(8 * n_modes / channels), _MIN_BLOCK_ROWS)
+    if f_low > 0.0:
+        span = math.ceil(_ROW_PERIODS / (f_low * dt))
+        cap = min(samples // 4, _MAX_GRAM // max(channels, 1))
+        rows = max(rows, min(span, cap))
+    return rows
+
+
 @dataclass(frozen=True)
 class _Options:
     method: str
@@ -327,21 +407,35 @@ class _Options:
     band: tuple[float, float] | None
     max_order: int | None
     criteria: Criteria
+    content: tuple[float, float] = (0.0, math.inf)
+    progress: ProgressCallback | None = None
 
 
 def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
     """Steps (2)-(7) of :func:`estimate_modes` at one decimation factor."""
     n_modes, band, max_order = options.n_modes, options.band, options.max_order
     if factor > 1:
-        decays = [decimate_record(d, factor) for d in decays]
+        done: list[Array] = []
+        for d in decays:
+            if options.progress is not None:
+                options.progress("decimating", len(done), len(decays))
+            done.append(decimate_record(d, factor))
+        decays = done
+        if options.progress is not None:
+            options.progress("decimating", len(decays), len(decays))
     dt_fit = dt * factor
     nyquist_fit = 0.5 / dt_fit
 
     # (3) band limit
     if band is not None:
         fit_band = (float(band[0]), min(float(band[1]), nyquist_fit))
-        filter_band = (fit_band[0] / _FILTER_WIDENING, fit_band[1] * _FILTER_WIDENING)
-        decays = [band_limit(d, dt_fit, filter_band) for d in decays]
+        # low-pass only, and only with content above the band: a high-pass or
+        # band-pass filter's start-up transient on the abrupt start of a free
+        # decay costs accuracy (offsets and drift give poles at 0 Hz, outside
+        # the band, anyway), so a band holding all the content filters nothing
+        high_edge = fit_band[1] * _FILTER_WIDENING
+        if options.content[1] > high_edge and high_edge < nyquist_fit:
+            decays = [band_limit(d, dt_fit, (0.0, high_edge)) for d in decays]
     else:
         fit_band = (0.0, nyquist_fit)
 
@@ -381,12 +475,15 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     else:
         n_max = max_order if max_order is not None else max(8 * n_modes, 48)
         n_max += n_max % 2
-        rows = max(math.ceil(n_max / r) + 1, math.ceil(8 * n_modes / r), _MIN_BLOCK_ROWS)
+        f_low = options.content[0]
+        rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, f_low)
         if min_samples <= 2 * rows + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
         gram, _ = lagged_gram(fitted, rows)
         basis_era = era_basis(gram, r)
         for n in range(2, n_max + 1, 2):
+            if options.progress is not None:
+                options.progress("model-order sweep", n // 2 - 1, n_max // 2)
             poles, shapes = era_modes(basis_era, n, dt_fit)
             models.append((n, poles, to_sensors @ shapes))
 

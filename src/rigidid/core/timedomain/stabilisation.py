@@ -39,6 +39,11 @@ class Criteria:
         Largest relative change of natural frequency from the previous order.
     damping : float
         Largest relative change of damping ratio from the previous order.
+    damping_floor : float
+        Largest absolute change of damping ratio always accepted: the relative
+        tolerance scaled to lightly damped poles, whose damping ratio scatters
+        by more than `damping` of itself between orders (a 0.1 % mode would
+        otherwise need agreement to 0.005 %).
     mac : float
         Smallest MAC with the matched pole of the previous order.
     max_damping : float
@@ -48,6 +53,7 @@ class Criteria:
 
     frequency: float = 0.005
     damping: float = 0.05
+    damping_floor: float = 2e-4
     mac: float = 0.98
     max_damping: float = 0.3
 
@@ -158,9 +164,11 @@ def stabilise(
             f, z = np.abs(lam), -lam.real / np.abs(lam)
             fp, zp = np.abs(prev.poles), -prev.poles.real / np.abs(prev.poles)
             df = np.abs(f[:, None] - fp[None, :]) / fp[None, :]
-            dz = np.abs(z[:, None] - zp[None, :]) / zp[None, :]
+            dz_abs = np.abs(z[:, None] - zp[None, :])
+            dz = dz_abs / zp[None, :]
             mac = mac_matrix(psi, prev.shapes)
-            ok = (df < criteria.frequency) & (dz < criteria.damping) & (mac > criteria.mac)
+            damping_ok = (dz < criteria.damping) | (dz_abs < criteria.damping_floor)
+            ok = (df < criteria.frequency) & damping_ok & (mac > criteria.mac)
             stable = np.any(ok, axis=1)
         current = OrderPoles(order, lam, stable, psi)
         out.append(current)
