@@ -299,32 +299,31 @@ def uncertainty_to_dict(result: Uncertainty) -> dict[str, Any]:
 def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:
     """JSON form of record-segment intervals: per quantity ``{"estimate", "std", "ci95"}``, and
     ``method``, ``segments``, ``used``."""
-    suffix = "_per_mass" if spread.per_mass else ""
+    head = {"method": "interleaved record segments", "segments": spread.segments, "used": spread.used}
+    return {**head, **_body_intervals(spread)}
+
+
+def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
+    """CG, inertia, principal moments and stiffness diagonal intervals; ``_per_mass`` keys without a mass."""
+    suffix = "_per_mass" if source.per_mass else ""
     return {
-        "method": "interleaved record segments",
-        "segments": spread.segments,
-        "used": spread.used,
-        "center_of_gravity": interval_to_dict(spread.center_of_gravity),
-        ("inertia_per_mass" if spread.per_mass else "inertia_tensor"): interval_to_dict(spread.inertia),
-        "principal_moments" + suffix: interval_to_dict(spread.principal_moments),
-        "stiffness_diagonal" + suffix: interval_to_dict(spread.stiffness_diagonal),
+        "center_of_gravity": interval_to_dict(source.center_of_gravity),
+        ("inertia_per_mass" if source.per_mass else "inertia_tensor"): interval_to_dict(source.inertia),
+        "principal_moments" + suffix: interval_to_dict(source.principal_moments),
+        "stiffness_diagonal" + suffix: interval_to_dict(source.stiffness_diagonal),
     }
 
 
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals`` and per quantity ``{"estimate", "std", "ci95"}``."""
-    suffix = "_per_mass" if bound.per_mass else ""
-    return {
+    head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
         "normalised_cost": bound.normalised_cost,
         "noise_from": bound.noise_from,
         "residuals": bound.residuals,
-        "center_of_gravity": interval_to_dict(bound.center_of_gravity),
-        ("inertia_per_mass" if bound.per_mass else "inertia_tensor"): interval_to_dict(bound.inertia),
-        "principal_moments" + suffix: interval_to_dict(bound.principal_moments),
-        "stiffness_diagonal" + suffix: interval_to_dict(bound.stiffness_diagonal),
     }
+    return {**head, **_body_intervals(bound)}
 
 
 def layout_report_to_dict(report: LayoutReport) -> dict[str, Any]:

@@ -42,6 +42,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError, NonSensorColumnWarning
+from rigidid.io.columns import NON_SENSOR_PREFIXES, match_columns
+from rigidid.io.columns import column as _column
+from rigidid.io.columns import row as _where
 from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
 
 __all__ = ["CHUNK_ROWS", "MAX_HEADER_BYTES", "NON_SENSOR_PREFIXES", "RawCsv", "read_csv_columns"]
@@ -53,9 +56,6 @@ CHUNK_ROWS = 1 << 14
 
 MAX_HEADER_BYTES = 1 << 20
 """The header line must end within this many bytes (1 MiB)."""
-
-NON_SENSOR_PREFIXES = ("force", "hammer", "trigger", "excitation", "tacho", "impact", "load_cell")
-"""A column whose key (:func:`~rigidid.io.dialect.column_key`) starts with one of these is not a sensor."""
 
 _SNIFF_BYTES = 1 << 16
 _TAIL_BYTES = 1 << 16
@@ -106,14 +106,6 @@ class RawCsv:
         self, data: Array, time: Array, line_of: Callable[[int], int], time_tokens: Callable[[], list[str]]
     ) -> None:
         self.data, self.time, self.line_of, self.time_tokens = data, time, line_of, time_tokens
-
-
-def _where(line: int) -> str:
-    return f"row {line}"
-
-
-def _column(name: str) -> str:
-    return f"column {name!r}"
 
 
 def _split(text: str, dialect: Dialect) -> list[str]:
@@ -183,34 +175,6 @@ def _first_bad_line(path: Path, dialect: Dialect, n_fields: int, start: int) -> 
             if k >= start and len(text.rstrip("\r\n").split(dialect.delimiter)) != n_fields:
                 return int(k)
     return start
-
-
-def _classify(header: list[str], wanted: list[str], src: str) -> tuple[list[int], list[str]]:
-    """Column index (in the file) of each wanted sensor, and the non-sensor columns left out."""
-    seen: dict[str, int] = {}
-    skipped: list[str] = []
-    for k, name in enumerate(header[1:], start=1):
-        if not name:
-            raise InputError("a column has no name", source=src, location=_where(1))
-        if name in seen or name in skipped:
-            raise InputError(f"column {name!r} appears twice", source=src, location=f"{_where(1)}, {_column(name)}")
-        if name in wanted:
-            seen[name] = k
-        elif column_key(name).startswith(NON_SENSOR_PREFIXES):
-            skipped.append(name)
-        else:
-            raise InputError(
-                f"column {name!r} is not a sensor of the layout", source=src, location=f"{_where(1)}, {_column(name)}"
-            )
-    missing = [s for s in wanted if s not in seen]
-    if missing:
-        raise InputError(
-            f"sensor {missing[0]!r} of the layout has no column"
-            + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
-            source=src,
-            location=_where(1),
-        )
-    return [seen[s] for s in wanted], skipped
 
 
 def _check_time_header(name: str, header: list[str], src: str) -> None:
@@ -290,7 +254,8 @@ def read_csv_columns(path: str | os.PathLike[str], wanted: list[str]) -> RawCsv:
         dialect = sniff_dialect(sample)
         header = _split(header_text, dialect)
         _check_time_header(header[0], header, src)
-        order, skipped = _classify(header, wanted, src)
+        order, skipped = match_columns(header[1:], wanted, src, _where(1), skip_non_sensors=True)
+        order = [k + 1 for k in order]
         if skipped:
             warnings.warn(
                 f"{src}: columns {', '.join(repr(s) for s in skipped)} are not sensors (force, trigger...): left out",

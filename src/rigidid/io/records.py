@@ -25,6 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.errors import InputError
 from rigidid.io.atomic import atomic_path
 from rigidid.io.binary_records import BINARY_SUFFIXES
+from rigidid.io.columns import column as _column
+from rigidid.io.columns import match_columns
+from rigidid.io.columns import row as _where
 
 __all__ = [
     "DECAY_RATIO",
@@ -51,14 +54,6 @@ by their peak value, then summed)."""
 MIN_ROWS = 16
 """Fewest data rows a record may have."""
 
-
-
-def _where(line: int) -> str:
-    return f"row {line}"
-
-
-def _column(name: str) -> str:
-    return f"column {name!r}"
 
 
 def _resolution(token: str) -> float:
@@ -132,30 +127,6 @@ def _check_decay(data: Array, line_of: Callable[[int], int], src: str) -> None:
         )
 
 
-def _match_columns(names: Sequence[str], wanted: list[str], src: str, where: str) -> list[int]:
-    """Column index of each of `wanted` in `names`; errors for an unnamed, repeated, unknown or missing name."""
-    seen: dict[str, int] = {}
-    for k, name in enumerate(names):
-        if not name:
-            raise InputError("a column has no name", source=src, location=where)
-        if name in seen:
-            raise InputError(f"column {name!r} appears twice", source=src, location=f"{where}, {_column(name)}")
-        if name not in wanted:
-            raise InputError(
-                f"column {name!r} is not a sensor of the layout", source=src, location=f"{where}, {_column(name)}"
-            )
-        seen[name] = k
-    missing = [s for s in wanted if s not in seen]
-    if missing:
-        raise InputError(
-            f"sensor {missing[0]!r} of the layout has no column"
-            + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
-            source=src,
-            location=where,
-        )
-    return [seen[s] for s in wanted]
-
-
 def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array, float]:
     """A binary record (layouts in :mod:`rigidid.io.binary_records`), checked like a CSV one.
 
@@ -173,7 +144,7 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
             )
         data = raw.data
     else:
-        order = _match_columns(raw.names, wanted, src, raw.field)
+        order, _ = match_columns(raw.names, wanted, src, raw.field)
         data = raw.data if order == list(range(len(order))) else np.ascontiguousarray(raw.data[:, order])
     n = data.shape[0]
     if n < MIN_ROWS:

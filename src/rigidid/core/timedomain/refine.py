@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
+from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -100,14 +101,12 @@ class Refinement:
     @property
     def frequency_hz(self) -> Array:
         """Undamped natural frequencies of the fitted model (Hz)."""
-        result: Array = np.abs(self.poles) / (2.0 * np.pi)
-        return result
+        return modal_from_poles(self.poles)[0]
 
     @property
     def damping_ratio(self) -> Array:
         """Damping ratios of the fitted model."""
-        result: Array = -self.poles.real / np.abs(self.poles)
-        return result
+        return modal_from_poles(self.poles)[1]
 
 
 # --- parameterisation ---------------------------------------------------------------------

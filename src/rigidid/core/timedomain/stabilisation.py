@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.statespace import mac_matrix
+from rigidid.core.statespace import mac_matrix, modal_from_poles
 
 __all__ = ["Cluster", "Criteria", "OrderPoles", "cluster_stable", "mac_matrix", "stabilise"]
 
@@ -85,14 +85,12 @@ class OrderPoles:
     @property
     def frequency_hz(self) -> Array:
         """Natural frequencies ``|lambda| / (2 pi)`` (Hz)."""
-        result: Array = np.abs(self.poles) / (2.0 * np.pi)
-        return result
+        return modal_from_poles(self.poles)[0]
 
     @property
     def damping_ratio(self) -> Array:
         """Damping ratios ``-Re(lambda) / |lambda|``."""
-        result: Array = -self.poles.real / np.abs(self.poles)
-        return result
+        return modal_from_poles(self.poles)[1]
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,71 @@
+"""Matching the columns (or channels) of a record to the layout's sensor ids: one rule for every format."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from rigidid.errors import InputError
+from rigidid.io.dialect import column_key
+
+__all__ = ["NON_SENSOR_PREFIXES", "column", "match_columns", "row"]
+
+NON_SENSOR_PREFIXES = ("force", "hammer", "trigger", "excitation", "tacho", "impact", "load_cell")
+"""Column names (matched without case and unit suffix) that are not sensors and are left out."""
+
+
+def row(line: int) -> str:
+    """Where a row is, for a message: ``"row 5"``."""
+    return f"row {line}"
+
+
+def column(name: str) -> str:
+    """Where a column is, for a message: ``"column 'A+x'"``."""
+    return f"column {name!r}"
+
+
+def match_columns(
+    names: Sequence[str], wanted: Sequence[str], src: str, where: str, *, skip_non_sensors: bool = False
+) -> tuple[list[int], list[str]]:
+    """Index in `names` of each of `wanted`, and the non-sensor names left out.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The record's column (channel) names.
+    wanted : sequence of str
+        The layout's sensor ids, in layout order.
+    src, where : str
+        File and location for the messages.
+    skip_non_sensors : bool
+        Leave out columns named like a force, hammer, trigger... channel
+        (:data:`NON_SENSOR_PREFIXES`) instead of refusing them.
+
+    Raises
+    ------
+    InputError
+        An unnamed or repeated column, a column that is no sensor, a sensor without a column.
+    """
+    seen: dict[str, int] = {}
+    skipped: list[str] = []
+    for k, name in enumerate(names):
+        if not name:
+            raise InputError("a column has no name", source=src, location=where)
+        if name in seen or name in skipped:
+            raise InputError(f"column {name!r} appears twice", source=src, location=f"{where}, {column(name)}")
+        if name in wanted:
+            seen[name] = k
+        elif skip_non_sensors and column_key(name).startswith(NON_SENSOR_PREFIXES):
+            skipped.append(name)
+        else:
+            raise InputError(
+                f"column {name!r} is not a sensor of the layout", source=src, location=f"{where}, {column(name)}"
+            )
+    missing = [s for s in wanted if s not in seen]
+    if missing:
+        raise InputError(
+            f"sensor {missing[0]!r} of the layout has no column"
+            + (f" ({len(missing)} sensors missing)" if len(missing) > 1 else ""),
+            source=src,
+            location=where,
+        )
+    return [seen[s] for s in wanted], skipped
