@@ -1168,8 +1168,6 @@ def with_mounts(
     InputError
         A bad file, units that differ from the layout's, or a zero torque axis.
     """
-    from dataclasses import replace as _replace
-
     from rigidid.core.mounts import mount_rates, torque_roll_axis
 
     ident = result.identification
@@ -1187,9 +1185,9 @@ def with_mounts(
                 for k, m in enumerate(spec.mounts)
             ])  # fmt: skip
         ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
-        out = _replace(out, mounts=Mounts(ids, positions, rates, nominal))
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal))
     if torque_axis is not None:
-        out = _replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
+        out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
     return out
 
 

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.geometry import skew
+from rigidid.core.geometry import transfer_matrix
 from rigidid.errors import InputError
 
 if TYPE_CHECKING:
@@ -103,7 +103,7 @@ def _design(offsets: Array, axes: Array, scale: float) -> Array:
     d = np.concatenate([np.ones(3), np.full(3, 1.0 / scale)])
     cols = []
     for r, u in zip(offsets, axes, strict=True):
-        t = np.hstack([np.eye(3), -skew(r)])
+        t = transfer_matrix(r)[:3]
         for a in range(3):
             tu = t.T @ u[:, a]
             m = np.outer(tu, tu) * np.outer(d, d)
@@ -332,7 +332,7 @@ def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> 
     """Columns ``T_k^T u u^T T_k phi`` (6,) for each mount and axis: (6, 3 n)."""
     cols = []
     for r, u in zip(offsets, axes, strict=True):
-        t = np.hstack([np.eye(3), -skew(r)])
+        t = transfer_matrix(r)[:3]
         tphi = t @ phi
         for a in range(3):
             cols.append(t.T @ u[:, a] * (u[:, a] @ tphi))
@@ -423,7 +423,7 @@ def fit_mount_model(
         mass[3:, 3:] = j
         rows, rhs = [], []
         for i in range(mu.size):
-            phi = transfer_matrix_local(g) @ coords[:, i]
+            phi = transfer_matrix(g) @ coords[:, i]
             cols = _mount_columns(phi, local_mounts - g, u)
             scale = 1.0 / (abs(mu[i]) ** 2 * np.linalg.norm(phi))
             block = np.hstack([cols, mu[i] * cols]) * scale
@@ -459,18 +459,11 @@ def fit_mount_model(
     )
 
 
-def transfer_matrix_local(offset: Array) -> Array:
-    """``[[I, -S(offset)], [0, I]]``: rigid motion of a point at `offset` from the reference."""
-    out = np.eye(6)
-    out[:3, 3:] = -skew(offset)
-    return out
-
-
 def _support_matrix(rates: Array, offsets: Array, axes: Array) -> Array:
     """``sum_k T_k^T U_k diag(rates_k) U_k^T T_k`` at the reference of `offsets`."""
     out = np.zeros((6, 6))
     for r, u, k in zip(offsets, axes, rates, strict=True):
-        t = np.hstack([np.eye(3), -skew(r)])
+        t = transfer_matrix(r)[:3]
         out += t.T @ (u @ np.diag(k) @ u.T) @ t
     return out
 
@@ -586,7 +579,7 @@ def identify_mount_model(
     matched, mac = match_modes(psi, model_poles, sensor_matrix(pos, dirs, g) @ model_phi)
     model_f, model_z = modal_from_poles(matched)
     f, z = modal_from_poles(lam)
-    shapes_cg = transfer_matrix_local(g_local) @ phi * np.array([length, length, length, 1.0, 1.0, 1.0])[:, None]
+    shapes_cg = transfer_matrix(g_local) @ phi * np.array([length, length, length, 1.0, 1.0, 1.0])[:, None]
     ident = Identification(
         center_of_gravity=g,
         inertia_per_mass=j,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.geometry import sensor_matrix, skew
+from rigidid.core.geometry import sensor_matrix, transfer_matrix
 from rigidid.core.statespace import state_matrix
 from rigidid.errors import InputError
 
@@ -121,7 +121,7 @@ def system_matrices(body: Body) -> tuple[Array, Array, Array]:
     k = np.zeros((6, 6))
     c = np.zeros((6, 6))
     for mount in body.mounts:
-        t = np.hstack([np.eye(3), -skew(mount.position - g)])
+        t = transfer_matrix(mount.position - g)[:3]
         k += t.T @ mount.stiffness @ t
         c += t.T @ mount.damping @ t
     return m, k, c
