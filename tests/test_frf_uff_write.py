@@ -4,9 +4,8 @@ and a real FRF export (pyuff's public data) read or refused in one line."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -23,9 +22,14 @@ REAL = DATA / "frf" / "pyuff" / "h1_no_nodes_non_ascii_header.uff"
 SI = {"length": "m", "mass": "kg"}
 
 
-def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    cmd = [sys.executable, "-m", "rigidid", *map(str, args)]
-    return subprocess.run(cmd, capture_output=True, text=True, check=False)
+def run(*args: str | Path) -> SimpleNamespace:
+    """The command line, in this process (a subprocess costs a second of start-up per call)."""
+    from typer.testing import CliRunner
+
+    from rigidid.cli import app
+
+    result = CliRunner().invoke(app, [str(a) for a in args])
+    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
 
 
 @pytest.fixture

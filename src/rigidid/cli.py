@@ -928,6 +928,13 @@ def plan(
     json_path: JsonPath = None,
     units: Units = None,
     geometry: Geometry = None,
+    references: Annotated[
+        Path | None,
+        typer.Option(
+            help="references.json of an FRF test: do its hammer points excite all six rigid-body motions?",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
@@ -948,7 +955,7 @@ def plan(
         with _naming(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
-                units=_parse_units(units), geometry=geometry, progress=progress,
+                units=_parse_units(units), geometry=geometry, progress=progress, references=references,
             )  # fmt: skip
         with OutputSet():
             if json_path is not None:
@@ -957,7 +964,7 @@ def plan(
             from rigidid.render import plan_tables
 
             _console().print(plan_tables(result))
-        if not result.report.ok:
+        if not result.report.ok or (result.references is not None and not result.references.ok):
             raise typer.Exit(EXIT_IDENTIFICATION)
 
 
