@@ -188,3 +188,25 @@ def test_the_real_h1_export_reads_once_its_nodes_are_named(tmp_path: Path) -> No
     expected = np.array([-5.99924e-02 - 5.53260e-02j, 2.58750e-02 - 2.30085e-04j, -2.99003e-01 + 3.17213e-01j,
                          -1.80250e00 + 1.55302e00j, 3.75037e00 + 2.93363e00j])  # fmt: skip
     np.testing.assert_allclose(h[0, 0], expected, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("func", "message"),
+    [
+        (1, r"function type 1 \(time response\) is not an FRF \(function type 4\): time records are read with"),
+        (9, r"function type 9 \(power spectral density \(PSD\)\) is not an FRF"),
+        (3, r"function type 3 is a cross spectrum, not an FRF"),
+    ],
+)
+def test_other_function_types_are_refused_by_name(tmp_path: Path, func: int, message: str) -> None:
+    h = np.ones((1, 1, 3), dtype=complex)
+    text = frf_uff_bytes(np.array([1.0, 2.0, 3.0]), h, ["1"], np.array([[0, 0, 1.0]]), ["2"], np.array([[1.0, 0, 0]]),
+                         SI, binary=False)  # fmt: skip
+    lines = text.split(b"\n")
+    record6 = next(k for k, line in enumerate(lines) if line.startswith(b"    4 "))
+    lines[record6] = b"%5d" % func + lines[record6][5:]
+    path = tmp_path / "other.uff"
+    path.write_bytes(b"\n".join(lines))
+    with pytest.raises(InputError, match=message) as info:
+        load_frf_uff(path, ["1"], ["2"])
+    assert info.value.location == "dataset 58 #1"

@@ -243,7 +243,6 @@ def load_frf_uff(
 
     src = str(path)
     sets = _read_all(Path(path))
-    factor = _uff_units_factor(sets, src, units)
     s_index = {s: i for i, s in enumerate(sensor_ids)}
     r_index = {r: j for j, r in enumerate(reference_ids)}
     found: dict[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.complex128]]] = {}
@@ -261,7 +260,13 @@ def load_frf_uff(
                 location=where,
             )
         if func != 4:
-            raise InputError(f"function type {func} is not an FRF (function type 4)", source=src, location=where)
+            from rigidid.io.uff import _FUNCTION_TYPES
+
+            name = _FUNCTION_TYPES.get(func, "unknown")
+            hint = ": time records are read with `--records` (identify, modes)" if func == 1 else ""
+            raise InputError(
+                f"function type {func} ({name}) is not an FRF (function type 4){hint}", source=src, location=where
+            )
         kind = _ORDINATE_KINDS.get(int(dset.get("ordinate_spec_data_type", 12)))
         if kind is None:
             raise InputError(
@@ -300,11 +305,12 @@ def load_frf_uff(
             data = 1j * w * data
         elif kind == "receptance":
             data = -(w**2) * data
-        if factor != 1.0:
-            data = np.asarray(data / factor, dtype=complex)
         found[(s_index[rsp], r_index[ref])] = (x, data)
     if not found:
         raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
+    factor = _uff_units_factor(sets, src, units)
+    if factor != 1.0:
+        found = {key: (x, np.asarray(data / factor, dtype=complex)) for key, (x, data) in found.items()}
     freqs = next(iter(found.values()))[0]
     frf = np.zeros((len(sensor_ids), len(reference_ids), freqs.size), dtype=complex)
     for i, s in enumerate(sensor_ids):
