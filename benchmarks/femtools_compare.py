@@ -3,8 +3,11 @@
 Run: ``.venv/bin/python benchmarks/femtools_compare.py --femtools DIR [--trials N]``
 
 ``DIR`` holds a copy of femtools' ``femtools/rbpe`` package (github 9997433-bit/femtools,
-MIT; not on PyPI: the PyPI package of that name is another project). It is imported from
-there, in this process; nothing of it is in rigidid. Without ``--femtools`` only rigidid runs.
+MIT; not on PyPI: the PyPI package of that name is another project): ``DIR/femtools/rbpe/``
+with ``__init__.py`` and ``rbfit.py`` (commit b462208, the version with ``mount_k`` and
+``restraint``) and an empty ``DIR/femtools/__init__.py`` (femtools' own imports its whole
+package). It is imported from there, in this process (it needs numpy and scipy only);
+nothing of it is in rigidid. Without ``--femtools`` only rigidid runs.
 
 Scenarios (as ``benchmarks/frf_accuracy.py``): a random body (``tests.bodies.random_body``)
 free-free (mounts at 1/100 of their stiffness: supports about a tenth of the band) or on its
@@ -21,7 +24,9 @@ on rigidid's band.
 
 Then femtools' documented example (its docstring of ``rigid_body_properties``: 12.5 kg, CG
 (0.1, -0.05, 0.2) m, inertia diag(0.8, 1.1, 1.5) kg m^2 on four 900 N/m springs, 24 sensors
-at the corners of a box, 6 inputs, exact accelerance 6-15 Hz, 21 lines) through both.
+at the corners of a box, 6 inputs, exact accelerance 6-15 Hz, 21 lines) through both; and
+rigidid on the same body measured 30-75 Hz (the supports' modes are at 2.6, 4.3 and 4.7 Hz,
+three motions are free).
 
 Errors: mass (relative), CG (distance over the largest sensor-box edge), inertia diagonal
 (largest relative error); median and worst over the trials; a failure (exception, or a
@@ -193,6 +198,15 @@ def documented_example(rbpe: Any) -> None:
             lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
         ),
     ]
+    f_high = np.linspace(30.0, 75.0, 21)
+    h_high = accelerance(body, pos, dirs, pos[inputs], dirs[inputs], f_high)
+    runs.append(
+        (
+            "rigidid mass_line, same body measured 30-75 Hz",
+            lambda: mass_line(f_high, h_high, pos, dirs, pos[inputs], dirs[inputs], band=(30.0, 75.0)),
+            lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
+        )
+    )
     if rbpe is not None:
         args = {"sensors": (pos, dirs), "inputs": (pos[inputs], dirs[inputs]), "band": (6.0, 15.0)}
         mk = [((x, y, -0.3), (0, 0, 1), 900.0) for x in (-0.5, 0.5) for y in (-0.4, 0.4)]

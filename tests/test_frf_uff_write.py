@@ -16,6 +16,7 @@ from rigidid.io import files
 from rigidid.io.frf import frf_format_from, frf_uff_bytes, load_frf_uff, load_references, reference_arrays
 
 from .conftest import DATA, SAMPLES
+from .tolerances import FRF_UFF_ASCII_REL, UFF_E13_REL
 
 FOUR = SAMPLES / "four-mounts"
 REAL = DATA / "frf" / "pyuff" / "h1_no_nodes_non_ascii_header.uff"
@@ -71,7 +72,7 @@ def test_uff_58_round_trips_through_the_reader(tmp_path: Path, test_files: tuple
     # read against another reference order: the array follows the ids asked for
     freqs, h = load_frf_uff(path, data.sensor_ids, data.reference_ids[::-1], units=SI)
     np.testing.assert_allclose(freqs, data.frequencies, rtol=1e-12, atol=0.0)
-    np.testing.assert_allclose(h, data.frf[:, ::-1], rtol=1e-9, atol=0.0)
+    np.testing.assert_allclose(h, data.frf[:, ::-1], rtol=FRF_UFF_ASCII_REL, atol=0.0)
     if binary:  # double precision, abscissa per line: exact
         np.testing.assert_array_equal(h, data.frf[:, ::-1])
 
@@ -83,9 +84,9 @@ def test_an_uneven_grid_in_ascii_keeps_six_digits_of_frequency(tmp_path: Path, t
     path.write_bytes(frf_uff_bytes(data.frequencies, data.frf, data.sensor_ids, dirs, data.reference_ids, rdirs,
                                    SI, binary=False))  # fmt: skip
     freqs, h = load_frf_uff(path, data.sensor_ids, data.reference_ids, units=SI)
-    np.testing.assert_allclose(freqs, lines, rtol=5e-6)
+    np.testing.assert_allclose(freqs, lines, rtol=UFF_E13_REL)
     assert np.max(np.abs(freqs / lines - 1.0)) > 1e-12  # the abscissa is E13.5 there
-    np.testing.assert_allclose(h, data.frf, rtol=1e-9, atol=0.0)
+    np.testing.assert_allclose(h, data.frf, rtol=FRF_UFF_ASCII_REL, atol=0.0)
 
 
 @pytest.mark.parametrize(("units", "factor"), [({"length": "in", "mass": "lb"}, 386.08858), (SI, 1.0)])
@@ -187,7 +188,7 @@ def test_the_real_h1_export_reads_once_its_nodes_are_named(tmp_path: Path) -> No
     np.testing.assert_allclose(freqs, 0.195313 * np.arange(1, 6), rtol=1e-12)
     expected = np.array([-5.99924e-02 - 5.53260e-02j, 2.58750e-02 - 2.30085e-04j, -2.99003e-01 + 3.17213e-01j,
                          -1.80250e00 + 1.55302e00j, 3.75037e00 + 2.93363e00j])  # fmt: skip
-    np.testing.assert_allclose(h[0, 0], expected, rtol=1e-6)
+    np.testing.assert_allclose(h[0, 0], expected, rtol=1e-12)
 
 
 @pytest.mark.parametrize(
