@@ -121,3 +121,11 @@ projected residual, relative; they differ by the term Kaufman drops (small near 
 REFINE_EXACT_REL = 1e-4
 """Output-error refinement from records with 1e-6 noise: inertia per mass relative to its largest entry,
 CG relative to half a metre (observed about 1e-6)."""
+
+FRF_UFF_ASCII_REL = 1.5e-12
+"""FRFs through an ASCII UFF 58 (values 4E20.12, 13 digits) and back, relative to each value
+(tests/test_frf_uff_write.py; observed 4.9e-13 on four-mounts with 1 % noise). Binary 58b is exact."""
+
+UFF_E13_REL = 5e-6
+"""An abscissa written as E13.5 (6 significant digits) comes back within half a unit of its sixth
+digit: the format's own bound, not an observation."""

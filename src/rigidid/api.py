@@ -27,13 +27,13 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.atomic import write_text_atomic
 from rigidid.io.files import ModeTable
-from rigidid.models import BodyFile, LayoutFile, MountsFile
+from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
     from rigidid.core.mounts import MountModel, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
-    from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
+    from rigidid.core.plan import LayoutReport, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.timedomain.refine import RecordBound
@@ -519,12 +519,16 @@ class PlanResult:
         Predicted standard deviations of CG and inertia (needs a body).
     suggestions : SensorPlan or None
         The sensors to add, best first (needs a body and ``add > 0``).
+    references : ReferenceReport or None
+        Whether the reference (hammer) points of an FRF test excite all six
+        rigid-body motions (needs ``references``).
     """
 
     units: dict[str, str]
     report: LayoutReport
     prediction: Prediction | None = None
     suggestions: SensorPlan | None = None
+    references: ReferenceReport | None = None
 
 
 def plan(
@@ -539,6 +543,7 @@ def plan(
     units: dict[str, str] | None = None,
     geometry: PathLike | None = None,
     progress: ProgressCallback | None = None,
+    references: ReferencesFile | PathLike | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -569,6 +574,10 @@ def plan(
     progress : callable, optional
         ``progress(task, done, total)`` around the predictions and the search
         for sensors (total unknown while they run).
+    references : ReferencesFile or path-like, optional
+        ``references.json`` of an FRF test: checked with
+        :func:`rigidid.core.plan.check_references` (about the body's CG and
+        with its modes when a body is given).
 
     Returns
     -------
@@ -594,10 +603,11 @@ def plan(
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(layout_units, report)
+        return PlanResult(layout_units, report, references=_plan_references(references, lay, None))
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
+    checked_refs = _plan_references(references, lay, core_body)
     levels = replace(DEFAULT_NOISE, **dict(noise or {}))
     prediction = None
     step = progress or no_progress
@@ -631,7 +641,25 @@ def plan(
             seed=seed,
             progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
         )
-    return PlanResult(layout_units, report, prediction, suggestions)
+    return PlanResult(layout_units, report, prediction, suggestions, checked_refs)
+
+
+def _plan_references(
+    references: ReferencesFile | PathLike | None, layout: LayoutFile, body: Body | None
+) -> ReferenceReport | None:
+    """``plan --references``: the reference set checked against the layout (and the body estimate)."""
+    if references is None:
+        return None
+    from rigidid.core.plan import check_references
+    from rigidid.io.frf import load_references, reference_arrays
+
+    refs = references if isinstance(references, ReferencesFile) else load_references(references)
+    if refs.units is not None and refs.units != layout.units:
+        source = None if isinstance(references, ReferencesFile) else str(references)
+        raise InputError("units differ from the layout's units", source=source, location="units")
+    ids, positions, directions = files.layout_arrays(layout)
+    _, rpos, rdirs = reference_arrays(refs)
+    return check_references(positions, directions, rpos, rdirs, body=body, unit=layout.units.length, names=ids)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:

@@ -170,7 +170,10 @@ def identify_massline(
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
-    freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
+    if is_uff:
+        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
+    else:
+        freqs, h = load_frf_csv(frf, ids, rids)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
     if modes is None:

@@ -196,6 +196,7 @@ _FLAGS = {
     "band": "--band",
     "max_order": "--max-order",
     "units": "--units",
+    "frf_format": "--frf-format",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
@@ -731,9 +732,19 @@ def simulate(
     record_noise: Annotated[
         float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=_TIME)
     ] = 0.0,
-    frf: Annotated[Path | None, typer.Option("--frf", help="Also write accelerance FRFs as CSV to PATH.")] = None,
+    frf: Annotated[
+        Path | None, typer.Option("--frf", help="Also write accelerance FRFs to PATH (CSV, or UFF for .uff/.unv).")
+    ] = None,
     references: ReferencesPath = None,
     frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
+    frf_format: Annotated[
+        str | None,
+        typer.Option(
+            "--frf-format",
+            help="Format of --frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
@@ -774,7 +785,7 @@ def simulate(
                         raise InputError(exc.message, source="--sample-rate/--duration") from None
                     raise
             if frf is not None:
-                _simulate_frf(body, layout, frf, references, frf_noise, seed)
+                _simulate_frf(body, layout, frf, references, frf_noise, seed, frf_format)
             if output == "-":
                 outs.stdout(text)
             else:
@@ -827,17 +838,50 @@ def _identify_massline(
         _console().print(massline_tables(result))
 
 
-def _simulate_frf(body: Path, layout: Path, out: Path, references: Path | None, noise: float, seed: int | None) -> None:
+def _simulate_frf(
+    body: Path,
+    layout: Path,
+    out: Path,
+    references: Path | None,
+    noise: float,
+    seed: int | None,
+    frf_format: str | None = None,
+) -> None:
+    import numpy as np
+
     from rigidid import api_frf
-    from rigidid.io.atomic import write_text_atomic
-    from rigidid.io.frf import frf_csv_text
+    from rigidid.io import files
+    from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
+    from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
 
     if references is None:
         raise InputError("--frf needs --references REFS.json", source="--references")
     if not noise >= 0.0:
         raise InputError(f"must be zero or positive, got {noise}", source="--frf-noise")
-    data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
-    write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+    fmt = frf_format_from(out, frf_format)
+    if fmt == "csv":
+        data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
+        write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+    else:
+        lay = files.load_layout(layout, require_rank=False)
+        refs = load_references(references)
+        data = api_frf.simulate_frf(body, lay, refs, noise=noise, seed=seed)
+        # UFF 58 states the abscissa as start and step in 6 digits: simulate on a grid that has them
+        step = float(f"{data.frequencies[0]:.5e}")
+        grid = step * np.arange(1, data.frequencies.size + 1, dtype=np.float64)
+        data = api_frf.simulate_frf(body, lay, refs, frequencies=grid, noise=noise, seed=seed)
+        dirs = files.layout_arrays(lay)[2]
+        rdirs = reference_arrays(refs)[2]
+        try:
+            content = frf_uff_bytes(
+                data.frequencies, data.frf, data.sensor_ids, dirs, data.reference_ids, rdirs,
+                {"length": lay.units.length, "mass": lay.units.mass}, binary=fmt == "uff",
+            )  # fmt: skip
+        except InputError as exc:
+            if exc.source in ("sensors", "references"):
+                exc.source = str(layout if exc.source == "sensors" else references)
+            raise
+        write_bytes_atomic(out, content)
     sys.stderr.write(
         f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
         f"({data.frequencies.size} lines) to {out}\n"
@@ -884,6 +928,13 @@ def plan(
     json_path: JsonPath = None,
     units: Units = None,
     geometry: Geometry = None,
+    references: Annotated[
+        Path | None,
+        typer.Option(
+            help="references.json of an FRF test: do its hammer points excite all six rigid-body motions?",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
@@ -904,7 +955,7 @@ def plan(
         with _naming(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
-                units=_parse_units(units), geometry=geometry, progress=progress,
+                units=_parse_units(units), geometry=geometry, progress=progress, references=references,
             )  # fmt: skip
         with OutputSet():
             if json_path is not None:
@@ -913,7 +964,7 @@ def plan(
             from rigidid.render import plan_tables
 
             _console().print(plan_tables(result))
-        if not result.report.ok:
+        if not result.report.ok or (result.references is not None and not result.references.ok):
             raise typer.Exit(EXIT_IDENTIFICATION)
 
 

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from rigidid.api_frf import MassLineResult
     from rigidid.core.layout_check import LayoutReport
     from rigidid.core.noise import NoiseLevels
-    from rigidid.core.plan import PredictedFigures, Prediction, SensorPlan
+    from rigidid.core.plan import PredictedFigures, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.timedomain.refine import RecordBound
@@ -423,6 +423,44 @@ def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
         "layout": layout_report_to_dict(plan.report),
         "prediction": None if plan.prediction is None else prediction_to_dict(plan.prediction),
         "suggestions": None if plan.suggestions is None else sensor_plan_to_dict(plan.suggestions),
+        "references": None if plan.references is None else reference_report_to_dict(plan.references),
+    }
+
+
+def reference_report_to_dict(report: ReferenceReport) -> dict[str, Any]:
+    """JSON form of ``plan --references``: whether the references excite all six rigid-body motions.
+
+    Returns
+    -------
+    dict
+        ``{"references", "point", "load_rank", "coverage": {load: fraction},
+        "weakest_load", "rank", "condition" (None when infinite),
+        "weakest_parameter", "participation" (per mode, or None),
+        "mode_frequencies_hz" (or None), "ok", "statement", "suggestion",
+        "suggested_reference": {"position", "direction"},
+        "suggested_condition" (None when infinite)}``.
+    """
+    from rigidid.core.plan import RIGID_LOADS
+
+    return {
+        "references": report.references,
+        "point": report.point.tolist(),
+        "load_rank": report.load_rank,
+        "coverage": {name: float(v) for name, v in zip(RIGID_LOADS, report.coverage, strict=True)},
+        "weakest_load": report.weakest_load,
+        "rank": report.rank,
+        "condition": _none_if_inf(report.condition),
+        "weakest_parameter": report.weakest_parameter,
+        "participation": None if report.participation is None else report.participation.tolist(),
+        "mode_frequencies_hz": None if report.mode_frequencies is None else report.mode_frequencies.tolist(),
+        "ok": report.ok,
+        "statement": report.statement,
+        "suggestion": report.suggestion,
+        "suggested_reference": {
+            "position": report.suggested_position.tolist(),
+            "direction": report.suggested_direction.tolist(),
+        },
+        "suggested_condition": _none_if_inf(report.suggested_condition),
     }
 
 

@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from rigidid.api_frf import MassLineResult
+    from rigidid.core.plan import ReferenceReport
     from rigidid.core.timedomain import ModalEstimate
 
 __all__ = ["estimate_tables", "massline_tables", "plan_tables", "result_csv_files", "result_tables"]
@@ -441,7 +442,34 @@ def plan_tables(plan: PlanResult) -> Group:
                 _fmt(f.score),
             )
         parts.append(sug)
+    if plan.references is not None:
+        parts.append(_reference_table(plan.references))
     return Group(*parts)
+
+
+def _reference_table(report: ReferenceReport) -> Table:
+    """``plan --references``: the reference (hammer) points against the six rigid-body motions."""
+    from rich.table import Table
+
+    from rigidid.core.plan import RIGID_LOADS
+
+    table = Table(title="Reference (hammer) points", title_justify="left", show_header=False)
+    table.add_column("item")
+    table.add_column("value")
+    table.add_row("references", str(report.references))
+    table.add_row("inertial parameters determined (10 needed)", str(report.rank))
+    table.add_row("condition number", "infinite" if not np.isfinite(report.condition) else f"{report.condition:.3g}")
+    table.add_row("load coverage", ", ".join(f"{n} {v:.0%}" for n, v in zip(RIGID_LOADS, report.coverage, strict=True)))
+    if report.participation is not None and report.mode_frequencies is not None:
+        table.add_row(
+            "mode participation",
+            ", ".join(
+                f"{f:.3g} Hz {p:.0%}" for f, p in zip(report.mode_frequencies, report.participation, strict=True)
+            ),
+        )
+    table.add_row("verdict", ("ready: " if report.ok else "[red]not usable as it is[/]: ") + report.statement)
+    table.add_row("to add", report.suggestion)
+    return table
 
 
 def estimate_tables(estimate: ModalEstimate) -> Group:

@@ -35,14 +35,18 @@ from rigidid.errors import IllConditionedWarning, InputError, Notice, emit
 
 __all__ = [
     "AXIS_COS",
+    "INERTIAL_PARAMETERS",
+    "RIGID_LOADS",
     "Finding",
     "LayoutReport",
     "PredictedFigures",
     "Prediction",
+    "ReferenceReport",
     "SensorPlan",
     "SuggestedSensor",
     "candidate_grid",
     "check_layout",
+    "check_references",
     "predict_uncertainty",
     "suggest_sensors",
 ]
@@ -507,3 +511,347 @@ def suggest_sensors(
             progress("choosing sensors", step, add)
     emit(notices)
     return SensorPlan(baseline, tuple(steps), c_pos, c_dir, noise, draws)
+
+
+# --------------------------------------------------------------------------- reference (hammer) points
+
+
+RIGID_LOADS = ("force along x", "force along y", "force along z", "moment about x", "moment about y", "moment about z")
+"""The six generalised loads on a rigid body, in the order of its coordinates."""
+
+INERTIAL_PARAMETERS = (
+    "the mass",
+    "the CG along x",
+    "the CG along y",
+    "the CG along z",
+    "the inertia about x",
+    "the inertia about y",
+    "the inertia about z",
+    "the product of inertia xy",
+    "the product of inertia xz",
+    "the product of inertia yz",
+)
+"""The ten inertial parameters the mass line determines, in the order of :func:`check_references`."""
+
+REFERENCE_CONDITION_LIMIT = 1.0e3
+"""Largest condition number of the references' map onto the ten inertial parameters that is
+accepted. Measured on the three samples' layouts: three references at corners along x, y and
+z give 3.9-10; three whose lines of action pass near the sensors' centroid give 20 to 6e3;
+two references or three along one axis give rank 9 (structurally: see :func:`check_references`)."""
+
+PARTICIPATION_MIN = 0.01
+"""A rigid-body mode counts as excited when some reference puts at least this fraction of its
+generalised force into it (``|psi_k^T g_j| / sqrt(g_j^T M^-1 g_j)``, mass-normalised ``psi``)."""
+
+
+@dataclass(frozen=True)
+class ReferenceReport:
+    """Whether a set of reference (hammer) points drives all six rigid-body motions.
+
+    Attributes
+    ----------
+    references : int
+        Number of references.
+    point : ndarray, shape (3,)
+        The point loads are taken about: the body's CG when a body is given,
+        else the centroid of the sensors (length).
+    load_rank : int
+        Rank of the references' generalised forces ``T_f^T`` (6 x q): at most
+        ``min(q, 6)``.
+    coverage : ndarray, shape (6,)
+        Per load of :data:`RIGID_LOADS`, the norm of its row of ``T_f^T``
+        (moments divided by the characteristic length) over the largest.
+    weakest_load : str
+        The load of :data:`RIGID_LOADS` with the least coverage.
+    rank : int
+        How many of the ten inertial parameters the mass line determines
+        (rank of the map, 10 needed).
+    condition : float
+        Condition number of that map (dimensionless; ``inf`` when rank < 10).
+    weakest_parameter : str
+        The parameter of :data:`INERTIAL_PARAMETERS` the references determine worst.
+    participation : ndarray or None, shape (6,)
+        Per rigid-body mode on the mounts (ascending frequency), the largest
+        fraction of a reference's generalised force going into it; ``None``
+        without a body with mounts.
+    mode_frequencies : ndarray or None, shape (6,)
+        Undamped frequencies of those modes (Hz).
+    ok : bool
+        Rank 10, condition at most :data:`REFERENCE_CONDITION_LIMIT`, and (with
+        a body) every mode excited (:data:`PARTICIPATION_MIN`).
+    statement : str
+        The verdict in words, naming what is missing.
+    suggestion : str
+        The reference to add (one at a time, the one giving the highest rank
+        and then the lowest condition; more than one, at most three, while
+        the set is not yet accepted), in words.
+    suggested_position, suggested_direction : ndarray, shape (3,)
+        The first reference to add (length; unit vector along an axis).
+    suggested_condition : float
+        The condition with the suggested references added.
+    """
+
+    references: int
+    point: Array
+    load_rank: int
+    coverage: Array
+    weakest_load: str
+    rank: int
+    condition: float
+    weakest_parameter: str
+    participation: Array | None
+    mode_frequencies: Array | None
+    ok: bool
+    statement: str
+    suggestion: str
+    suggested_position: Array
+    suggested_direction: Array
+    suggested_condition: float
+
+
+def _mass_matrix_about(body: Body, point: Array) -> Array:
+    """6x6 rigid-body mass matrix about `point`: ``[[m I, -m S(g)], [m S(g), J_g + m (|g|^2 I - g g^T)]]``."""
+    from rigidid.core.geometry import skew
+
+    g = np.asarray(body.center_of_gravity, dtype=float) - point
+    m = body.mass
+    out = np.zeros((6, 6))
+    out[:3, :3] = m * np.eye(3)
+    out[:3, 3:] = -m * skew(g)
+    out[3:, :3] = m * skew(g)
+    out[3:, 3:] = np.asarray(body.inertia_tensor, dtype=float) + m * (float(g @ g) * np.eye(3) - np.outer(g, g))
+    return out
+
+
+def _parameter_map(mass_matrix: Array, loads: Array) -> Array:
+    """``D`` (6 q x 10): ``vec(M(theta) X)`` per inertial parameter, ``X = M0^-1 G`` the rigid accelerations.
+
+    ``theta = (m, m g_x, m g_y, m g_z, J_xx, J_yy, J_zz, J_xy, J_xz, J_yz)`` (``J`` about the point), in
+    which ``M`` is linear; the mass line gives ``X``, and ``M(theta) X = G`` is what determines ``theta``.
+    """
+    from rigidid.core.geometry import skew
+
+    x = np.linalg.solve(mass_matrix, loads)
+    basis = np.zeros((10, 6, 6))
+    basis[0, :3, :3] = np.eye(3)
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1.0
+        basis[1 + k, :3, 3:] = -skew(e)
+        basis[1 + k, 3:, :3] = skew(e)
+    for n, (a, b) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
+        basis[4 + n, 3 + a, 3 + b] = basis[4 + n, 3 + b, 3 + a] = 1.0
+    d: Array = np.einsum("kab,bj->ajk", basis, x).reshape(-1, 10)
+    return d
+
+
+def _condition(d: Array) -> tuple[int, float, Array]:
+    s, vt = np.linalg.svd(d, full_matrices=True)[1:]
+    rank = int(numerical_rank(s, d.shape[0]))
+    cond = float(s[0] / s[-1]) if rank == d.shape[1] else math.inf
+    return rank, cond, vt[-1]
+
+
+def check_references(
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+    *,
+    body: Body | None = None,
+    unit: str = "",
+    names: tuple[str, ...] | None = None,
+) -> ReferenceReport:
+    """Whether reference (hammer) points excite all six rigid-body motions, and what to add.
+
+    Parameters
+    ----------
+    positions, directions : array_like, shape (p, 3)
+        The sensors (length; unit axes): candidate places for a new reference.
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Where the force acts and its unit direction.
+    body : Body, optional
+        An estimate of the body (and mounts): the loads are taken about its CG,
+        its mass matrix maps them to accelerations, and with mounts each
+        rigid-body mode's participation is given. Without, a nominal body
+        (CG at the sensors' centroid, isotropic inertia of their spread).
+    unit : str
+        Length unit, for the messages.
+    names : tuple of str, optional
+        Sensor ids, for the suggestion.
+
+    Returns
+    -------
+    ReferenceReport
+
+    Raises
+    ------
+    InputError
+        Shapes that disagree, or no reference.
+
+    Notes
+    -----
+    A reference ``j`` applies the generalised force ``g_j = (d_j, r_j x d_j)``
+    (a row of ``T_f``, eq. (3) of [1] for the reference point); the body
+    answers with the rigid accelerations ``x_j = M^-1 g_j``, which the mass
+    line measures (``T M^-1 T_f^T``). The ten inertial parameters ``theta``
+    follow from ``M(theta) x_j = g_j``, linear in ``theta``: the references
+    determine them when that 6 q x 10 map has rank 10, and its condition
+    number (lengths scaled by the sensors' RMS radius, masses by the body's)
+    says how well. One reference cannot (6 equations). Two cannot either:
+    an inertia ``e e^T`` about ``e = alpha_1 x alpha_2`` (normal to both
+    angular accelerations they cause) changes no equation, so rank 9 at
+    most. Forces that never give a moment about an axis leave the inertia
+    about it free.
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    dirs = normalise_directions(np.asarray(directions, dtype=float).reshape(-1, 3))
+    rpos = np.asarray(reference_positions, dtype=float).reshape(-1, 3)
+    rdirs = normalise_directions(np.asarray(reference_directions, dtype=float).reshape(-1, 3))
+    if rpos.shape[0] == 0 or rpos.shape != rdirs.shape:
+        raise InputError("need one position and one direction per reference, at least one reference")
+    if pos.shape != dirs.shape:
+        raise InputError("need one direction per sensor")
+    point = pos.mean(axis=0) if body is None else np.asarray(body.center_of_gravity, dtype=float)
+    spread = np.vstack([pos, rpos]) - point
+    length = float(np.sqrt(np.mean(np.sum(spread**2, axis=1)))) or 1.0
+    if body is None:
+        mass0 = np.diag([1.0, 1.0, 1.0, length**2, length**2, length**2])
+        scale_m = 1.0
+    else:
+        _check_body(body)
+        mass0 = _mass_matrix_about(body, point)
+        scale_m = body.mass
+    # dimensionless: lengths / L, masses / m
+    sdiag = np.array([1.0, 1.0, 1.0, length, length, length])
+    mass_s = mass0 / scale_m / np.outer(sdiag, sdiag)
+
+    def loads_of(p: Array, d: Array) -> Array:
+        g: Array = sensor_matrix(p, d, point).T / sdiag[:, None]
+        return g
+
+    loads = loads_of(rpos, rdirs)
+    rank, cond, weak = _condition(_parameter_map(mass_s, loads))
+    rows = np.linalg.norm(loads, axis=1)
+    coverage = rows / rows.max()
+    weakest_load = RIGID_LOADS[int(np.argmin(coverage))]
+    weakest_parameter = INERTIAL_PARAMETERS[int(np.argmax(np.abs(weak)))]
+    load_rank = int(numerical_rank(np.linalg.svd(loads.T, compute_uv=False), loads.shape[1]))
+
+    # the references to add, one at a time (at most three): each sensor's place (and the references'
+    # own) along x, y and z, the one giving the highest rank, then the lowest condition
+    places = np.vstack([pos, rpos])
+    labels = list(names or [f"#{i + 1}" for i in range(pos.shape[0])])
+    labels += [f"reference #{j + 1}" for j in range(len(rpos))]
+    unit_text = " " + unit if unit else ""
+    chosen: list[tuple[int, int]] = []
+    current = loads
+    best_rank, best_cond = rank, cond
+    while len(chosen) < 3:
+        best = (-1, math.inf, 0, 0)
+        for i, place in enumerate(places):
+            for axis in range(3):
+                extra = loads_of(place[None], np.eye(3)[axis][None])
+                r, c = _condition(_parameter_map(mass_s, np.hstack([current, extra])))[:2]
+                if r > best[0] or (r == best[0] and c < best[1]):
+                    best = (r, c, i, axis)
+        chosen.append((best[2], best[3]))
+        current = np.hstack([current, loads_of(places[best[2]][None], np.eye(3)[best[3]][None])])
+        best_rank, best_cond = best[0], best[1]
+        if _accepted(best_rank, best_cond) or _accepted(rank, cond):
+            break
+    parts = []
+    for i, axis in chosen:
+        where = f"sensor {labels[i]}" if i < pos.shape[0] else labels[i]
+        coords = ", ".join(f"{v:.4g}" for v in places[i])
+        parts.append(f"along +{'xyz'[axis]} at {where} ({coords}{unit_text})")
+    suggestion = f"add a reference {' and one '.join(parts)}: " + (
+        f"condition {best_cond:.3g}" if best_rank == 10 else f"rank {best_rank} of 10"
+    )
+    add_pos = places[chosen[0][0]].copy()
+    add_dir = np.eye(3)[chosen[0][1]]
+
+    participation = frequencies = None
+    if body is not None and body.mounts:
+        from rigidid.core.simulate import system_matrices
+
+        m_cg, k_cg, _ = system_matrices(body)
+        eigvals, psi = _mass_normal_modes(k_cg, m_cg)
+        if eigvals is not None:
+            g_cg = sensor_matrix(rpos, rdirs, np.asarray(body.center_of_gravity, dtype=float)).T  # (6, q)
+            norms = np.sqrt(np.einsum("aj,aj->j", g_cg, np.linalg.solve(m_cg, g_cg)))
+            participation = np.max(np.abs(psi.T @ g_cg) / norms, axis=1)
+            frequencies = np.sqrt(np.clip(eigvals, 0.0, None)) / (2.0 * np.pi)
+
+    ok = _accepted(rank, cond)
+    excited = participation is None or bool(np.all(participation >= PARTICIPATION_MIN))
+    q = rpos.shape[0]
+    subject = "the reference" if q == 1 else f"the {q} references"
+    absent = [name for name, v in zip(RIGID_LOADS, coverage, strict=True) if v < 1e-9]
+    if absent:
+        listed = absent[0] if len(absent) == 1 else ", a ".join(absent[:-1]) + " or a " + absent[-1]
+        missing = f"no reference gives a {listed}"
+    else:
+        missing = f"the weakest load is the {weakest_load} ({coverage.min():.0%} of the strongest)"
+    if q == 2 and rank < 10:
+        missing += (
+            "; two references never determine the inertia about the axis normal to the two rotations "
+            "they cause: a third is needed"
+        )
+    if ok:
+        statement = (
+            f"{subject} determine{'s' if q == 1 else ''} mass, CG and inertia from the mass line "
+            f"(condition {cond:.3g}); {missing}"
+        )
+    elif rank < 10:
+        statement = (
+            f"{subject} leave{'s' if q == 1 else ''} {weakest_parameter} undetermined (rank {rank} of 10); {missing}"
+        )
+    else:
+        statement = (
+            f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
+            f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
+        )
+    if participation is not None and frequencies is not None:
+        k = int(np.argmin(participation))
+        if not excited:
+            statement += (
+                f"; rigid-body mode {k + 1} ({frequencies[k]:.3g} Hz) is not excited "
+                f"(participation {participation[k]:.1%} < {PARTICIPATION_MIN:.0%})"
+            )
+        else:
+            statement += f"; every rigid-body mode is excited (least: mode {k + 1}, {participation[k]:.0%})"
+    return ReferenceReport(
+        references=q,
+        point=point,
+        load_rank=load_rank,
+        coverage=coverage,
+        weakest_load=weakest_load,
+        rank=rank,
+        condition=cond,
+        weakest_parameter=weakest_parameter,
+        participation=participation,
+        mode_frequencies=frequencies,
+        ok=ok and excited,
+        statement=statement,
+        suggestion=suggestion,
+        suggested_position=add_pos,
+        suggested_direction=add_dir,
+        suggested_condition=best_cond,
+    )
+
+
+def _accepted(rank: int, condition: float) -> bool:
+    """Whether a set of references with this rank and condition is accepted (:data:`REFERENCE_CONDITION_LIMIT`)."""
+    return rank == 10 and condition <= REFERENCE_CONDITION_LIMIT
+
+
+def _mass_normal_modes(stiffness: Array, mass: Array) -> tuple[Array | None, Array]:
+    """Undamped modes ``K psi = w^2 M psi``, ``psi^T M psi = I`` (Cholesky of ``M``); ``None`` if ``K`` is zero."""
+    if not np.any(stiffness):
+        return None, np.zeros((6, 6))
+    chol = np.linalg.cholesky(mass)
+    a = np.linalg.solve(chol, np.linalg.solve(chol, stiffness).T).T  # L^-1 K L^-T
+    eigvals, vecs = np.linalg.eigh(0.5 * (a + a.T))
+    psi: Array = np.linalg.solve(chol.T, vecs)
+    return eigvals, psi

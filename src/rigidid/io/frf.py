@@ -19,6 +19,7 @@ import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,7 +27,17 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.models import ReferencesFile
 
-__all__ = ["FRF_COLUMNS", "frf_csv_text", "load_frf_csv", "load_frf_uff", "load_references", "reference_arrays"]
+__all__ = [
+    "FRF_COLUMNS",
+    "FRF_FORMATS",
+    "frf_csv_text",
+    "frf_format_from",
+    "frf_uff_bytes",
+    "load_frf_csv",
+    "load_frf_uff",
+    "load_references",
+    "reference_arrays",
+]
 
 FRF_COLUMNS = ("frequency_hz", "response", "reference", "real", "imag")
 
@@ -165,8 +176,35 @@ def _uff_id(node: int, code: int, ids: Sequence[str]) -> str | None:
     return None
 
 
+def _uff_units_factor(sets: list[dict[str, Any]], src: str, units: dict[str, str] | None) -> float:
+    """Factor from rigidid's accelerance to the file's, from its dataset 164 (1 without one)."""
+    from rigidid.io.uff import _LENGTH_PER_M, _MASS_PER_KG, _units_from_164
+
+    found = [d for d in sets if d.get("type") == 164]
+    if not found:
+        return 1.0
+    file_units = _units_from_164(found[0], src, "dataset 164")
+    if units is not None and file_units != {"length": units["length"], "mass": units["mass"]}:
+        raise InputError(
+            f"units {file_units['length']}, {file_units['mass']} differ from the layout's "
+            f"{units['length']}, {units['mass']}",
+            source=src,
+            location="dataset 164",
+        )
+    force = float(found[0].get("force", 0.0))
+    if not force > 0.0:  # a standard code with zero factors: coherent or gravitational by the code
+        from rigidid.io.uff import _CODE_FACTORS
+
+        force = _CODE_FACTORS.get(int(found[0].get("units_code") or 0), (1.0, 1.0))[1]
+    return _MASS_PER_KG[file_units["mass"]] * _LENGTH_PER_M[file_units["length"]] / force
+
+
 def load_frf_uff(
-    path: str | os.PathLike[str], sensor_ids: Sequence[str], reference_ids: Sequence[str]
+    path: str | os.PathLike[str],
+    sensor_ids: Sequence[str],
+    reference_ids: Sequence[str],
+    *,
+    units: dict[str, str] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
     """Read FRFs from a universal file (datasets 58, function type 4) as accelerance.
 
@@ -178,13 +216,19 @@ def load_frf_uff(
         Ids of the layout's sensors and of the references: a record's response
         (reference) node ``n`` and direction ``d`` is the id ``"n+x"``-style if
         there is one, else ``"n"``.
+    units : dict, optional
+        ``{"length", "mass"}`` of the layout: a dataset 164 in the file must
+        name the same units.
 
     Returns
     -------
     frequencies : ndarray, shape (f,)
     frf : ndarray of complex, shape (p, q, f)
         Accelerance; mobility (ordinate type 11) is multiplied by ``i w``,
-        receptance (8) by ``-w^2``; values are taken in the layout's units.
+        receptance (8) by ``-w^2``. With a dataset 164, values per its force
+        unit are converted to rigidid's (per mass unit x length / s^2: lbf
+        of in/lb and ft/lb files divided out); without, they are taken in
+        the layout's units.
 
     Raises
     ------
@@ -192,7 +236,8 @@ def load_frf_uff(
         Naming the file and dataset: function type 3 (cross spectrum) or
         another non-FRF, an ordinate that is not acceleration, velocity or
         displacement, a node/direction that is no sensor or reference, a
-        missing pair, or pairs with other frequency lines.
+        missing pair, pairs with other frequency lines, or a dataset 164 whose
+        units differ from `units`.
     """
     from rigidid.io.uff import _read_all
 
@@ -215,7 +260,13 @@ def load_frf_uff(
                 location=where,
             )
         if func != 4:
-            raise InputError(f"function type {func} is not an FRF (function type 4)", source=src, location=where)
+            from rigidid.io.uff import _FUNCTION_TYPES
+
+            name = _FUNCTION_TYPES.get(func, "unknown")
+            hint = ": time records are read with `--records` (identify, modes)" if func == 1 else ""
+            raise InputError(
+                f"function type {func} ({name}) is not an FRF (function type 4){hint}", source=src, location=where
+            )
         kind = _ORDINATE_KINDS.get(int(dset.get("ordinate_spec_data_type", 12)))
         if kind is None:
             raise InputError(
@@ -257,6 +308,9 @@ def load_frf_uff(
         found[(s_index[rsp], r_index[ref])] = (x, data)
     if not found:
         raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
+    factor = _uff_units_factor(sets, src, units)
+    if factor != 1.0:
+        found = {key: (x, np.asarray(data / factor, dtype=complex)) for key, (x, data) in found.items()}
     freqs = next(iter(found.values()))[0]
     frf = np.zeros((len(sensor_ids), len(reference_ids), freqs.size), dtype=complex)
     for i, s in enumerate(sensor_ids):
@@ -268,3 +322,203 @@ def load_frf_uff(
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
             frf[i, j] = pair[1]
     return freqs, frf
+
+
+# --------------------------------------------------------------------------- UFF 58 (function type 4) writer
+
+FRF_FORMATS = ("csv", "uff", "uff-ascii")
+"""Formats ``simulate --frf`` writes: CSV (:func:`frf_csv_text`), UFF 58b (binary) or 58 (ASCII)
+(:func:`frf_uff_bytes`)."""
+
+
+def frf_format_from(path: str | os.PathLike[str], given: str | None) -> str:
+    """The FRF file format: `given` (one of :data:`FRF_FORMATS`), else from the suffix (``.uff``/``.unv``: ``"uff"``).
+
+    Raises
+    ------
+    InputError
+        `given` is none of :data:`FRF_FORMATS`, or contradicts a UFF suffix
+        (``identify --frf`` reads by suffix, so such a file would not read back).
+    """
+    is_uff = str(path).lower().endswith((".uff", ".unv"))
+    if given is None:
+        return "uff" if is_uff else "csv"
+    fmt = given.strip().lower()
+    if fmt not in FRF_FORMATS:
+        raise InputError(f"FRF format {given!r}: one of {', '.join(FRF_FORMATS)}", source="frf_format")
+    if (fmt == "csv") == is_uff:
+        want = ".csv" if fmt == "csv" else ".uff or .unv"
+        raise InputError(
+            f"{fmt} FRFs in a file named {Path(path).name!r}: FRF files are read by suffix; name it {want}",
+            source="frf_format",
+        )
+    return fmt
+
+
+def _uff_node_code(sid: str, direction: NDArray[np.float64], what: str) -> tuple[int, int]:
+    """UFF node and signed direction code of a sensor or reference id (``"12"``, ``"12+x"``).
+
+    The direction must lie along a global axis (UFF 58 states nothing else
+    without a local coordinate system); an axis in the id must be that one.
+    """
+    from rigidid.io.uff import _ID_PATTERN, _dir_code
+
+    match = _ID_PATTERN.match(sid)
+    if match is None or int(match.group(1)) <= 0:
+        raise InputError(
+            f"{what} id {sid!r} is not a UFF node and direction (ids such as 12 or 12+x are): "
+            "rename it or write the FRFs as CSV",
+            source=what + "s",
+        )
+    d = np.asarray(direction, dtype=float).reshape(3)
+    along = np.flatnonzero(np.abs(d) > 1e-12)
+    if along.size != 1:
+        raise InputError(
+            f"{what} {sid}: direction ({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g}) is not along an axis; UFF 58 "
+            "records only +-x, +-y, +-z: write the FRFs as CSV",
+            source=what + "s",
+        )
+    axis = ("+" if d[along[0]] > 0 else "-") + "xyz"[along[0]]
+    named = match.group(2)
+    if named:
+        named = named.lower() if named[0] in "+-" else "+" + named.lower()
+        if named != axis:
+            raise InputError(f"{what} id {sid!r} names the axis {named} but its direction is {axis}", source=what + "s")
+    return int(match.group(1)), _dir_code(axis)
+
+
+def _uff_force_factor(units: dict[str, str]) -> tuple[float, dict[str, Any]]:
+    """Dataset 164 of the layout's units and the factor from rigidid's accelerance to the file's.
+
+    rigidid's accelerance is length / s^2 per (mass unit x length / s^2); the
+    file's is per the force unit of its 164 system (lbf for in/lb and ft/lb, a
+    gravitational system). The factor is 1 for coherent systems.
+    """
+    from rigidid.io.uff import _LENGTH_PER_M, _MASS_PER_KG, _write_164
+
+    dset = _write_164(units)
+    factor = _MASS_PER_KG[units["mass"]] * _LENGTH_PER_M[units["length"]] / float(dset["force"])
+    return factor, dset
+
+
+def _d25(value: float) -> str:
+    return f"{value:25.16e}".replace("e", "D")
+
+
+def frf_uff_bytes(
+    frequencies: NDArray[np.float64],
+    frf: NDArray[np.complex128],
+    sensor_ids: Sequence[str],
+    sensor_directions: NDArray[np.float64],
+    reference_ids: Sequence[str],
+    reference_directions: NDArray[np.float64],
+    units: dict[str, str],
+    *,
+    binary: bool = True,
+    name: str = "rigidid simulate",
+) -> bytes:
+    """FRFs (p, q, f) as a universal file: dataset 164 and one dataset 58 (function type 4) per pair.
+
+    Parameters
+    ----------
+    frequencies : ndarray, shape (f,)
+        Frequency lines (Hz), ascending and positive.
+    frf : ndarray of complex, shape (p, q, f)
+        Accelerance in the layout's units (1 / mass unit).
+    sensor_ids, reference_ids : sequence of str
+        Ids of the form ``"12"`` or ``"12+x"``: the node number and, if given,
+        the direction code of the record's response (reference).
+    sensor_directions, reference_directions : ndarray, shape (p, 3) and (q, 3)
+        Unit directions; the code of an id without an axis comes from them
+        (they must then lie along a global axis).
+    units : dict
+        ``{"length", "mass"}`` of the layout: written as dataset 164; values
+        are converted to its force unit (lbf for in/lb and ft/lb).
+    binary : bool
+        Binary 58b (default; double precision, abscissa stored per line, exact)
+        or ASCII 58 (``4E20.12``; the abscissa is written as start and
+        increment in 6 significant digits, so only a grid whose step has 6
+        digits comes back exactly).
+    name : str
+        First ID line of each record.
+
+    Returns
+    -------
+    bytes
+        The file's content (write it with :func:`rigidid.io.atomic.write_bytes_atomic`).
+
+    Raises
+    ------
+    InputError
+        An id that is no UFF node, an id without axis whose direction is
+        oblique, a unit UFF cannot state, non-finite values, or frequencies
+        that are not positive and ascending.
+
+    Notes
+    -----
+    Records: ordinate data type 6 (complex double); abscissa 18 (frequency,
+    Hz); ordinate 12 (acceleration, length exponent 1); denominator 13
+    (excitation force, force exponent 1). Load case = reference number (from 1).
+    """
+    freq = np.asarray(frequencies, dtype=float).reshape(-1)
+    h = np.asarray(frf, dtype=complex)
+    p, q = len(sensor_ids), len(reference_ids)
+    if h.shape != (p, q, freq.size):
+        raise InputError(f"FRF array of shape {h.shape}, expected {(p, q, freq.size)}", source="frf")
+    if freq.size < 2 or not np.all(np.isfinite(freq)) or freq[0] <= 0.0 or np.any(np.diff(freq) <= 0.0):
+        raise InputError("frequencies must be at least two positive, ascending lines", source="frequencies")
+    if not np.all(np.isfinite(h)):
+        raise InputError("FRF values must be finite", source="frf")
+    rsp = [_uff_node_code(s, d, "sensor") for s, d in zip(sensor_ids, np.asarray(sensor_directions), strict=True)]
+    ref = [
+        _uff_node_code(r, d, "reference") for r, d in zip(reference_ids, np.asarray(reference_directions), strict=True)
+    ]
+    factor, u164 = _uff_force_factor(units)
+    step = float(freq[1] - freq[0])
+    even = not binary and bool(np.allclose(np.diff(freq), step, rtol=1e-9, atol=0.0))
+    length = units["length"]
+    force = "N" if u164["units_code"] == 1 else str(u164["units_description"]).split("(")[-1].rstrip(")").strip()
+    out = bytearray()
+    out += b"    -1\n   164" + b" " * 74 + b"\n"
+    out += f"{u164['units_code']:10d}{u164['units_description'][:20]:<20s}{u164['temp_mode']:10d}\n".encode()
+    out += (_d25(u164["length"]) + _d25(u164["force"]) + _d25(u164["temp"]) + "\n").encode()
+    out += (_d25(u164["temp_offset"]) + "\n    -1\n").encode()
+    record = 0
+    for j in range(q):
+        for i in range(p):
+            record += 1
+            values = h[i, j] * factor
+            if binary:
+                data = np.empty(3 * freq.size)
+                data[0::3], data[1::3], data[2::3] = freq, values.real, values.imag
+                body = data.astype("<f8").tobytes()
+                out += f"    -1\n    58b{1:6d}{2:6d}{11:12d}{len(body):12d}{0:6d}{0:6d}{0:12d}{0:12d}\n".encode()
+            else:
+                out += b"    -1\n    58" + b" " * 74 + b"\n"
+            head = [
+                f"{name[:80]:<80s}",
+                f"{f'{sensor_ids[i]} / {reference_ids[j]}'[:80]:<80s}",
+                f"{'NONE':<80s}",
+                f"{'NONE':<80s}",
+                f"{'NONE':<80s}",
+                f"{4:5d}{record:10d}{0:5d}{j + 1:10d} {'NONE':<10s}{rsp[i][0]:10d}{rsp[i][1]:4d}"
+                f" {'NONE':<10s}{ref[j][0]:10d}{ref[j][1]:4d}",
+                f"{6:10d}{freq.size:10d}{int(even):10d}"
+                f"{freq[0] if even else 0.0:13.5e}{step if even else 0.0:13.5e}{0.0:13.5e}",
+                f"{18:10d}{0:5d}{0:5d}{0:5d} {'Frequency':<20s} {'Hz':<20s}",
+                f"{12:10d}{1:5d}{0:5d}{0:5d} {'Acceleration':<20s} {f'{length}/s^2':<20s}",
+                f"{13:10d}{0:5d}{1:5d}{0:5d} {'Force':<20s} {force[:20]:<20s}",
+                f"{0:10d}{0:5d}{0:5d}{0:5d} {'NONE':<20s} {'NONE':<20s}",
+            ]
+            out += ("\n".join(head) + "\n").encode()
+            if binary:
+                out += body + b"    -1\n"
+                continue
+            if even:
+                data = np.empty(2 * freq.size)
+                data[0::2], data[1::2] = values.real, values.imag
+                lines = ["".join(f"{v:20.12e}" for v in data[k : k + 4]) for k in range(0, data.size, 4)]
+            else:
+                lines = [f"{f:13.5e}{v.real:20.12e}{v.imag:20.12e}" for f, v in zip(freq, values, strict=True)]
+            out += ("\n".join(lines) + "\n    -1\n").encode()
+    return bytes(out)

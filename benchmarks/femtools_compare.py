@@ -1,0 +1,259 @@
+"""rigidid's mass line beside femtools.rbpe on the same simulated FRFs and on femtools' own example.
+
+Run: ``.venv/bin/python benchmarks/femtools_compare.py --femtools DIR [--trials N]``
+
+``DIR`` holds a copy of femtools' ``femtools/rbpe`` package (github 9997433-bit/femtools,
+MIT; not on PyPI: the PyPI package of that name is another project): ``DIR/femtools/rbpe/``
+with ``__init__.py`` and ``rbfit.py`` (commit b462208, the version with ``mount_k`` and
+``restraint``) and an empty ``DIR/femtools/__init__.py`` (femtools' own imports its whole
+package). It is imported from there, in this process (it needs numpy and scipy only);
+nothing of it is in rigidid. Without ``--femtools`` only rigidid runs.
+
+Scenarios (as ``benchmarks/frf_accuracy.py``): a random body (``tests.bodies.random_body``)
+free-free (mounts at 1/100 of their stiffness: supports about a tenth of the band) or on its
+mounts as drawn; 8 random sensors; 3 references at three corners of the sensor box along x,
+y and z (and, as femtools asks for, 6 references: those three plus the other three
+directions at the same corners); accelerance 0.25-400 Hz (3200 lines), one elastic mode at
+300 Hz (1 % damping), 1 % complex noise. rigidid: ``rigidid.core.massline.mass_line`` with
+its automatic band. femtools: ``rigid_body_properties`` as documented, (a) defaults
+(averaged mass line, its own automatic band), (b) defaults on rigidid's band, (c) defaults
+from rigidid's lower band edge to 60 Hz (a fifth of the elastic mode: chosen knowing the
+truth, in femtools' favour), (d) ``restraint="inertia", mount_k="fit"`` on rigidid's band,
+and on mounts (e) the true mount stiffness given (``mount_k``, truth rigidid does not get)
+on rigidid's band.
+
+Then femtools' documented example (its docstring of ``rigid_body_properties``: 12.5 kg, CG
+(0.1, -0.05, 0.2) m, inertia diag(0.8, 1.1, 1.5) kg m^2 on four 900 N/m springs, 24 sensors
+at the corners of a box, 6 inputs, exact accelerance 6-15 Hz, 21 lines) through both; and
+rigidid on the same body measured 30-75 Hz (the supports' modes are at 2.6, 4.3 and 4.7 Hz,
+three motions are free).
+
+Errors: mass (relative), CG (distance over the largest sensor-box edge), inertia diagonal
+(largest relative error); median and worst over the trials; a failure (exception, or a
+non-finite or non-positive result) is counted and left out of the statistics. Times are
+per call, median, wall clock on this machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from tests.bodies import random_body, random_layout
+
+from rigidid.core.frf import accelerance, random_elastic_modes
+from rigidid.core.geometry import transfer_matrix
+from rigidid.core.massline import mass_line
+from rigidid.core.simulate import Body, Mount
+
+Errors = tuple[float, float, float]
+
+
+def test_case(seed: int, soften: float, references: int) -> dict[str, Any]:
+    """One simulated FRF test (the frf_accuracy.py scenario), with 3 or 6 references."""
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    mounts = tuple(Mount(m.position, m.stiffness * soften, m.damping * np.sqrt(soften)) for m in body.mounts)
+    body = dataclasses.replace(body, mounts=mounts)
+    assert isinstance(body, Body)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    corners = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rpos, rdirs = corners, np.eye(3)
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, references, mass=body.mass)  # 3: frf_accuracy.py's draws
+    if references == 6:
+        rpos = np.vstack([corners, corners])
+        rdirs = np.vstack([np.eye(3), np.eye(3)[[1, 2, 0]]])
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    # the mount stiffness about the origin (femtools' reference point), for its mount_k
+    k0 = np.zeros((6, 6))
+    for m in body.mounts:
+        t = transfer_matrix(m.position)[:3]
+        k0 += t.T @ m.stiffness @ t
+    return {"body": body, "pos": pos, "dirs": dirs, "rpos": rpos, "rdirs": rdirs, "f": f, "h": h, "k0": k0}
+
+
+def errors(body: Body, pos: np.ndarray, mass: float, cg: np.ndarray, inertia: np.ndarray) -> Errors:
+    if not (np.isfinite(mass) and mass > 0 and np.all(np.isfinite(cg)) and np.all(np.isfinite(inertia))):
+        raise ArithmeticError("non-finite or non-positive result")
+    span = float(np.ptp(pos, axis=0).max())
+    return (
+        abs(mass / body.mass - 1.0),
+        float(np.linalg.norm(cg - body.center_of_gravity)) / span,
+        float(np.max(np.abs(np.diag(inertia) / np.diag(body.inertia_tensor) - 1.0))),
+    )
+
+
+def timed(call: Callable[[], Any]) -> tuple[Any, float]:
+    t0 = time.perf_counter()
+    out = call()
+    return out, time.perf_counter() - t0
+
+
+def run_scenario(name: str, soften: float, references: int, trials: int, rbpe: Any) -> None:
+    rows: dict[str, list[Errors]] = {}
+    times: dict[str, list[float]] = {}
+    failed: dict[str, list[str]] = {}
+
+    def record(label: str, body: Body, pos: np.ndarray, call: Callable[[], Any], unpack: Callable[[Any], Any]) -> Any:
+        try:
+            out, dt = timed(call)
+            rows.setdefault(label, []).append(errors(body, pos, *unpack(out)))
+            times.setdefault(label, []).append(dt)
+            return out
+        except Exception as exc:
+            failed.setdefault(label, []).append(f"{type(exc).__name__}: {str(exc)[:90]}")
+            return None
+
+    for seed in range(trials):
+        c = test_case(seed, soften, references)
+        body, pos, dirs, rpos, rdirs, f, h = (c[k] for k in ("body", "pos", "dirs", "rpos", "rdirs", "f", "h"))
+        r = record(
+            "rigidid mass_line (auto band)",
+            body,
+            pos,
+            lambda: mass_line(f, h, pos, dirs, rpos, rdirs),  # noqa: B023
+            lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
+        )
+        if rbpe is None:
+            continue
+        args = {"sensors": (pos, dirs), "inputs": (rpos, rdirs)}
+
+        def fem(out: Any) -> tuple[float, np.ndarray, np.ndarray]:
+            return out.mass, out.cog_global, out.inertia
+
+        record("femtools defaults (own band)", body, pos, lambda: rbpe(h, f, **args), fem)  # noqa: B023
+        if r is None:
+            continue
+        band = r.band
+        record("femtools defaults, rigidid's band", body, pos, lambda: rbpe(h, f, band=band, **args), fem)  # noqa: B023
+        low_band = (band[0], min(band[1], 60.0))
+        record(
+            "femtools defaults, rigidid's low edge to 60 Hz",
+            body,
+            pos,
+            lambda: rbpe(h, f, band=low_band, **args),  # noqa: B023
+            fem,
+        )
+        record(
+            "femtools inertia restraint + fitted K, rigidid's band",
+            body,
+            pos,
+            lambda: rbpe(h, f, band=band, restraint="inertia", mount_k="fit", **args),  # noqa: B023
+            fem,
+        )
+        if soften == 1.0:
+            record(
+                "femtools true mount K given, rigidid's band",
+                body,
+                pos,
+                lambda: rbpe(h, f, band=band, mount_k=c["k0"], **args),  # noqa: B023
+                fem,
+            )
+    print(f"\n{name}: {references} references, {trials} trials")
+    for label in dict.fromkeys([*rows, *failed]):
+        e = np.array(rows.get(label, []))
+        n_fail = len(failed.get(label, []))
+        if e.size:
+            print(
+                f"  {label:55s} mass {np.median(e[:, 0]):.4f}/{e[:, 0].max():.4f}  "
+                f"CG {np.median(e[:, 1]):.4f}/{e[:, 1].max():.4f}  J {np.median(e[:, 2]):.4f}/{e[:, 2].max():.4f}  "
+                f"time {1e3 * np.median(times[label]):.1f} ms  failed {n_fail}/{trials}"
+            )
+        else:
+            print(f"  {label:55s} failed {n_fail}/{trials}")
+        if n_fail:
+            print(f"    e.g. {failed[label][0]}")
+
+
+def documented_example(rbpe: Any) -> None:
+    """femtools' own example (docstring of rigid_body_properties), exact FRFs, through both."""
+    from rigidid.core.simulate import Mount
+
+    mass, cg, jdiag = 12.5, np.array([0.1, -0.05, 0.2]), np.array([0.8, 1.1, 1.5])
+    pos = np.repeat([[sx, sy, sz] for sx in (-0.5, 0.5) for sy in (-0.4, 0.4) for sz in (-0.3, 0.3)], 3, axis=0)
+    dirs = np.tile(np.eye(3), (8, 1))
+    inputs = [0, 4, 8, 13, 17, 22]
+    spring = np.diag([0.0, 0.0, 900.0])
+    mounts = tuple(Mount(np.array([x, y, -0.3]), spring, np.zeros((3, 3))) for x in (-0.5, 0.5) for y in (-0.4, 0.4))
+    body = Body(mass, cg, np.diag(jdiag), mounts)
+    f = np.linspace(6.0, 15.0, 21)
+    # the same FRFs as the example builds (-w^2 T (K - w^2 M)^-1 T_in^T); rigidid's forward model, undamped
+    h = accelerance(body, pos, dirs, pos[inputs], dirs[inputs], f)
+    print("\nfemtools' documented example (12.5 kg on 4 x 900 N/m, 24 sensors, 6 inputs, 6-15 Hz, 21 lines, exact)")
+    runs: list[tuple[str, Callable[[], Any], Callable[[Any], Any]]] = [
+        (
+            "rigidid mass_line (band 6-15 Hz given)",
+            lambda: mass_line(f, h, pos, dirs, pos[inputs], dirs[inputs], band=(6.0, 15.0)),
+            lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
+        ),
+    ]
+    f_high = np.linspace(30.0, 75.0, 21)
+    h_high = accelerance(body, pos, dirs, pos[inputs], dirs[inputs], f_high)
+    runs.append(
+        (
+            "rigidid mass_line, same body measured 30-75 Hz",
+            lambda: mass_line(f_high, h_high, pos, dirs, pos[inputs], dirs[inputs], band=(30.0, 75.0)),
+            lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
+        )
+    )
+    if rbpe is not None:
+        args = {"sensors": (pos, dirs), "inputs": (pos[inputs], dirs[inputs]), "band": (6.0, 15.0)}
+        mk = [((x, y, -0.3), (0, 0, 1), 900.0) for x in (-0.5, 0.5) for y in (-0.4, 0.4)]
+
+        def fem(out: Any) -> tuple[float, np.ndarray, np.ndarray]:
+            return out.mass, out.cog_global, out.inertia
+
+        runs += [
+            ("femtools, mounts ignored (its example: 12.14)", lambda: rbpe(h, f, **args), fem),
+            ("femtools, mount_k given (its example: 12.5)", lambda: rbpe(h, f, mount_k=mk, **args), fem),
+            (
+                "femtools, inertia restraint + fitted K",
+                lambda: rbpe(h, f, restraint="inertia", mount_k="fit", **args),
+                fem,
+            ),
+        ]
+    for label, call, unpack in runs:
+        try:
+            out, dt = timed(call)
+            m, c, j = unpack(out)
+            e = errors(body, pos, m, c, j)
+            print(
+                f"  {label:48s} mass {m:.6g} kg (error {e[0]:.2e})  CG error {e[1]:.2e} of span  "
+                f"J diag error {e[2]:.2e}  time {1e3 * dt:.1f} ms"
+            )
+        except Exception as exc:
+            print(f"  {label:48s} failed: {type(exc).__name__}: {exc}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--trials", type=int, default=10)
+    parser.add_argument("--femtools", type=Path, default=None, help="folder holding the femtools package")
+    args = parser.parse_args()
+    rbpe = None
+    if args.femtools is not None:
+        sys.path.insert(0, str(args.femtools.resolve()))
+        from femtools.rbpe.rbfit import rigid_body_properties
+
+        rbpe = rigid_body_properties
+    warm = test_case(0, 0.01, 3)  # imports and first calls out of the timings
+    mass_line(warm["f"], warm["h"], warm["pos"], warm["dirs"], warm["rpos"], warm["rdirs"])
+    documented_example(rbpe)
+    for references in (3, 6):
+        run_scenario("free-free (supports 1/100 stiffness)", 0.01, references, args.trials, rbpe)
+        run_scenario("on mounts (as drawn)", 1.0, references, args.trials, rbpe)
+
+
+if __name__ == "__main__":
+    main()
