@@ -46,6 +46,7 @@ __all__ = [
     "PlanResult",
     "TestData",
     "body_from_file",
+    "body_with_mounts",
     "convert",
     "estimate_modes",
     "identify",
@@ -148,6 +149,7 @@ class MountModelFit:
     residual: float
     free_residual: float | None
     free_parameters: int = 51
+    noise: NoiseLevels | None = None
 
     def _aic(self, residual: float, parameters: int) -> float:
         n = self.model.equations
@@ -164,10 +166,15 @@ class MountModelFit:
         return None if self.free_residual is None else self._aic(self.free_residual, self.free_parameters)
 
     @property
-    def adequate(self) -> bool | None:
-        """True when the mount model explains the modes as well as the free matrices (lower or equal AIC)."""
+    def aic_adequate(self) -> bool | None:
+        """True when the mount model's AIC is not worse than the free matrices'."""
         free = self.free_aic
         return None if free is None else bool(self.aic <= free)
+
+    @property
+    def adequate(self) -> bool | None:
+        """The verdict: the F test's (:attr:`MountModel.adequate`) when made, else :attr:`aic_adequate`."""
+        return self.aic_adequate if self.model.adequate is None else self.model.adequate
 
 
 @dataclass(frozen=True)
@@ -190,6 +197,7 @@ class Mounts:
     positions: NDArray[np.float64]
     rates: MountRates
     nominal: NDArray[np.float64] | None = None
+    groups: tuple[str | None, ...] | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -353,7 +361,7 @@ def identify(
     fit = None
     if method == "mounts":
         assert mounts is not None
-        result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay)
+        result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
     else:
         result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
     result = _check_result(result, labels, lay.units.length, notes)
@@ -457,6 +465,41 @@ def body_from_file(body: BodyFile) -> Body:
     )
 
 
+def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -> BodyFile:
+    """`body` with its mounts replaced by those of ``mounts.json`` (each with its ``stiffness``).
+
+    Parameters
+    ----------
+    body : BodyFile or path-like
+        ``body.json``: mass, CG and inertia are kept.
+    mounts : path-like or MountsFile
+        Positions, ``stiffness`` and optional ``damping`` of every mount (as in
+        ``body.json``: three values along the layout's x, y, z or a 3x3 matrix),
+        in the body's units.
+
+    Returns
+    -------
+    BodyFile
+
+    Raises
+    ------
+    InputError
+        A bad file, units that differ from the body's, or a mount without stiffness.
+    """
+    from rigidid.models import MountSpec
+
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    source = None if isinstance(mounts, MountsFile) else str(mounts)
+    _, _, entries = _mount_spec(mounts, {"length": spec.units.length, "mass": spec.units.mass})
+    replaced = []
+    for k, m in enumerate(entries.mounts):
+        if m.stiffness is None:
+            raise InputError("a mount without stiffness cannot be simulated", source=source, location=f"mounts.{k}")
+        extra = {} if m.damping is None else {"damping": m.damping}
+        replaced.append(MountSpec(position=m.position, stiffness=m.stiffness, **extra))
+    return spec.model_copy(update={"mounts": replaced})
+
+
 def simulate(
     body: BodyFile | PathLike,
     layout: LayoutFile | PathLike,
@@ -525,6 +568,7 @@ class PlanResult:
     report: LayoutReport
     prediction: Prediction | None = None
     suggestions: SensorPlan | None = None
+    mount_split: tuple[int, int, str] | None = None
 
 
 def plan(
@@ -539,6 +583,7 @@ def plan(
     units: dict[str, str] | None = None,
     geometry: PathLike | None = None,
     progress: ProgressCallback | None = None,
+    mounts: PathLike | MountsFile | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -569,6 +614,10 @@ def plan(
     progress : callable, optional
         ``progress(task, done, total)`` around the predictions and the search
         for sensors (total unknown while they run).
+    mounts : path-like or MountsFile, optional
+        ``mounts.json`` (or a ``body.json``): whether this mount layout determines
+        every per-mount rate (:func:`rigidid.core.mounts.split_uniqueness`),
+        in :attr:`PlanResult.mount_split`.
 
     Returns
     -------
@@ -591,10 +640,16 @@ def plan(
     ids, positions, directions = files.layout_arrays(lay)
     layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length, names=ids)
+    split = None
+    if mounts is not None:
+        from rigidid.core.mounts import split_uniqueness
+
+        where, axes, mount_spec = _mount_spec(mounts, layout_units)
+        split = split_uniqueness(where, axes, [m.group for m in mount_spec.mounts])
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(layout_units, report)
+        return PlanResult(layout_units, report, mount_split=split)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -631,7 +686,7 @@ def plan(
             seed=seed,
             progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
         )
-    return PlanResult(layout_units, report, prediction, suggestions)
+    return PlanResult(layout_units, report, prediction, suggestions, split)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:
@@ -1116,13 +1171,24 @@ def _mount_model(
     mass: float | None,
     mounts: PathLike | MountsFile,
     layout: LayoutFile,
+    noise: NoiseLevels | Mapping[str, float] | None = None,
 ) -> tuple[Identification, MountModelFit]:
-    """The mount model, started from the free route when six modes allow it, and the comparison with it."""
+    """The mount model, started from the free route when six modes allow it, and the comparison with it.
+
+    The output residuals are weighted by `noise` (default: ``estimate_noise``, the shape noise from the
+    rigid-body fit, with any overrides of a mapping), as the Monte Carlo intervals are.
+    """
     from rigidid.core.geometry import layout_frame
     from rigidid.core.mounts import eigen_residual, identify_mount_model
+    from rigidid.core.noise import NoiseLevels, estimate_noise
     from rigidid.errors import IdentificationError
 
-    where, axes, _ = _mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    where, axes, spec = _mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    groups = [m.group for m in spec.mounts]
+    if isinstance(noise, NoiseLevels):
+        levels = noise
+    else:
+        levels = replace(estimate_noise(positions, directions, shapes), **dict(noise or {}))
     free = None
     if poles.size == 6:
         try:
@@ -1130,7 +1196,9 @@ def _mount_model(
         except IdentificationError:
             free = None
     start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
-    ident, model = identify_mount_model(positions, directions, poles, shapes, where, axes, mass=mass, start=start)
+    ident, model = identify_mount_model(
+        positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
+    )
     length = layout_frame(positions).scale
     residual = eigen_residual(
         poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length
@@ -1140,7 +1208,7 @@ def _mount_model(
         free_residual = eigen_residual(
             poles, free.mode_shapes_cg, free.inertia_per_mass, free.stiffness_per_mass, free.damping_per_mass, length
         )
-    return ident, MountModelFit(model, residual, free_residual)
+    return ident, MountModelFit(model, residual, free_residual, noise=levels)
 
 
 def with_mounts(
@@ -1175,9 +1243,11 @@ def with_mounts(
     if mounts is not None:
         positions, axes, spec = _mount_spec(mounts, result.units)
         scale = 1.0 if ident.mass is None else ident.mass
+        groups = tuple(m.group for m in spec.mounts)
         rates = mount_rates(
-            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass
-        )
+            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass,
+            groups=groups,
+        )  # fmt: skip
         nominal = None
         if all(m.stiffness is not None for m in spec.mounts):
             nominal = np.array([
@@ -1185,7 +1255,7 @@ def with_mounts(
                 for k, m in enumerate(spec.mounts)
             ])  # fmt: skip
         ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
-        out = replace(out, mounts=Mounts(ids, positions, rates, nominal))
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups))
     if torque_axis is not None:
         out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
     return out

@@ -391,6 +391,8 @@ def plan_tables(plan: PlanResult) -> Group:
     summary.add_row("hardest motion to see", report.weakest_motion)
     verdict = "ready" if report.ok else "not usable as it is"
     summary.add_row("verdict", f"[{_SEVERITY_STYLE[report.worst]}]{verdict}[/]" if report.findings else verdict)
+    if plan.mount_split is not None:
+        summary.add_row("per-mount rates", plan.mount_split[2])
     parts: list[Any] = [summary]
     if report.findings:
         findings = Table(title="Findings", title_justify="left")

@@ -41,6 +41,7 @@ __all__ = [
     "group_matrix",
     "identify_mount_model",
     "mount_rates",
+    "split_uniqueness",
     "torque_roll_axis",
 ]
 
@@ -171,6 +172,67 @@ def _fit(design: Array, matrix: Array, scale: float, ties: Array) -> tuple[Array
     return (ties @ rates).reshape(-1, 3), residual
 
 
+def _uniqueness(design: Array) -> tuple[int, int, str]:
+    """Unknowns, rank and the statement of a design matrix (21 rows, one column per shared rate)."""
+    unknowns = design.shape[1]
+    s = np.linalg.svd(design, compute_uv=False)
+    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
+    if rank == unknowns:
+        statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
+    else:
+        statement = (
+            f"not unique: {unknowns} rates but the mount layout determines only {rank} combinations of them "
+            f"(the 6x6 matrix has 21 independent entries); fix some rates (a data sheet's shear rates), declare "
+            "mounts of one type identical (a common group), or use fewer mounts, to make the rest unique"
+        )
+    return unknowns, rank, statement
+
+
+def split_uniqueness(
+    positions: ArrayLike, axes: ArrayLike | None = None, groups: Sequence[Hashable | None] | None = None
+) -> tuple[int, int, str]:
+    """Whether a mount layout determines every per-mount rate from a 6x6 matrix (before a test).
+
+    Parameters
+    ----------
+    positions : array_like, shape (n, 3)
+        Where the mounts act (length).
+    axes : array_like, shape (n, 3, 3), optional
+        Their principal axes (columns); default x, y, z.
+    groups : sequence of hashable or None, optional
+        Groups of identical mounts (:func:`group_matrix`).
+
+    Returns
+    -------
+    unknowns, rank : int
+        Shared rates and the rank of their map to the 21 entries of ``K``
+        (unique when equal); as :class:`MountRates`.
+    statement : str
+        In words, with what would make it unique.
+
+    Notes
+    -----
+    The rank does not depend on the reference point (moving it is a congruence of
+    ``K``), so the mounts' centroid serves as the CG.
+
+    Examples
+    --------
+    >>> split_uniqueness([[-1, 0, 0], [1, 0, 0], [0, 1, -1]])[:2]
+    (9, 8)
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    n = pos.shape[0]
+    if n == 0 or not np.all(np.isfinite(pos)):
+        raise InputError("mount positions must be finite, with at least one mount", source="positions")
+    u = np.broadcast_to(np.eye(3), (n, 3, 3)).copy() if axes is None else np.asarray(axes, dtype=float)
+    if u.shape != (n, 3, 3) or not np.all(np.isfinite(u)) or np.any(np.linalg.norm(u, axis=1) <= 0.0):
+        raise InputError(f"axes must be ({n}, 3, 3) non-zero finite vectors", source="axes")
+    u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    offsets = pos - pos.mean(axis=0)
+    scale = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1)))) or 1.0
+    return _uniqueness(_design(offsets, u, scale) @ group_matrix(groups, n))
+
+
 def mount_rates(
     stiffness: ArrayLike,
     center_of_gravity: ArrayLike,
@@ -253,9 +315,7 @@ def mount_rates(
     scale = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1)))) or 1.0
     ties = group_matrix(groups, n)
     design = _design(offsets, u, scale) @ ties
-    s = np.linalg.svd(design, compute_uv=False)
-    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
-    unknowns = ties.shape[1]
+    unknowns, rank, statement = _uniqueness(design)
     rates_k, res_k = _fit(design, k, scale, ties)
     rates_c, res_c = (None, math.nan)
     if damping is not None:
@@ -263,14 +323,6 @@ def mount_rates(
         if c.shape != (6, 6) or not np.all(np.isfinite(c)):
             raise InputError(f"damping must be a finite 6x6 matrix, got shape {c.shape}", source="damping")
         rates_c, res_c = _fit(design, c, scale, ties)
-    if rank == unknowns:
-        statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
-    else:
-        statement = (
-            f"not unique: {unknowns} rates but the mount layout determines only {rank} combinations of them "
-            f"(the 6x6 matrix has 21 independent entries); fix some rates (a data sheet's shear rates), declare "
-            "mounts of one type identical (a common group), or use fewer mounts, to make the rest unique"
-        )
     return MountRates(rates_k, rates_c, u, res_k, res_c, unknowns, rank, statement)
 
 
@@ -430,11 +482,15 @@ class _OutputError:
     """
 
     def __init__(
-        self, t_local: Array, mu: NDArray[np.complex128], psi: NDArray[np.complex128], noise: NoiseLevels
+        self,
+        sensors: tuple[Array, Array],
+        mu: NDArray[np.complex128],
+        psi: NDArray[np.complex128],
+        noise: NoiseLevels,
     ) -> None:
         from rigidid.core.statespace import modal_from_poles
 
-        self.pos, self.dirs = t_local
+        self.pos, self.dirs = sensors
         self.psi = psi
         self.wn = np.abs(mu)
         _, self.zeta = modal_from_poles(mu)
@@ -584,7 +640,7 @@ def fit_mount_model(
     frame = layout_frame(pos)
     length = frame.scale
     omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
-    mu = lam / omega
+    mu = np.asarray(lam / omega, dtype=np.complex128)
     local_pos = frame.to_local(pos)
     coords, _ = project_rigid(sensor_matrix(local_pos, dirs), psi)
     coords = coords / np.linalg.norm(coords, axis=0)
@@ -730,12 +786,14 @@ def identify_mount_model(
     *,
     mass: float | None = None,
     start: tuple[ArrayLike, ArrayLike] | None = None,
+    groups: Sequence[Hashable | None] | None = None,
+    noise: NoiseLevels | None = None,
 ) -> tuple[Identification, MountModel]:
     """The mount model as an :class:`~rigidid.core.identify.Identification` (method ``"mounts"``).
 
     Parameters
     ----------
-    positions, directions, poles, shapes, mount_positions, mount_axes, start
+    positions, directions, poles, shapes, mount_positions, mount_axes, start, groups, noise
         As :func:`fit_mount_model`.
     mass : float, optional
         The mass, for absolute results.
@@ -761,7 +819,9 @@ def identify_mount_model(
     from rigidid.core.selection import project_rigid
     from rigidid.core.statespace import modal_from_poles
 
-    model = fit_mount_model(positions, directions, poles, shapes, mount_positions, mount_axes, start=start)
+    model = fit_mount_model(
+        positions, directions, poles, shapes, mount_positions, mount_axes, start=start, groups=groups, noise=noise
+    )
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lam = np.asarray(poles, dtype=complex).ravel()
