@@ -929,6 +929,7 @@ def report(
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
     if records and stabilisation is not None:
         spectrum = _spectrum(records)
+    identified, roll = _report_mounts(result, force_unit)
     return render_report(
         result.identification,
         result.positions,
@@ -945,7 +946,18 @@ def report(
         mount_stiffness=stiffness,
         spectrum=spectrum,
         progress=progress,
+        identified_mounts=identified,
+        torque_roll_axis=roll,
     )
+
+
+def _report_mounts(result: IdentifyResult, force_unit: str | None) -> tuple[dict[str, Any] | None, Any]:
+    """The identified mounts and the torque roll axis as the report takes them (the result JSON's forms)."""
+    from rigidid.jsonout import mounts_to_dict, result_to_dict
+
+    identified = None if result.mounts is None else mounts_to_dict(result, force_unit)
+    roll = None if result.torque_roll_axis is None else result_to_dict(result, force_unit)["torque_roll_axis"]
+    return identified, roll
 
 
 def _spectrum(records: Sequence[tuple[NDArray[np.float64], float]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -968,7 +980,7 @@ def report_pngs(
 
     Parameters are those of :func:`report`; returns the paths written.
     """
-    from rigidid.reporting import _mount_labels, save_pngs
+    from rigidid.reporting import _mount_labels, identified_mount_labels, save_pngs
 
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
@@ -977,6 +989,10 @@ def report_pngs(
         mounts = [np.asarray(m.position, dtype=float) for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
         labels = _mount_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
+    identified, roll = _report_mounts(result, force_unit)
+    if identified is not None:
+        mounts = [np.asarray(m["position"], dtype=float) for m in identified["mounts"]]
+        labels = identified_mount_labels(identified)
     return save_pngs(
         folder,
         result.identification,
@@ -990,6 +1006,7 @@ def report_pngs(
         mount_labels=labels,
         spectrum=_spectrum(records) if records and stabilisation is not None else None,
         progress=progress,
+        roll_axis=None if roll is None else roll["direction"],
     )
 
 
