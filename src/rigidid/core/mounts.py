@@ -49,6 +49,9 @@ Array = NDArray[np.float64]
 
 ADEQUATE_P = 0.01
 """The mount model is flagged inadequate when its F test's p-value is below this."""
+SHAPE_NOISE_FLOOR = 1e-6
+"""Shape noise below this (exact or 10-digit data) is taken as this, a known level: the F test
+then compares the mount model's misfit with it (chi-square) rather than with the data's own."""
 
 _UPPER = np.triu_indices(6)
 _WEIGHT = np.where(_UPPER[0] == _UPPER[1], 1.0, math.sqrt(2.0))
@@ -497,7 +500,8 @@ class _OutputError:
         self.freq = max(noise.frequency, 1e-6)
         self.damp = max(noise.damping, 1e-4)
         rms = np.sqrt(np.mean(np.abs(psi) ** 2, axis=0))
-        self.shape_scale = rms * max(noise.shape, 1e-6) / math.sqrt(2.0)
+        self.shape_scale = rms * max(noise.shape, SHAPE_NOISE_FLOOR) / math.sqrt(2.0)
+        self.floored = noise.shape < SHAPE_NOISE_FLOOR
 
     def __call__(self, g: Array, j: Array, k: Array, c: Array) -> Array:
         from scipy.optimize import linear_sum_assignment
@@ -534,17 +538,24 @@ class _OutputError:
 
 
 def _f_test(
-    cost: float, free_cost: float, modes: int, sensors: int, parameters: int
+    cost: float, free_cost: float, modes: int, sensors: int, parameters: int, known: bool
 ) -> tuple[float, tuple[int, int], float] | None:
-    """F statistic, degrees of freedom and p-value of the mount model against any linear rigid-body model."""
+    """F statistic, degrees of freedom and p-value of the mount model against any linear rigid-body model.
+
+    With `known` (the shape noise was below its floor, so the floor is the noise), the
+    denominator is its expectation, 1, and the p-value that of chi-square.
+    """
+    from scipy.stats import chi2
     from scipy.stats import f as f_dist
 
     numerator = 12 * modes - parameters
     denominator = 2 * modes * (sensors - 6)
     if numerator <= 0 or denominator <= 0:
         return None
-    floor = 1e-12 * denominator
-    statistic = (max(cost - free_cost, 0.0) / numerator) / (max(free_cost, floor) / denominator)
+    excess = max(cost - free_cost, 0.0)
+    if known:
+        return excess / numerator, (numerator, denominator), float(chi2.sf(excess, numerator))
+    statistic = (excess / numerator) / (max(free_cost, 1e-12 * denominator) / denominator)
     return statistic, (numerator, denominator), float(f_dist.sf(statistic, numerator, denominator))
 
 
@@ -619,6 +630,9 @@ def fit_mount_model(
     ``F`` follows Fisher's distribution when the model is right, whatever the
     common noise scale; the ratio of the frequency and damping levels to the shape
     level must be right. A p-value below :data:`ADEQUATE_P` flags the model.
+    Shape noise below :data:`SHAPE_NOISE_FLOOR` is taken as the floor, a known
+    level: the misfit is then tested against it by chi-square (F with ``d_2``
+    infinite), so data exact to rounding pass.
     """
     from scipy.optimize import least_squares, nnls
 
@@ -702,8 +716,9 @@ def fit_mount_model(
         resid = a @ rates - b
         cost = float(np.sum(output(*build(refined.x)) ** 2))
         f_result = _f_test(
-            cost, output.free_cost(sensor_matrix(local_pos, dirs)), mu.size, pos.shape[0], 9 + 2 * shared
-        )
+            cost, output.free_cost(sensor_matrix(local_pos, dirs)), mu.size, pos.shape[0], 9 + 2 * shared,
+            output.floored,
+        )  # fmt: skip
     g, j = x[:3], _inertia(x[3:])
     k = (ties @ rates[:shared]).reshape(q, 3) * omega**2
     c = (ties @ rates[shared:]).reshape(q, 3) * omega
