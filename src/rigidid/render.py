@@ -147,6 +147,28 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
             damping = [_fmt(v) if v is not None else "-" for v in m["damping"]]
             table.add_row(m["id"], *(_fmt(v) for v in m["stiffness"]), *damping)
         tables.append(table)
+    if result.mount_model is not None:
+        fit = result.mount_model
+        model = fit.model
+        table = Table(title="Mount model", title_justify="left", show_header=False)
+        table.add_column("item")
+        table.add_column("value")
+        table.add_row("unknowns / equations", f"{model.parameters} / {model.equations}")
+        free = "-" if fit.free_residual is None else f"{fit.free_residual:.3g}"
+        table.add_row(
+            "eigenproblem residual",
+            f"{fit.residual:.3g} (free route: {free})",
+        )
+        if model.p_value is not None and model.f_dof is not None:
+            table.add_row(
+                "F test against any linear model",
+                f"F = {model.f_statistic:.3g} with ({model.f_dof[0]}, {model.f_dof[1]}) dof, p = {model.p_value:.3g}",
+            )
+        verdict = "not tested" if fit.adequate is None else "the mounts explain the modes"
+        if fit.adequate is False:
+            verdict = "INADEQUATE: a mount position or axis is off, or a support is missing; trust the free route"
+        table.add_row("verdict", verdict)
+        tables.append(table)
     if result.torque_roll_axis is not None:
         tra = result.torque_roll_axis
         table = Table(title="Torque roll axis", title_justify="left", show_header=False)
