@@ -31,7 +31,7 @@ from rigidid.models import BodyFile, LayoutFile, MountsFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
-    from rigidid.core.mounts import MountModel, MountRates, TorqueRollAxis
+    from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, SensorPlan
     from rigidid.core.record_spread import RecordSpread
@@ -569,6 +569,7 @@ class PlanResult:
     prediction: Prediction | None = None
     suggestions: SensorPlan | None = None
     mount_split: tuple[int, int, str] | None = None
+    mount_prediction: MountModelPrediction | None = None
 
 
 def plan(
@@ -617,7 +618,9 @@ def plan(
     mounts : path-like or MountsFile, optional
         ``mounts.json`` (or a ``body.json``): whether this mount layout determines
         every per-mount rate (:func:`rigidid.core.mounts.split_uniqueness`),
-        in :attr:`PlanResult.mount_split`.
+        in :attr:`PlanResult.mount_split`; with `body`, also the mount model's
+        predicted precision (:func:`rigidid.core.mounts.predict_mount_model`,
+        at most 50 draws) in :attr:`PlanResult.mount_prediction`.
 
     Returns
     -------
@@ -645,7 +648,8 @@ def plan(
         from rigidid.core.mounts import split_uniqueness
 
         where, axes, mount_spec = _mount_spec(mounts, layout_units)
-        split = split_uniqueness(where, axes, [m.group for m in mount_spec.mounts])
+        mount_groups = [m.group for m in mount_spec.mounts]
+        split = split_uniqueness(where, axes, mount_groups)
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
@@ -662,6 +666,16 @@ def plan(
             core_body, positions, directions, noise=levels, draws=draws, seed=seed,
             progress=lambda _, done, total: step(task, done, total),
         )  # fmt: skip
+    mount_prediction = None
+    if mounts is not None and report.rank == 6:
+        from rigidid.core.mounts import predict_mount_model
+
+        step("predicting the mount model", 0, 1)
+        mount_prediction = predict_mount_model(
+            core_body, positions, directions, where, axes, groups=mount_groups, noise=levels, draws=min(draws, 50),
+            seed=seed,
+        )  # fmt: skip
+        step("predicting the mount model", 1, 1)
     suggestions = None
     if add:
         if add < 0:
@@ -686,7 +700,7 @@ def plan(
             seed=seed,
             progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
         )
-    return PlanResult(layout_units, report, prediction, suggestions, split)
+    return PlanResult(layout_units, report, prediction, suggestions, split, mount_prediction)
 
 
 def _same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:

@@ -447,6 +447,11 @@ def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
             "unknowns": plan.mount_split[0], "rank": plan.mount_split[1],
             "unique": plan.mount_split[0] == plan.mount_split[1], "statement": plan.mount_split[2],
         }}),
+        **({} if plan.mount_prediction is None else {"mount_model_prediction": {
+            "center_of_gravity_std": _vec(plan.mount_prediction.center_of_gravity_std),
+            "inertia_std": _rows(plan.mount_prediction.inertia_std),
+            "flagged": plan.mount_prediction.flagged, "draws": plan.mount_prediction.draws,
+        }}),
     }  # fmt: skip
 
 

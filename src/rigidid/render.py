@@ -415,6 +415,13 @@ def plan_tables(plan: PlanResult) -> Group:
     summary.add_row("verdict", f"[{_SEVERITY_STYLE[report.worst]}]{verdict}[/]" if report.findings else verdict)
     if plan.mount_split is not None:
         summary.add_row("per-mount rates", plan.mount_split[2])
+    if plan.mount_prediction is not None:
+        mp = plan.mount_prediction
+        summary.add_row(
+            f"mount model: predicted std ({mp.draws} draws)",
+            f"CG {', '.join(_fmt(float(v)) for v in mp.center_of_gravity_std)} {length}; inertia diagonal "
+            f"{', '.join(_fmt(float(v)) for v in np.diag(mp.inertia_std))} {mass} {length}^2",
+        )
     parts: list[Any] = [summary]
     if report.findings:
         findings = Table(title="Findings", title_justify="left")

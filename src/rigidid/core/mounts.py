@@ -30,10 +30,12 @@ if TYPE_CHECKING:
 
     from rigidid.core.identify import Identification
     from rigidid.core.noise import NoiseLevels
+    from rigidid.core.simulate import Body
 
 __all__ = [
     "ADEQUATE_P",
     "MountModel",
+    "MountModelPrediction",
     "MountRates",
     "TorqueRollAxis",
     "eigen_residual",
@@ -41,6 +43,7 @@ __all__ = [
     "group_matrix",
     "identify_mount_model",
     "mount_rates",
+    "predict_mount_model",
     "split_uniqueness",
     "torque_roll_axis",
 ]
@@ -885,3 +888,91 @@ def identify_mount_model(
         ),
     )
     return ident, model
+
+
+@dataclass(frozen=True)
+class MountModelPrediction:
+    """Predicted precision of the mount model for a body, a layout and mounts (:func:`predict_mount_model`).
+
+    Attributes
+    ----------
+    center_of_gravity_std : ndarray, shape (3,)
+        Standard deviation of the CG coordinates over the draws (length).
+    inertia_std : ndarray, shape (3, 3)
+        Standard deviation of each inertia tensor entry (mass length^2).
+    flagged : float
+        Share of the draws the F test flags (about :data:`ADEQUATE_P` when the
+        mounts describe the body's supports).
+    draws : int
+        Draws made.
+    """
+
+    center_of_gravity_std: Array
+    inertia_std: Array
+    flagged: float
+    draws: int
+
+
+def predict_mount_model(
+    body: Body,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    mount_positions: ArrayLike,
+    mount_axes: ArrayLike | None = None,
+    *,
+    groups: Sequence[Hashable | None] | None = None,
+    noise: NoiseLevels,
+    draws: int = 50,
+    seed: int | None = 0,
+    modes: int = 6,
+) -> MountModelPrediction:
+    """Monte Carlo precision of the mount model: simulated noisy modes of `body`, fitted by :func:`fit_mount_model`.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate (:class:`rigidid.core.simulate.Body`), its own mounts the truth.
+    positions, directions : array_like, shape (p, 3)
+        The sensors.
+    mount_positions, mount_axes, groups
+        The mounts the model assumes (as :func:`fit_mount_model`).
+    noise : NoiseLevels
+        Frequency, damping and shape noise of each draw, also the fit's weights.
+    draws : int
+        Number of noisy tests (each about 0.1 s).
+    seed : int, optional
+        Seed of the noise.
+    modes : int
+        Modes used per draw (5 or 6: the five lowest when 5).
+
+    Returns
+    -------
+    MountModelPrediction
+
+    Raises
+    ------
+    InputError
+        Fewer than two draws, or `modes` not 5 or 6.
+    """
+    from rigidid.core.simulate import add_noise, body_modes
+
+    if draws < 2 or modes not in (5, 6):
+        raise InputError(f"need draws >= 2 and modes 5 or 6, got {draws} and {modes}", source="draws")
+    exact = body_modes(body, positions, directions)
+    rng = np.random.default_rng(seed)
+    cgs, inertias, flagged = [], [], 0
+    for _ in range(draws):
+        test = add_noise(exact, frequency=noise.frequency, damping=noise.damping, shape=noise.shape, rng=rng)
+        fit = fit_mount_model(
+            positions, directions, test.poles[:modes], test.shapes[:, :modes], mount_positions, mount_axes,
+            groups=groups, noise=noise,
+        )  # fmt: skip
+        cgs.append(fit.center_of_gravity)
+        inertias.append(body.mass * fit.inertia_per_mass)
+        flagged += fit.adequate is False
+    return MountModelPrediction(
+        center_of_gravity_std=np.std(cgs, axis=0, ddof=1),
+        inertia_std=np.std(inertias, axis=0, ddof=1),
+        flagged=flagged / draws,
+        draws=draws,
+    )
