@@ -31,7 +31,7 @@ from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
-    from rigidid.core.mounts import MountModel, MountRates, TorqueRollAxis
+    from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
@@ -46,6 +46,7 @@ __all__ = [
     "PlanResult",
     "TestData",
     "body_from_file",
+    "body_with_mounts",
     "convert",
     "estimate_modes",
     "identify",
@@ -148,6 +149,7 @@ class MountModelFit:
     residual: float
     free_residual: float | None
     free_parameters: int = 51
+    noise: NoiseLevels | None = None
 
     def _aic(self, residual: float, parameters: int) -> float:
         n = self.model.equations
@@ -164,10 +166,15 @@ class MountModelFit:
         return None if self.free_residual is None else self._aic(self.free_residual, self.free_parameters)
 
     @property
-    def adequate(self) -> bool | None:
-        """True when the mount model explains the modes as well as the free matrices (lower or equal AIC)."""
+    def aic_adequate(self) -> bool | None:
+        """True when the mount model's AIC is not worse than the free matrices'."""
         free = self.free_aic
         return None if free is None else bool(self.aic <= free)
+
+    @property
+    def adequate(self) -> bool | None:
+        """The verdict: the F test's (:attr:`MountModel.adequate`) when made, else :attr:`aic_adequate`."""
+        return self.aic_adequate if self.model.adequate is None else self.model.adequate
 
 
 @dataclass(frozen=True)
@@ -190,6 +197,7 @@ class Mounts:
     positions: NDArray[np.float64]
     rates: MountRates
     nominal: NDArray[np.float64] | None = None
+    groups: tuple[str | None, ...] | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -353,7 +361,7 @@ def identify(
     fit = None
     if method == "mounts":
         assert mounts is not None
-        result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay)
+        result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
     else:
         result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
     result = _check_result(result, labels, lay.units.length, notes)
@@ -457,6 +465,41 @@ def body_from_file(body: BodyFile) -> Body:
     )
 
 
+def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -> BodyFile:
+    """`body` with its mounts replaced by those of ``mounts.json`` (each with its ``stiffness``).
+
+    Parameters
+    ----------
+    body : BodyFile or path-like
+        ``body.json``: mass, CG and inertia are kept.
+    mounts : path-like or MountsFile
+        Positions, ``stiffness`` and optional ``damping`` of every mount (as in
+        ``body.json``: three values along the layout's x, y, z or a 3x3 matrix),
+        in the body's units.
+
+    Returns
+    -------
+    BodyFile
+
+    Raises
+    ------
+    InputError
+        A bad file, units that differ from the body's, or a mount without stiffness.
+    """
+    from rigidid.models import MountSpec
+
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    source = None if isinstance(mounts, MountsFile) else str(mounts)
+    _, _, entries = _mount_spec(mounts, {"length": spec.units.length, "mass": spec.units.mass})
+    replaced = []
+    for k, m in enumerate(entries.mounts):
+        if m.stiffness is None:
+            raise InputError("a mount without stiffness cannot be simulated", source=source, location=f"mounts.{k}")
+        extra = {} if m.damping is None else {"damping": m.damping}
+        replaced.append(MountSpec(position=m.position, stiffness=m.stiffness, **extra))
+    return spec.model_copy(update={"mounts": replaced})
+
+
 def simulate(
     body: BodyFile | PathLike,
     layout: LayoutFile | PathLike,
@@ -529,6 +572,8 @@ class PlanResult:
     prediction: Prediction | None = None
     suggestions: SensorPlan | None = None
     references: ReferenceReport | None = None
+    mount_split: tuple[int, int, str] | None = None
+    mount_prediction: MountModelPrediction | None = None
 
 
 def plan(
@@ -544,6 +589,7 @@ def plan(
     geometry: PathLike | None = None,
     progress: ProgressCallback | None = None,
     references: ReferencesFile | PathLike | None = None,
+    mounts: PathLike | MountsFile | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -578,6 +624,12 @@ def plan(
         ``references.json`` of an FRF test: checked with
         :func:`rigidid.core.plan.check_references` (about the body's CG and
         with its modes when a body is given).
+    mounts : path-like or MountsFile, optional
+        ``mounts.json`` (or a ``body.json``): whether this mount layout determines
+        every per-mount rate (:func:`rigidid.core.mounts.split_uniqueness`),
+        in :attr:`PlanResult.mount_split`; with `body`, also the mount model's
+        predicted precision (:func:`rigidid.core.mounts.predict_mount_model`,
+        at most 50 draws) in :attr:`PlanResult.mount_prediction`.
 
     Returns
     -------
@@ -600,10 +652,19 @@ def plan(
     ids, positions, directions = files.layout_arrays(lay)
     layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     report = check_layout(positions, directions, unit=lay.units.length, names=ids)
+    split = None
+    if mounts is not None:
+        from rigidid.core.mounts import split_uniqueness
+
+        where, axes, mount_spec = _mount_spec(mounts, layout_units)
+        mount_groups = [m.group for m in mount_spec.mounts]
+        split = split_uniqueness(where, axes, mount_groups)
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(layout_units, report, references=_plan_references(references, lay, None))
+        return PlanResult(
+            layout_units, report, references=_plan_references(references, lay, None), mount_split=split
+        )
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -617,6 +678,16 @@ def plan(
             core_body, positions, directions, noise=levels, draws=draws, seed=seed,
             progress=lambda _, done, total: step(task, done, total),
         )  # fmt: skip
+    mount_prediction = None
+    if mounts is not None and report.rank == 6:
+        from rigidid.core.mounts import predict_mount_model
+
+        step("predicting the mount model", 0, 1)
+        mount_prediction = predict_mount_model(
+            core_body, positions, directions, where, axes, groups=mount_groups, noise=levels, draws=min(draws, 50),
+            seed=seed,
+        )  # fmt: skip
+        step("predicting the mount model", 1, 1)
     suggestions = None
     if add:
         if add < 0:
@@ -641,7 +712,7 @@ def plan(
             seed=seed,
             progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
         )
-    return PlanResult(layout_units, report, prediction, suggestions, checked_refs)
+    return PlanResult(layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction)
 
 
 def _plan_references(
@@ -902,6 +973,7 @@ def report(
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
     if records and stabilisation is not None:
         spectrum = _spectrum(records)
+    identified, roll = _report_mounts(result, force_unit)
     return render_report(
         result.identification,
         result.positions,
@@ -918,7 +990,18 @@ def report(
         mount_stiffness=stiffness,
         spectrum=spectrum,
         progress=progress,
+        identified_mounts=identified,
+        torque_roll_axis=roll,
     )
+
+
+def _report_mounts(result: IdentifyResult, force_unit: str | None) -> tuple[dict[str, Any] | None, Any]:
+    """The identified mounts and the torque roll axis as the report takes them (the result JSON's forms)."""
+    from rigidid.jsonout import mounts_to_dict, result_to_dict
+
+    identified = None if result.mounts is None else mounts_to_dict(result, force_unit)
+    roll = None if result.torque_roll_axis is None else result_to_dict(result, force_unit)["torque_roll_axis"]
+    return identified, roll
 
 
 def _spectrum(records: Sequence[tuple[NDArray[np.float64], float]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -941,7 +1024,7 @@ def report_pngs(
 
     Parameters are those of :func:`report`; returns the paths written.
     """
-    from rigidid.reporting import _mount_labels, save_pngs
+    from rigidid.reporting import _mount_labels, identified_mount_labels, save_pngs
 
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
@@ -950,6 +1033,10 @@ def report_pngs(
         mounts = [np.asarray(m.position, dtype=float) for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
         labels = _mount_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
+    identified, roll = _report_mounts(result, force_unit)
+    if identified is not None:
+        mounts = [np.asarray(m["position"], dtype=float) for m in identified["mounts"]]
+        labels = identified_mount_labels(identified)
     return save_pngs(
         folder,
         result.identification,
@@ -963,6 +1050,7 @@ def report_pngs(
         mount_labels=labels,
         spectrum=_spectrum(records) if records and stabilisation is not None else None,
         progress=progress,
+        roll_axis=None if roll is None else roll["direction"],
     )
 
 
@@ -1144,13 +1232,24 @@ def _mount_model(
     mass: float | None,
     mounts: PathLike | MountsFile,
     layout: LayoutFile,
+    noise: NoiseLevels | Mapping[str, float] | None = None,
 ) -> tuple[Identification, MountModelFit]:
-    """The mount model, started from the free route when six modes allow it, and the comparison with it."""
+    """The mount model, started from the free route when six modes allow it, and the comparison with it.
+
+    The output residuals are weighted by `noise` (default: ``estimate_noise``, the shape noise from the
+    rigid-body fit, with any overrides of a mapping), as the Monte Carlo intervals are.
+    """
     from rigidid.core.geometry import layout_frame
     from rigidid.core.mounts import eigen_residual, identify_mount_model
+    from rigidid.core.noise import NoiseLevels, estimate_noise
     from rigidid.errors import IdentificationError
 
-    where, axes, _ = _mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    where, axes, spec = _mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    groups = [m.group for m in spec.mounts]
+    if isinstance(noise, NoiseLevels):
+        levels = noise
+    else:
+        levels = replace(estimate_noise(positions, directions, shapes), **dict(noise or {}))
     free = None
     if poles.size == 6:
         try:
@@ -1158,7 +1257,9 @@ def _mount_model(
         except IdentificationError:
             free = None
     start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
-    ident, model = identify_mount_model(positions, directions, poles, shapes, where, axes, mass=mass, start=start)
+    ident, model = identify_mount_model(
+        positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
+    )
     length = layout_frame(positions).scale
     residual = eigen_residual(
         poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length
@@ -1168,7 +1269,7 @@ def _mount_model(
         free_residual = eigen_residual(
             poles, free.mode_shapes_cg, free.inertia_per_mass, free.stiffness_per_mass, free.damping_per_mass, length
         )
-    return ident, MountModelFit(model, residual, free_residual)
+    return ident, MountModelFit(model, residual, free_residual, noise=levels)
 
 
 def with_mounts(
@@ -1203,9 +1304,11 @@ def with_mounts(
     if mounts is not None:
         positions, axes, spec = _mount_spec(mounts, result.units)
         scale = 1.0 if ident.mass is None else ident.mass
+        groups = tuple(m.group for m in spec.mounts)
         rates = mount_rates(
-            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass
-        )
+            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass,
+            groups=groups,
+        )  # fmt: skip
         nominal = None
         if all(m.stiffness is not None for m in spec.mounts):
             nominal = np.array([
@@ -1213,7 +1316,7 @@ def with_mounts(
                 for k, m in enumerate(spec.mounts)
             ])  # fmt: skip
         ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
-        out = replace(out, mounts=Mounts(ids, positions, rates, nominal))
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups))
     if torque_axis is not None:
         out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
     return out

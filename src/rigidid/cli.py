@@ -745,6 +745,10 @@ def simulate(
             show_default=False,
         ),
     ] = None,
+    mounts: Annotated[
+        Path | None,
+        typer.Option("--mounts", help="mounts.json whose mounts (with their stiffness) replace the body's."),
+    ] = None,
 ) -> None:
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with _reported():
@@ -763,6 +767,8 @@ def simulate(
         _check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
         _check_outputs({"--output": output, "--frf": frf}, {"--records": records})
         impacts = [_parse_impact(text) for text in impact] if impact else None
+        if mounts is not None:
+            body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
         with _naming(str(body)):
             table = api.simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
@@ -935,6 +941,10 @@ def plan(
             show_default=False,
         ),
     ] = None,
+    mounts: Annotated[
+        Path | None,
+        typer.Option("--mounts", help="mounts.json: check that the mount layout determines every per-mount rate."),
+    ] = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with _reported():
@@ -956,6 +966,7 @@ def plan(
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
                 units=_parse_units(units), geometry=geometry, progress=progress, references=references,
+                mounts=mounts,
             )  # fmt: skip
         with OutputSet():
             if json_path is not None:
@@ -999,6 +1010,8 @@ def report(
     geometry: Geometry = None,
     force_unit: ForceUnit = None,
     refine: Refine = True,
+    mounts: MountsPath = None,
+    torque_axis: TorqueAxis = None,
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with _reported():
@@ -1016,8 +1029,9 @@ def report(
         kept: dict[str, Any] = {}
         result, estimate = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept, refine=refine,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept, refine=refine, mounts=mounts,
         )  # fmt: skip
+        result = _with_mounts(result, mounts, torque_axis)
         spec = None
         if body is not None:
             spec = load_body(body)

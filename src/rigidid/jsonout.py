@@ -151,6 +151,7 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
             "free_parameters": fit.free_parameters,
             "free_aic": fit.free_aic,
             "adequate": fit.adequate,
+            **mount_test_to_dict(result),
         }
     if result.torque_roll_axis is not None:
         tra = result.torque_roll_axis
@@ -233,6 +234,7 @@ def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
                 "stiffness": _vec(factor * rates.stiffness[k]),
                 "damping": _plain(factor * damping[k]),
                 "nominal_stiffness": None if m.nominal is None else _vec(factor * m.nominal[k]),
+                "group": None if m.groups is None else m.groups[k],
             }
             for k in range(len(m.ids))
         ],
@@ -242,6 +244,24 @@ def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         "rank": rates.rank,
         "unique": rates.unique,
         "statement": rates.statement,
+    }
+
+
+def mount_test_to_dict(result: IdentifyResult) -> dict[str, Any]:
+    """The mount model's F test keys: ``f_statistic``, ``f_dof``, ``p_value``, ``significance``, ``aic_adequate``...."""
+    from rigidid.core.mounts import ADEQUATE_P
+
+    assert result.mount_model is not None
+    fit = result.mount_model
+    model = fit.model
+    return {
+        "f_statistic": model.f_statistic,
+        "f_dof": None if model.f_dof is None else list(model.f_dof),
+        "p_value": model.p_value,
+        "significance": None if model.p_value is None else ADEQUATE_P,
+        "aic_adequate": fit.aic_adequate,
+        "noise": None if fit.noise is None else noise_to_dict(fit.noise),
+        "groups": (model.parameters - 9) // 6,
     }
 
 
@@ -424,7 +444,16 @@ def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
         "prediction": None if plan.prediction is None else prediction_to_dict(plan.prediction),
         "suggestions": None if plan.suggestions is None else sensor_plan_to_dict(plan.suggestions),
         "references": None if plan.references is None else reference_report_to_dict(plan.references),
-    }
+        **({} if plan.mount_split is None else {"mount_split": {
+            "unknowns": plan.mount_split[0], "rank": plan.mount_split[1],
+            "unique": plan.mount_split[0] == plan.mount_split[1], "statement": plan.mount_split[2],
+        }}),
+        **({} if plan.mount_prediction is None else {"mount_model_prediction": {
+            "center_of_gravity_std": _vec(plan.mount_prediction.center_of_gravity_std),
+            "inertia_std": _rows(plan.mount_prediction.inertia_std),
+            "flagged": plan.mount_prediction.flagged, "draws": plan.mount_prediction.draws,
+        }}),
+    }  # fmt: skip
 
 
 def reference_report_to_dict(report: ReferenceReport) -> dict[str, Any]:

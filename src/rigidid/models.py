@@ -209,6 +209,11 @@ class MountEntry(_Strict):
     )
     stiffness: Matrix3Sym | None = Field(default=None, description="nominal rates (data sheet), mass/s^2")
     damping: Matrix3Sym | None = Field(default=None, description="nominal damping, mass/s")
+    group: Annotated[str, BeforeValidator(_text_id)] | None = Field(
+        default=None,
+        description="mounts of one group are identical: they share their rates along their own axes "
+        "(the mount model and the per-mount split fit one set per group)",
+    )
 
 
 class MountsFile(_Strict):
@@ -387,6 +392,7 @@ class MountResult(_Strict):
     stiffness: Vector3 = Field(description="rates along the axes (mounts.units.stiffness)")
     damping: Vector3 = Field(description="damping along the axes (mounts.units.damping)")
     nominal_stiffness: Vector3 | None = Field(default=None, description="the file's nominal rates along the axes")
+    group: str | None = Field(default=None, description="the mount's group of identical mounts (mounts.json)")
 
 
 class MountsResult(_Strict):
@@ -412,7 +418,20 @@ class MountModelResult(_Strict):
     free_residual: float | None = Field(description="the same for the free route (null with five modes)")
     free_parameters: int
     free_aic: float | None
-    adequate: bool | None = Field(description="the mount model's AIC is not worse than the free route's")
+    adequate: bool | None = Field(
+        description="the mount model explains the modes: the F test's p_value >= significance when it was made, "
+        "else the mount model's AIC is not worse than the free route's"
+    )
+    f_statistic: float | None = Field(
+        default=None,
+        description="F test of the mount model against any linear rigid-body model on noise-weighted output residuals",
+    )
+    f_dof: tuple[int, int] | None = Field(default=None, description="its degrees of freedom (numerator, denominator)")
+    p_value: float | None = Field(default=None, description="chance of an F this large when the mount model is right")
+    significance: float | None = Field(default=None, description="p_value below this flags the mount model")
+    aic_adequate: bool | None = Field(default=None, description="the mount model's AIC is not worse than the free's")
+    noise: dict[str, float] | None = Field(default=None, description="noise levels weighting the output residuals")
+    groups: int | None = Field(default=None, description="distinct mounts fitted (mounts of a group count once)")
 
 
 class TorqueRollAxisResult(_Strict):

@@ -148,6 +148,28 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
             damping = [_fmt(v) if v is not None else "-" for v in m["damping"]]
             table.add_row(m["id"], *(_fmt(v) for v in m["stiffness"]), *damping)
         tables.append(table)
+    if result.mount_model is not None:
+        fit = result.mount_model
+        model = fit.model
+        table = Table(title="Mount model", title_justify="left", show_header=False)
+        table.add_column("item")
+        table.add_column("value")
+        table.add_row("unknowns / equations", f"{model.parameters} / {model.equations}")
+        free = "-" if fit.free_residual is None else f"{fit.free_residual:.3g}"
+        table.add_row(
+            "eigenproblem residual",
+            f"{fit.residual:.3g} (free route: {free})",
+        )
+        if model.p_value is not None and model.f_dof is not None:
+            table.add_row(
+                "F test against any linear model",
+                f"F = {model.f_statistic:.3g} with ({model.f_dof[0]}, {model.f_dof[1]}) dof, p = {model.p_value:.3g}",
+            )
+        verdict = "not tested" if fit.adequate is None else "the mounts explain the modes"
+        if fit.adequate is False:
+            verdict = "INADEQUATE: a mount position or axis is off, or a support is missing; trust the free route"
+        table.add_row("verdict", verdict)
+        tables.append(table)
     if result.torque_roll_axis is not None:
         tra = result.torque_roll_axis
         table = Table(title="Torque roll axis", title_justify="left", show_header=False)
@@ -392,6 +414,15 @@ def plan_tables(plan: PlanResult) -> Group:
     summary.add_row("hardest motion to see", report.weakest_motion)
     verdict = "ready" if report.ok else "not usable as it is"
     summary.add_row("verdict", f"[{_SEVERITY_STYLE[report.worst]}]{verdict}[/]" if report.findings else verdict)
+    if plan.mount_split is not None:
+        summary.add_row("per-mount rates", plan.mount_split[2])
+    if plan.mount_prediction is not None:
+        mp = plan.mount_prediction
+        summary.add_row(
+            f"mount model: predicted std ({mp.draws} draws)",
+            f"CG {', '.join(_fmt(float(v)) for v in mp.center_of_gravity_std)} {length}; inertia diagonal "
+            f"{', '.join(_fmt(float(v)) for v in np.diag(mp.inertia_std))} {mass} {length}^2",
+        )
     parts: list[Any] = [summary]
     if report.findings:
         findings = Table(title="Findings", title_justify="left")

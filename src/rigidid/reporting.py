@@ -76,6 +76,7 @@ _SENSOR_COLOUR = "#1f5fa8"
 _CG_COLOUR = "#c0392b"
 _AXIS_COLOURS = ("#2e8b57", "#d68910", "#7d3c98")
 _MOUNT_COLOUR = "#333333"
+_ROLL_COLOUR = "#e67e22"
 _MODE_COLOUR = "#c0392b"
 
 Stabilisation = Sequence["tuple[int, ArrayLike, ArrayLike] | OrderPoles"]
@@ -183,6 +184,7 @@ class _Scene:
     outline: list[int]
     arrow: float
     size: float
+    roll_axis: Array | None = None  # unit direction of the torque roll axis, through the CG
 
 
 def _sensor_labels(positions: Array, sensor_ids: Sequence[str], size: float) -> list[tuple[Array, str]]:
@@ -213,6 +215,12 @@ def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
         ax3.text(*scene.tips[k], f" {k + 1}", fontsize=11, color=_AXIS_COLOURS[k], fontweight="bold")
     if scene.mounts.size:
         ax3.scatter(*scene.mounts.T, color=_MOUNT_COLOUR, marker="^", s=60, depthshade=False)
+        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
+            ax3.text(*(m - np.array([0.0, 0.0, 0.05 * scene.size])), text, fontsize=8, color=_MOUNT_COLOUR)
+    if scene.roll_axis is not None:
+        ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
+        ax3.plot(*ends.T, color=_ROLL_COLOUR, lw=2.0, ls="--")
+        ax3.text(*ends[1], " torque roll axis", fontsize=9, color=_ROLL_COLOUR)
     _equal_3d(ax3, everything, zoom=1.2)
     ax3.set_xlabel(f"x [{length}]")
     ax3.set_ylabel(f"y [{length}]")
@@ -277,6 +285,9 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
             ax.annotate(
                 text, (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=8, color=_MOUNT_COLOUR
             )
+    if scene.roll_axis is not None:
+        ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
+        ax.plot(ends[:, a], ends[:, b], color=_ROLL_COLOUR, lw=1.6, ls="--", zorder=2)
     centre, half = limits
     ax.set_xlim(centre[a] - half[a], centre[a] + half[a])
     ax.set_ylim(centre[b] - half[b], centre[b] + half[b])
@@ -304,6 +315,8 @@ def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, len
     if scene.mounts.size:
         label = "mount (stiffness per axis)" if scene.mount_labels else "mount"
         handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label=label))
+    if scene.roll_axis is not None:
+        handles.append(Line2D([], [], color=_ROLL_COLOUR, lw=2.0, ls="--", label="torque roll axis (J⁻¹t, CG)"))
     notes.legend(handles=handles, loc="upper left", fontsize=10, frameon=False)
     text = (
         f"CG = ({', '.join(_num(float(v), 4) for v in scene.g)}) {length}\n"
@@ -311,6 +324,14 @@ def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, len
         + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
     )
     notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=10, va="bottom", family="DejaVu Sans")
+
+
+def _unit(v: ArrayLike) -> Array:
+    u = np.asarray(v, dtype=float).reshape(3)
+    norm = float(np.linalg.norm(u))
+    if not (math.isfinite(norm) and norm > 0.0):
+        raise InputError("the torque roll axis must be a finite non-zero vector", source="roll_axis")
+    return u / norm
 
 
 def _layout_figure(
@@ -322,6 +343,7 @@ def _layout_figure(
     mass: str,
     mounts: Array,
     mount_labels: Sequence[str] = (),
+    roll_axis: ArrayLike | None = None,
 ) -> Figure:
     """3D view above a third-angle drawing: top view over front view, side view right of it."""
     g = ident.center_of_gravity
@@ -342,6 +364,7 @@ def _layout_figure(
         outline=sensor_outline(positions),
         arrow=0.12 * size,
         size=size,
+        roll_axis=None if roll_axis is None else _unit(roll_axis),
     )
     everything = np.vstack(
         [positions, positions + scene.arrow * directions, g[None, :], scene.tips, mounts.reshape(-1, 3)]
@@ -583,6 +606,7 @@ def _figures(
     mount_labels: Sequence[str] = (),
     spectrum: tuple[ArrayLike, ArrayLike] | None = None,
     progress: ProgressCallback | None = None,
+    roll_axis: ArrayLike | None = None,
 ) -> dict[str, Figure]:
     length, mass = _units(units)
     pos, dirs, ids, m = _as_arrays(positions, directions, sensor_ids, mounts)
@@ -595,7 +619,7 @@ def _figures(
             raise InputError("frequencies and spectrum differ in length", source="spectrum")
     step = progress or no_progress
     drawers: list[tuple[str, Callable[[], Figure]]] = [
-        ("layout", lambda: _layout_figure(ident, pos, dirs, ids, length, mass, m, mount_labels)),
+        ("layout", lambda: _layout_figure(ident, pos, dirs, ids, length, mass, m, mount_labels, roll_axis)),
         ("modes", lambda: _modes_figure(ident, pos, length, table)),
         ("decoupling", lambda: _decoupling_figure(table)),
     ]
@@ -759,6 +783,8 @@ def render_report(
     spectrum: tuple[ArrayLike, ArrayLike] | None = None,
     created: str | None = None,
     progress: ProgressCallback | None = None,
+    identified_mounts: Mapping[str, Any] | None = None,
+    torque_roll_axis: Mapping[str, Any] | None = None,
 ) -> str:
     """One self-contained HTML document reporting an identification.
 
@@ -808,6 +834,14 @@ def render_report(
         Date and time shown under the title (default: now, UTC).
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
+    identified_mounts : mapping, optional
+        Per-mount rates identified from the test, in the form of
+        :func:`rigidid.jsonout.mounts_to_dict` (``units``, ``mounts`` with ``id``,
+        ``position``, ``axes``, ``stiffness``, ``damping``...): drawn at the mounts
+        (positions from here, replacing `mounts` and `mount_stiffness`) and tabled.
+    torque_roll_axis : mapping, optional
+        ``{"direction", "torque_axis", "angle_to_torque_deg", "angle_to_principal_deg"}``
+        (the result JSON's ``torque_roll_axis``): drawn through the CG and tabled.
 
     Returns
     -------
@@ -826,14 +860,18 @@ def render_report(
         If matplotlib is not installed.
     """
     length, mass_unit = _units(units)
+    if identified_mounts is not None:
+        mounts = [m["position"] for m in identified_mounts["mounts"]]
     pos, dirs, ids, mount_pos = _as_arrays(positions, directions, sensor_ids, mounts)
     uncertainty_table = None if uncertainty is None else _uncertainty_html(uncertainty, length, mass_unit)
     ident = identification
     table = _decoupling(ident, mode_labels)
     mount_labels = _mount_labels(mount_stiffness, length, mass_unit, force_unit)
+    drawn_labels = mount_labels if identified_mounts is None else identified_mount_labels(identified_mounts)
+    roll = None if torque_roll_axis is None else torque_roll_axis["direction"]
     figures = _figures(
-        ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=mount_labels,
-        spectrum=spectrum, progress=progress,
+        ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=drawn_labels,
+        spectrum=spectrum, progress=progress, roll_axis=roll,
     )  # fmt: skip
     pngs = {name: _png(fig) for name, fig in figures.items()}
     parts = [
@@ -843,7 +881,8 @@ def render_report(
         _modes_html(ident, table),
         _supports_html(ident, length, mass_unit, force_unit),
         _decoupling_html(table, pngs["decoupling"]),
-        _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, mount_labels),
+        _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, [] if identified_mounts else mount_labels),
+        _identified_mounts_html(identified_mounts, torque_roll_axis, length),
         "<h2>Mode shapes</h2>",
         _figure_html(
             pngs["modes"],
@@ -1019,6 +1058,48 @@ def _decoupling_html(table: _Decoupling, png: bytes) -> str:
         )
     )
     parts.append("</details>")
+    return "\n".join(parts)
+
+
+def identified_mount_labels(identified: Mapping[str, Any]) -> list[str]:
+    """``front-left: k 180/160/420 N/mm`` per mount: its identified rates along its own axes."""
+    unit = identified["units"]["stiffness"]
+    return [
+        f"{m['id']}: k " + "/".join(_num(float(v), 3) for v in m["stiffness"]) + f" {unit}"
+        for m in identified["mounts"]
+    ]
+
+
+def _triple(values: Sequence[Any] | None) -> str:
+    return "-" if values is None else " / ".join("-" if v is None else _num(float(v), 4) for v in values)
+
+
+def _identified_mounts_html(identified: Mapping[str, Any] | None, roll: Mapping[str, Any] | None, length: str) -> str:
+    """The identified per-mount rates and the torque roll axis, as tables (empty without either)."""
+    parts: list[str] = []
+    if identified is not None:
+        units = identified["units"]
+        parts += ["<h2>Mounts (identified)</h2>", _table(
+            ["mount", f"position [{length}]", "axes (rows)", f"stiffness [{units['stiffness']}]",
+             f"damping [{units['damping']}]", "nominal stiffness", "group"],
+            [[_esc(m["id"]), _triple(m["position"]),
+              "; ".join(_direction_text(np.asarray(a, dtype=float)) for a in m["axes"]),
+              _triple(m["stiffness"]), _triple(m["damping"]), _triple(m.get("nominal_stiffness")),
+              _esc(m.get("group") or "-")]
+             for m in identified["mounts"]],
+            caption=f"rates along each mount's axes, fitted to the identified stiffness and damping at the CG; "
+            f"residual |K - K_mounts| / |K| = {_num(float(identified['stiffness_residual']), 3)}; "
+            f"{identified['statement']}",
+        )]  # fmt: skip
+    if roll is not None:
+        parts += ["<h2>Torque roll axis</h2>", _table(
+            ["torque axis", "roll axis (J⁻¹t)", "angle to torque axis [°]", "angles to principal axes 1/2/3 [°]"],
+            [[_esc(_direction_text(np.asarray(roll["torque_axis"], dtype=float))),
+              _esc(_direction_text(np.asarray(roll["direction"], dtype=float))),
+              _num(float(roll["angle_to_torque_deg"]), 3), _triple(roll["angle_to_principal_deg"])]],
+            caption="the axis through the CG the free body starts to turn about under a pure torque about the "
+            "torque axis (dashed orange in the layout figure)",
+        )]  # fmt: skip
     return "\n".join(parts)
 
 

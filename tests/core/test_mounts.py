@@ -102,7 +102,7 @@ def test_mount_model_recovers_an_exact_body_from_five_modes() -> None:
 
 
 def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
-    """An unmodelled support (a hose) makes the free matrices explain the modes better (AIC)."""
+    """An unmodelled support (a hose) is flagged by the F test; the mounts alone pass (exact modes)."""
     from rigidid import api
 
     body, where, axes, _ = _body(4)
@@ -134,3 +134,64 @@ def _layout() -> object:
 
 
 _LAYOUT = _layout()
+
+
+def _sensors() -> tuple[np.ndarray, np.ndarray]:
+    pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    pos = np.vstack([pos, 0.5 * pos[:4] + [0.05, 0.0, 0.0]])
+    dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2]]
+    return pos, dirs
+
+
+def _identical(n: int) -> tuple[Body, np.ndarray, np.ndarray, np.ndarray]:
+    """`n` identical mounts (one data sheet) turned each its own way."""
+    body, where, axes, _ = _body(n)
+    rates = np.array([5e4, 3e4, 2e5])
+    mounts = [Mount.from_values(p, u @ np.diag(rates) @ u.T, u @ np.diag(1e-3 * rates) @ u.T)
+              for p, u in zip(where, axes, strict=True)]  # fmt: skip
+    return Body(body.mass, body.center_of_gravity, body.inertia_tensor, mounts), where, axes, rates
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_identical_mounts_share_their_rates_exactly(n: int) -> None:
+    """A group of identical mounts: three rates, fitted to the exact matrices and to five exact modes."""
+    from rigidid.core.mounts import fit_mount_model, group_matrix
+    from rigidid.core.noise import DEFAULT_NOISE
+
+    body, where, axes, rates = _identical(n)
+    _, k, c = system_matrices(body)
+    split = mount_rates(k, body.center_of_gravity, where, axes, c, groups=["a"] * n)
+    assert split.unknowns == 3 and split.unique
+    np.testing.assert_allclose(split.stiffness, np.tile(rates, (n, 1)), rtol=MOUNT_RATES_REL)
+    pos, dirs = _sensors()
+    modes = body_modes(body, pos, dirs)
+    fit = fit_mount_model(pos, dirs, modes.poles[:5], modes.shapes[:, :5], where, axes, groups=["a"] * n,
+                          noise=DEFAULT_NOISE)  # fmt: skip
+    assert fit.parameters == 9 + 6
+    np.testing.assert_allclose(fit.stiffness_per_mass * body.mass, np.tile(rates, (n, 1)), rtol=MOUNT_RATES_REL)
+    np.testing.assert_allclose(fit.center_of_gravity, body.center_of_gravity, atol=MOUNT_RATES_REL)
+    assert fit.adequate is True
+    assert group_matrix([None, "x", None, "x"], 4).shape == (12, 9)
+    with pytest.raises(InputError, match="groups"):
+        group_matrix(["a"], 2)
+
+
+def test_f_test_passes_a_right_model_and_flags_a_hidden_hose() -> None:
+    """Noisy modes (the default noise, fixed seeds): the mounts alone pass, a hose they omit is flagged."""
+    from rigidid.core.mounts import ADEQUATE_P, fit_mount_model
+    from rigidid.core.noise import DEFAULT_NOISE
+    from rigidid.core.simulate import add_noise
+
+    body, where, axes, _ = _body(3)
+    hose = Mount.from_values([0.0, 0.45, 0.1], (2e4, 2e4, 2e4))
+    hidden = Body(body.mass, body.center_of_gravity, body.inertia_tensor, [*body.mounts, hose])
+    pos, dirs = _sensors()
+    levels = {"frequency": DEFAULT_NOISE.frequency, "damping": DEFAULT_NOISE.damping, "shape": DEFAULT_NOISE.shape}
+    for seed in (1, 2):
+        right = add_noise(body_modes(body, pos, dirs), **levels, seed=seed)
+        wrong = add_noise(body_modes(hidden, pos, dirs), **levels, seed=seed)
+        good = fit_mount_model(pos, dirs, right.poles, right.shapes, where, axes, noise=DEFAULT_NOISE)
+        bad = fit_mount_model(pos, dirs, wrong.poles, wrong.shapes, where, axes, noise=DEFAULT_NOISE)
+        assert good.f_dof == (12 * 6 - 27, 2 * 6 * (12 - 6))
+        assert good.p_value is not None and good.p_value >= ADEQUATE_P and good.adequate
+        assert bad.p_value is not None and bad.p_value < 1e-6 and bad.adequate is False

@@ -26,24 +26,80 @@ from rigidid.core.geometry import transfer_matrix
 from rigidid.errors import InputError
 
 if TYPE_CHECKING:
+    from collections.abc import Hashable, Sequence
+
     from rigidid.core.identify import Identification
+    from rigidid.core.noise import NoiseLevels
+    from rigidid.core.simulate import Body
 
 __all__ = [
+    "ADEQUATE_P",
     "MountModel",
+    "MountModelPrediction",
     "MountRates",
     "TorqueRollAxis",
     "eigen_residual",
     "fit_mount_model",
+    "group_matrix",
     "identify_mount_model",
     "mount_rates",
+    "predict_mount_model",
+    "split_uniqueness",
     "torque_roll_axis",
 ]
 
 Array = NDArray[np.float64]
 
+ADEQUATE_P = 0.01
+"""The mount model is flagged inadequate when its F test's p-value is below this."""
+SHAPE_NOISE_FLOOR = 1e-6
+"""Shape noise below this (exact or 10-digit data) is taken as this, a known level: the F test
+then compares the mount model's misfit with it (chi-square) rather than with the data's own."""
+
 _UPPER = np.triu_indices(6)
 _WEIGHT = np.where(_UPPER[0] == _UPPER[1], 1.0, math.sqrt(2.0))
 """Off-diagonal entries count twice in the Frobenius norm of a symmetric matrix."""
+
+
+def group_matrix(groups: Sequence[Hashable | None] | None, count: int) -> Array:
+    """Map from the shared rates of groups of identical mounts to every mount's rates.
+
+    Parameters
+    ----------
+    groups : sequence of hashable or None, length `count`, or None
+        A label per mount: mounts with one label are identical (they share their
+        three rates along their own axes, so mirrored mounts can share); None
+        (for the whole or an entry) leaves a mount independent.
+    count : int
+        Number of mounts.
+
+    Returns
+    -------
+    ndarray, shape (3 count, 3 g)
+        ``rates.ravel() = S @ shared``, ``g`` the number of distinct mounts.
+
+    Raises
+    ------
+    InputError
+        `groups` of the wrong length.
+
+    Examples
+    --------
+    >>> group_matrix(["a", None, "a"], 3).shape
+    (9, 6)
+    """
+    labels = [None] * count if groups is None else list(groups)
+    if len(labels) != count:
+        raise InputError(f"groups must give one label per mount ({count}), got {len(labels)}", source="groups")
+    column: dict[Hashable, int] = {}
+    index = []
+    for k, label in enumerate(labels):
+        key = ("independent", k) if label is None else ("group", label)
+        index.append(column.setdefault(key, len(column)))
+    out = np.zeros((3 * count, 3 * len(column)))
+    for k, c in enumerate(index):
+        out[3 * k : 3 * k + 3, 3 * c : 3 * c + 3] = np.eye(3)
+    return out
 
 
 @dataclass(frozen=True)
@@ -111,7 +167,7 @@ def _design(offsets: Array, axes: Array, scale: float) -> Array:
     return np.stack(cols, axis=1)
 
 
-def _fit(design: Array, matrix: Array, scale: float) -> tuple[Array, float]:
+def _fit(design: Array, matrix: Array, scale: float, ties: Array) -> tuple[Array, float]:
     from scipy.optimize import nnls
 
     d = np.concatenate([np.ones(3), np.full(3, 1.0 / scale)])
@@ -119,7 +175,68 @@ def _fit(design: Array, matrix: Array, scale: float) -> tuple[Array, float]:
     rates, _ = nnls(design, target)
     norm = float(np.linalg.norm(target))
     residual = float(np.linalg.norm(design @ rates - target)) / norm if norm > 0.0 else 0.0
-    return rates.reshape(-1, 3), residual
+    return (ties @ rates).reshape(-1, 3), residual
+
+
+def _uniqueness(design: Array) -> tuple[int, int, str]:
+    """Unknowns, rank and the statement of a design matrix (21 rows, one column per shared rate)."""
+    unknowns = design.shape[1]
+    s = np.linalg.svd(design, compute_uv=False)
+    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
+    if rank == unknowns:
+        statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
+    else:
+        statement = (
+            f"not unique: {unknowns} rates but the mount layout determines only {rank} combinations of them "
+            f"(the 6x6 matrix has 21 independent entries); fix some rates (a data sheet's shear rates), declare "
+            "mounts of one type identical (a common group), or use fewer mounts, to make the rest unique"
+        )
+    return unknowns, rank, statement
+
+
+def split_uniqueness(
+    positions: ArrayLike, axes: ArrayLike | None = None, groups: Sequence[Hashable | None] | None = None
+) -> tuple[int, int, str]:
+    """Whether a mount layout determines every per-mount rate from a 6x6 matrix (before a test).
+
+    Parameters
+    ----------
+    positions : array_like, shape (n, 3)
+        Where the mounts act (length).
+    axes : array_like, shape (n, 3, 3), optional
+        Their principal axes (columns); default x, y, z.
+    groups : sequence of hashable or None, optional
+        Groups of identical mounts (:func:`group_matrix`).
+
+    Returns
+    -------
+    unknowns, rank : int
+        Shared rates and the rank of their map to the 21 entries of ``K``
+        (unique when equal); as :class:`MountRates`.
+    statement : str
+        In words, with what would make it unique.
+
+    Notes
+    -----
+    The rank does not depend on the reference point (moving it is a congruence of
+    ``K``), so the mounts' centroid serves as the CG.
+
+    Examples
+    --------
+    >>> split_uniqueness([[-1, 0, 0], [1, 0, 0], [0, 1, -1]])[:2]
+    (9, 8)
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    n = pos.shape[0]
+    if n == 0 or not np.all(np.isfinite(pos)):
+        raise InputError("mount positions must be finite, with at least one mount", source="positions")
+    u = np.broadcast_to(np.eye(3), (n, 3, 3)).copy() if axes is None else np.asarray(axes, dtype=float)
+    if u.shape != (n, 3, 3) or not np.all(np.isfinite(u)) or np.any(np.linalg.norm(u, axis=1) <= 0.0):
+        raise InputError(f"axes must be ({n}, 3, 3) non-zero finite vectors", source="axes")
+    u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    offsets = pos - pos.mean(axis=0)
+    scale = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1)))) or 1.0
+    return _uniqueness(_design(offsets, u, scale) @ group_matrix(groups, n))
 
 
 def mount_rates(
@@ -128,6 +245,7 @@ def mount_rates(
     positions: ArrayLike,
     axes: ArrayLike | None = None,
     damping: ArrayLike | None = None,
+    groups: Sequence[Hashable | None] | None = None,
 ) -> MountRates:
     """Per-mount rates along given axes from a 6x6 stiffness (and damping) at the CG.
 
@@ -145,6 +263,9 @@ def mount_rates(
         here). Default: the layout's axes x, y, z for every mount.
     damping : array_like, shape (6, 6), optional
         Damping at the CG, fitted the same way.
+    groups : sequence of hashable or None, optional
+        A label per mount; mounts with one label share their rates
+        (:func:`group_matrix`). Default: every mount independent.
 
     Returns
     -------
@@ -198,25 +319,16 @@ def mount_rates(
     u = u / norms
     offsets = pos - g
     scale = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1)))) or 1.0
-    design = _design(offsets, u, scale)
-    s = np.linalg.svd(design, compute_uv=False)
-    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
-    unknowns = 3 * n
-    rates_k, res_k = _fit(design, k, scale)
+    ties = group_matrix(groups, n)
+    design = _design(offsets, u, scale) @ ties
+    unknowns, rank, statement = _uniqueness(design)
+    rates_k, res_k = _fit(design, k, scale, ties)
     rates_c, res_c = (None, math.nan)
     if damping is not None:
         c = np.asarray(damping, dtype=float)
         if c.shape != (6, 6) or not np.all(np.isfinite(c)):
             raise InputError(f"damping must be a finite 6x6 matrix, got shape {c.shape}", source="damping")
-        rates_c, res_c = _fit(design, c, scale)
-    if rank == unknowns:
-        statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
-    else:
-        statement = (
-            f"not unique: {unknowns} rates but the mount layout determines only {rank} combinations of them "
-            f"(the 6x6 matrix has 21 independent entries); fix some rates (a data sheet's shear rates), use "
-            "mounts of one type with equal rates, or fewer mounts, to make the rest unique"
-        )
+        rates_c, res_c = _fit(design, c, scale, ties)
     return MountRates(rates_k, rates_c, u, res_k, res_c, unknowns, rank, statement)
 
 
@@ -307,9 +419,21 @@ class MountModel:
         RMS of the eigenproblem residual ``(lambda^2 M + lambda C + K) phi`` over the
         modes, each mode's equations scaled by ``|lambda|^2 |phi|`` (dimensionless).
     parameters : int
-        Unknowns of the model: 9 (CG, inertia) + 6 per mount.
+        Unknowns of the model: 9 (CG, inertia) + 6 per distinct mount (mounts of a
+        group count once).
     equations : int
         Real equations: 12 per mode.
+    f_statistic : float or None
+        F test of the mount model against any linear model of the rigid-body
+        motion (see Notes of :func:`fit_mount_model`); None when the noise levels
+        were not given or the test has no degrees of freedom.
+    f_dof : tuple of int or None
+        Its degrees of freedom (numerator, denominator).
+    p_value : float or None
+        Probability of an F statistic at least this large when the mount model is
+        right and the noise is as given.
+    cost : float or None
+        Sum of squared noise-weighted output residuals (None without noise levels).
     """
 
     center_of_gravity: Array
@@ -320,12 +444,21 @@ class MountModel:
     residual: float
     parameters: int
     equations: int
+    f_statistic: float | None = None
+    f_dof: tuple[int, int] | None = None
+    p_value: float | None = None
+    cost: float | None = None
 
     @property
     def aic(self) -> float:
         """Akaike's criterion ``N ln(RSS / N) + 2 P`` (RSS floored at 1e-30 N)."""
         rss = max(self.residual**2 * self.equations, 1e-30 * self.equations)
         return float(self.equations * math.log(rss / self.equations) + 2 * self.parameters)
+
+    @property
+    def adequate(self) -> bool | None:
+        """F test verdict: False when ``p_value < ADEQUATE_P`` (a support or position is wrong)."""
+        return None if self.p_value is None else bool(self.p_value >= ADEQUATE_P)
 
 
 def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> NDArray[np.complex128]:
@@ -345,6 +478,90 @@ def _inertia(params: Array) -> Array:
     return lower @ lower.T
 
 
+class _OutputError:
+    """Noise-weighted misfit of a mount model's modes to the measured poles and shapes (local frame).
+
+    Per measured mode: natural frequency over ``frequency``, damping ratio over
+    ``damping`` (both relative), and the shape misfit after the best complex scale
+    over ``shape / sqrt(2)`` of the mode's RMS value per real and imaginary part:
+    each entry has unit variance when the noise is as given.
+    """
+
+    def __init__(
+        self,
+        sensors: tuple[Array, Array],
+        mu: NDArray[np.complex128],
+        psi: NDArray[np.complex128],
+        noise: NoiseLevels,
+    ) -> None:
+        from rigidid.core.statespace import modal_from_poles
+
+        self.pos, self.dirs = sensors
+        self.psi = psi
+        self.wn = np.abs(mu)
+        _, self.zeta = modal_from_poles(mu)
+        self.freq = max(noise.frequency, 1e-6)
+        self.damp = max(noise.damping, 1e-4)
+        rms = np.sqrt(np.mean(np.abs(psi) ** 2, axis=0))
+        self.shape_scale = rms * max(noise.shape, SHAPE_NOISE_FLOOR) / math.sqrt(2.0)
+        self.floored = noise.shape < SHAPE_NOISE_FLOOR
+
+    def __call__(self, g: Array, j: Array, k: Array, c: Array) -> Array:
+        from scipy.optimize import linear_sum_assignment
+
+        from rigidid.core.geometry import sensor_matrix
+        from rigidid.core.identify import model_modes
+        from rigidid.core.statespace import mac_matrix, modal_from_poles
+
+        n = self.wn.size
+        size = n * (2 + 2 * self.psi.shape[0])
+        if not (np.all(np.isfinite(j)) and np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
+            return np.full(size, 1e6)
+        lam, phi = model_modes(j, k, c)
+        model = sensor_matrix(self.pos, self.dirs, g) @ phi
+        wn = np.abs(lam)
+        _, zeta = modal_from_poles(lam)
+        cost = np.abs(wn[None, :] - self.wn[:, None]) / self.wn[:, None] + (1.0 - mac_matrix(self.psi, model))
+        rows, cols = linear_sum_assignment(cost)
+        out = np.zeros((n, 2 + 2 * self.psi.shape[0]))
+        for i, m in zip(rows, cols, strict=True):
+            out[i, 0] = (wn[m] - self.wn[i]) / self.wn[i] / self.freq
+            out[i, 1] = (zeta[m] - self.zeta[i]) / max(self.zeta[i], 1e-4) / self.damp
+            v = model[:, m]
+            alpha = (v.conj() @ self.psi[:, i]) / max(float(np.real(v.conj() @ v)), 1e-300)
+            miss = (self.psi[:, i] - alpha * v) / self.shape_scale[i]
+            out[i, 2:] = np.concatenate([miss.real, miss.imag])
+        return out.ravel()
+
+    def free_cost(self, t: Array) -> float:
+        """The same weighted shape misfit for the best rigid motion of each mode (any linear model's floor)."""
+        coords = np.linalg.lstsq(t, self.psi, rcond=None)[0]
+        miss = (self.psi - t @ coords) / self.shape_scale
+        return float(np.sum(np.abs(miss) ** 2))
+
+
+def _f_test(
+    cost: float, free_cost: float, modes: int, sensors: int, parameters: int, known: bool
+) -> tuple[float, tuple[int, int], float] | None:
+    """F statistic, degrees of freedom and p-value of the mount model against any linear rigid-body model.
+
+    With `known` (the shape noise was below its floor, so the floor is the noise), the
+    denominator is its expectation, 1, and the p-value that of chi-square.
+    """
+    from scipy.stats import chi2
+    from scipy.stats import f as f_dist
+
+    numerator = 12 * modes - parameters
+    denominator = 2 * modes * (sensors - 6)
+    if numerator <= 0 or denominator <= 0:
+        return None
+    excess = max(cost - free_cost, 0.0)
+    if known:
+        return excess / numerator, (numerator, denominator), float(chi2.sf(excess, numerator))
+    statistic = (excess / numerator) / (max(free_cost, 1e-12 * denominator) / denominator)
+    return statistic, (numerator, denominator), float(f_dist.sf(statistic, numerator, denominator))
+
+
 def fit_mount_model(
     positions: ArrayLike,
     directions: ArrayLike,
@@ -354,6 +571,8 @@ def fit_mount_model(
     mount_axes: ArrayLike | None = None,
     *,
     start: tuple[ArrayLike, ArrayLike] | None = None,
+    groups: Sequence[Hashable | None] | None = None,
+    noise: NoiseLevels | None = None,
 ) -> MountModel:
     """CG, inertia and per-mount rates fitted together to five or more rigid-body modes.
 
@@ -372,6 +591,14 @@ def fit_mount_model(
     start : (cg, inertia_per_mass), optional
         Starting point (e.g. from :func:`rigidid.core.identify.identify`); default
         the sensor centroid and an inertia from the sensors' spread.
+    groups : sequence of hashable or None, optional
+        A label per mount; mounts with one label are identical and share their
+        rates (:func:`group_matrix`). Default: every mount independent.
+    noise : NoiseLevels, optional
+        Standard deviations of the measured frequencies, damping ratios and shapes
+        (:class:`rigidid.core.noise.NoiseLevels`). Given, the equation-error fit is
+        refined by a noise-weighted output-error fit and the F test is made;
+        without, only the equation-error fit.
 
     Returns
     -------
@@ -393,6 +620,22 @@ def fit_mount_model(
     6x6 ``K`` and ``C`` (9 + 6 per mount instead of 51), so five modes can do, and
     noise is averaged over more equations per unknown. Computed in the frame of
     :func:`rigidid.core.geometry.layout_frame`, times scaled by the RMS pole.
+
+    With `noise`, that fit starts an output-error fit: the model's poles and its
+    shapes at the sensors against the measured ones, each residual divided by its
+    noise level (so every entry has unit variance), rates bounded at zero. Its
+    weighted sum of squares ``S_m`` is compared with ``S_f``, the misfit of the
+    best rigid motion of each mode, which is what any linear model of the six
+    rigid-body degrees of freedom (a free ``M^-1 K`` and ``M^-1 C``) leaves:
+    ``F = ((S_m - S_f) / d_1) / (S_f / d_2)`` with ``d_1 = 12 n - P`` (two
+    pole and ten scale-free shape entries in the rigid subspace per mode, less the
+    model's ``P`` unknowns) and ``d_2 = 2 n (p - 6)``. To first order in the noise
+    ``F`` follows Fisher's distribution when the model is right, whatever the
+    common noise scale; the ratio of the frequency and damping levels to the shape
+    level must be right. A p-value below :data:`ADEQUATE_P` flags the model.
+    Shape noise below :data:`SHAPE_NOISE_FLOOR` is taken as the floor, a known
+    level: the misfit is then tested against it by chi-square (F with ``d_2``
+    infinite), so data exact to rounding pass.
     """
     from scipy.optimize import least_squares, nnls
 
@@ -409,28 +652,34 @@ def fit_mount_model(
     q = mp.shape[0]
     u = np.broadcast_to(np.eye(3), (q, 3, 3)).copy() if mount_axes is None else np.asarray(mount_axes, dtype=float)
     u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    ties = group_matrix(groups, q)
+    shared = ties.shape[1]
     frame = layout_frame(pos)
     length = frame.scale
     omega = float(np.sqrt(np.mean(np.abs(lam) ** 2)))
-    mu = lam / omega
-    coords, _ = project_rigid(sensor_matrix(frame.to_local(pos), dirs), psi)
+    mu = np.asarray(lam / omega, dtype=np.complex128)
+    local_pos = frame.to_local(pos)
+    coords, _ = project_rigid(sensor_matrix(local_pos, dirs), psi)
     coords = coords / np.linalg.norm(coords, axis=0)
     local_mounts = frame.to_local(mp)
 
-    def rates_and_residual(x: Array) -> tuple[Array, Array]:
+    def system(x: Array) -> tuple[Array, Array]:
         g, j = x[:3], _inertia(x[3:])
         mass = np.eye(6)
         mass[3:, 3:] = j
         rows, rhs = [], []
         for i in range(mu.size):
             phi = transfer_matrix(g) @ coords[:, i]
-            cols = _mount_columns(phi, local_mounts - g, u)
+            cols = _mount_columns(phi, local_mounts - g, u) @ ties
             scale = 1.0 / (abs(mu[i]) ** 2 * np.linalg.norm(phi))
             block = np.hstack([cols, mu[i] * cols]) * scale
             target = -(mu[i] ** 2) * (mass @ phi) * scale
             rows.append(np.vstack([block.real, block.imag]))
             rhs.append(np.concatenate([target.real, target.imag]))
-        a, b = np.vstack(rows), np.concatenate(rhs)
+        return np.vstack(rows), np.concatenate(rhs)
+
+    def rates_and_residual(x: Array) -> tuple[Array, Array]:
+        a, b = system(x)
         rates, _ = nnls(a, b)
         return rates, a @ rates - b
 
@@ -443,10 +692,39 @@ def fit_mount_model(
     chol = np.linalg.cholesky(0.5 * (j0 + j0.T) + 1e-9 * np.eye(3))
     x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
-    rates, resid = rates_and_residual(sol.x)
-    g, j = sol.x[:3], _inertia(sol.x[3:])
-    k = rates[: 3 * q].reshape(q, 3) * omega**2
-    c = rates[3 * q :].reshape(q, 3) * omega
+    x, (rates, resid) = sol.x, rates_and_residual(sol.x)
+    f_result = None
+    cost = None
+    if noise is not None:
+        output = _OutputError((local_pos, dirs), mu, psi, noise)
+
+        def build(z: Array) -> tuple[Array, Array, Array, Array]:
+            g = z[:3]
+            kr = (ties @ z[9 : 9 + shared]).reshape(q, 3)
+            cr = (ties @ z[9 + shared :]).reshape(q, 3)
+            return (
+                g,
+                _inertia(z[3:9]),
+                _support_matrix(kr, local_mounts - g, u),
+                _support_matrix(cr, local_mounts - g, u),
+            )
+
+        z0 = np.concatenate([x, rates])
+        lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
+        refined = least_squares(
+            lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
+        )
+        x, rates = refined.x[:9], refined.x[9:]
+        a, b = system(x)
+        resid = a @ rates - b
+        cost = float(np.sum(output(*build(refined.x)) ** 2))
+        f_result = _f_test(
+            cost, output.free_cost(sensor_matrix(local_pos, dirs)), mu.size, pos.shape[0], 9 + 2 * shared,
+            output.floored,
+        )  # fmt: skip
+    g, j = x[:3], _inertia(x[3:])
+    k = (ties @ rates[:shared]).reshape(q, 3) * omega**2
+    c = (ties @ rates[shared:]).reshape(q, 3) * omega
     return MountModel(
         center_of_gravity=frame.centre + length * g,
         inertia_per_mass=length**2 * j,
@@ -454,8 +732,12 @@ def fit_mount_model(
         damping_per_mass=c,
         axes=u,
         residual=float(np.sqrt(np.mean(resid**2))),
-        parameters=9 + 6 * q,
+        parameters=9 + 2 * shared,
         equations=resid.size,
+        f_statistic=None if f_result is None else f_result[0],
+        f_dof=None if f_result is None else f_result[1],
+        p_value=None if f_result is None else f_result[2],
+        cost=cost,
     )
 
 
@@ -522,12 +804,14 @@ def identify_mount_model(
     *,
     mass: float | None = None,
     start: tuple[ArrayLike, ArrayLike] | None = None,
+    groups: Sequence[Hashable | None] | None = None,
+    noise: NoiseLevels | None = None,
 ) -> tuple[Identification, MountModel]:
     """The mount model as an :class:`~rigidid.core.identify.Identification` (method ``"mounts"``).
 
     Parameters
     ----------
-    positions, directions, poles, shapes, mount_positions, mount_axes, start
+    positions, directions, poles, shapes, mount_positions, mount_axes, start, groups, noise
         As :func:`fit_mount_model`.
     mass : float, optional
         The mass, for absolute results.
@@ -553,7 +837,9 @@ def identify_mount_model(
     from rigidid.core.selection import project_rigid
     from rigidid.core.statespace import modal_from_poles
 
-    model = fit_mount_model(positions, directions, poles, shapes, mount_positions, mount_axes, start=start)
+    model = fit_mount_model(
+        positions, directions, poles, shapes, mount_positions, mount_axes, start=start, groups=groups, noise=noise
+    )
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lam = np.asarray(poles, dtype=complex).ravel()
@@ -602,3 +888,91 @@ def identify_mount_model(
         ),
     )
     return ident, model
+
+
+@dataclass(frozen=True)
+class MountModelPrediction:
+    """Predicted precision of the mount model for a body, a layout and mounts (:func:`predict_mount_model`).
+
+    Attributes
+    ----------
+    center_of_gravity_std : ndarray, shape (3,)
+        Standard deviation of the CG coordinates over the draws (length).
+    inertia_std : ndarray, shape (3, 3)
+        Standard deviation of each inertia tensor entry (mass length^2).
+    flagged : float
+        Share of the draws the F test flags (about :data:`ADEQUATE_P` when the
+        mounts describe the body's supports).
+    draws : int
+        Draws made.
+    """
+
+    center_of_gravity_std: Array
+    inertia_std: Array
+    flagged: float
+    draws: int
+
+
+def predict_mount_model(
+    body: Body,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    mount_positions: ArrayLike,
+    mount_axes: ArrayLike | None = None,
+    *,
+    groups: Sequence[Hashable | None] | None = None,
+    noise: NoiseLevels,
+    draws: int = 50,
+    seed: int | None = 0,
+    modes: int = 6,
+) -> MountModelPrediction:
+    """Monte Carlo precision of the mount model: simulated noisy modes of `body`, fitted by :func:`fit_mount_model`.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate (:class:`rigidid.core.simulate.Body`), its own mounts the truth.
+    positions, directions : array_like, shape (p, 3)
+        The sensors.
+    mount_positions, mount_axes, groups
+        The mounts the model assumes (as :func:`fit_mount_model`).
+    noise : NoiseLevels
+        Frequency, damping and shape noise of each draw, also the fit's weights.
+    draws : int
+        Number of noisy tests (each about 0.1 s).
+    seed : int, optional
+        Seed of the noise.
+    modes : int
+        Modes used per draw (5 or 6: the five lowest when 5).
+
+    Returns
+    -------
+    MountModelPrediction
+
+    Raises
+    ------
+    InputError
+        Fewer than two draws, or `modes` not 5 or 6.
+    """
+    from rigidid.core.simulate import add_noise, body_modes
+
+    if draws < 2 or modes not in (5, 6):
+        raise InputError(f"need draws >= 2 and modes 5 or 6, got {draws} and {modes}", source="draws")
+    exact = body_modes(body, positions, directions)
+    rng = np.random.default_rng(seed)
+    cgs, inertias, flagged = [], [], 0
+    for _ in range(draws):
+        test = add_noise(exact, frequency=noise.frequency, damping=noise.damping, shape=noise.shape, rng=rng)
+        fit = fit_mount_model(
+            positions, directions, test.poles[:modes], test.shapes[:, :modes], mount_positions, mount_axes,
+            groups=groups, noise=noise,
+        )  # fmt: skip
+        cgs.append(fit.center_of_gravity)
+        inertias.append(body.mass * fit.inertia_per_mass)
+        flagged += fit.adequate is False
+    return MountModelPrediction(
+        center_of_gravity_std=np.std(cgs, axis=0, ddof=1),
+        inertia_std=np.std(inertias, axis=0, ddof=1),
+        flagged=flagged / draws,
+        draws=draws,
+    )
