@@ -121,3 +121,7 @@ projected residual, relative; they differ by the term Kaufman drops (small near 
 REFINE_EXACT_REL = 1e-4
 """Output-error refinement from records with 1e-6 noise: inertia per mass relative to its largest entry,
 CG relative to half a metre (observed about 1e-6)."""
+
+STREAMED_DECIMATION = 1e-12
+"""Absolute difference between the streaming decimator and the whole-record one on unit-variance
+noise (observed <= 4e-16: chunk boundaries only reorder floating-point sums)."""
