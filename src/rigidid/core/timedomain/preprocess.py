@@ -111,6 +111,7 @@ def find_impact(
     *,
     threshold: float = 0.01,
     pulse_width: float = 0.005,
+    energy: Array | None = None,
 ) -> Impact:
     """Locate the impact in a record and the start of the free decay after it.
 
@@ -128,6 +129,9 @@ def find_impact(
         Longest expected duration of the impact force (s). The energy peak is
         sought within this window after the onset, and the free decay starts
         half a window after that peak (at least one sample).
+    energy : ndarray, shape (n,), optional
+        ``channel_energy(record)`` when the caller has it already (the record
+        reader computes it for its decay check), so it is computed once.
 
     Returns
     -------
@@ -144,7 +148,8 @@ def find_impact(
     sample 0 and only the first half pulse window is dropped, which costs
     little: a free decay can start anywhere after the force has ended.
     """
-    energy = channel_energy(record)
+    if energy is None or energy.shape != (record.shape[0],):
+        energy = channel_energy(record)
     if energy.size == 0 or not np.any(energy > 0.0):
         raise InputError("the record is empty or all zero")
     top = float(energy.max())
