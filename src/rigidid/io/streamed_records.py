@@ -16,11 +16,13 @@ it on the whole record (:func:`~rigidid.core.timedomain.preprocess.find_impact`,
 :func:`~rigidid.core.timedomain.preprocess.content_range`); ``q0`` is
 :data:`PRE_SAFETY` times smaller than the factor that content would give
 (so the new Nyquist frequency stays 16 times above the highest frequency seen
-in the head, not 4), and keeps at least :data:`PRE_MIN_ROWS` rows, so the
-impact is still located to a few raw samples. Records shorter than
-``2 PRE_MIN_ROWS`` rows are not pre-decimated (``q0 = 1``: the same data as
-:func:`~rigidid.io.records.read_record`). The records of one estimation share
-the first record's ``q0``.
+in the head, not 4), keeps at least :data:`PULSE_SAMPLES` samples per
+:data:`PULSE_WIDTH` (the impact is still located to a fraction of its
+pulse) and is at most :data:`MAX_PRE_FACTOR`. The choice depends on the
+first :data:`HEAD_ROWS` rows only, so it is the same whatever the file's
+format. Records of at most :data:`HEAD_ROWS` rows are not pre-decimated
+(``q0 = 1``: the same data as :func:`~rigidid.io.records.read_record`). The
+records of one estimation share the first record's ``q0``.
 
 Time is checked block by block against the median step of the first block
 (:func:`~rigidid.io.records.read_record` takes the median of all steps: the
@@ -47,15 +49,29 @@ from rigidid.io.columns import match_columns
 from rigidid.io.columns import row as _where
 from rigidid.progress import ProgressCallback
 
-__all__ = ["HEAD_ROWS", "PRE_MIN_ROWS", "PRE_SAFETY", "StreamedRecord", "read_record_streamed"]
+__all__ = [
+    "HEAD_ROWS",
+    "MAX_PRE_FACTOR",
+    "PRE_SAFETY",
+    "PULSE_SAMPLES",
+    "PULSE_WIDTH",
+    "StreamedRecord",
+    "read_record_streamed",
+]
 
 Array = NDArray[np.float64]
 
 HEAD_ROWS = 1 << 16
 """Rows of the first record from which the pre-factor is chosen (held raw until then)."""
 
-PRE_MIN_ROWS = 1 << 17
-"""The pre-decimated record keeps at least this many rows."""
+MAX_PRE_FACTOR = 64
+"""Largest pre-decimation factor."""
+
+PULSE_WIDTH = 0.005
+"""The impact pulse width the estimation assumes by default (s)."""
+
+PULSE_SAMPLES = 16
+"""The pre-decimated record keeps at least this many samples per :data:`PULSE_WIDTH`."""
 
 PRE_SAFETY = 4
 """The pre-factor is this many times below the factor the head's content allows."""
@@ -225,13 +241,10 @@ class _TimeCheck:
         return dt
 
 
-def _pre_factor(head: Array, time: Array, rows: int, f_limit: float | None) -> int:
-    """The pre-decimation factor from the head of a record (see the module documentation)."""
+def _pre_factor(head: Array, time: Array, f_limit: float | None) -> int:
+    """The pre-decimation factor from the first :data:`HEAD_ROWS` rows of a longer record."""
     from rigidid.core.timedomain.preprocess import content_range, decimation_for, find_impact
 
-    cap = rows // PRE_MIN_ROWS
-    if cap < 2 or head.shape[0] < 64:
-        return 1
     dt = float(time[-1] - time[0]) / (time.shape[0] - 1)
     if not dt > 0.0:
         return 1
@@ -242,7 +255,8 @@ def _pre_factor(head: Array, time: Array, rows: int, f_limit: float | None) -> i
     f_high = content_range([head[start:]], dt)[1]
     if f_limit is not None:
         f_high = min(f_high, f_limit)
-    return max(1, min(decimation_for(f_high, dt) // PRE_SAFETY, cap))
+    pulse_cap = int(PULSE_WIDTH / (PULSE_SAMPLES * dt))
+    return max(1, min(decimation_for(f_high, dt) // PRE_SAFETY, pulse_cap, MAX_PRE_FACTOR))
 
 
 def read_record_streamed(
@@ -301,14 +315,14 @@ def read_record_streamed(
         for t, values in blocks:
             pending.append((t, values))
             held += t.shape[0]
-            if held >= HEAD_ROWS:
+            if held > HEAD_ROWS:
                 break
-        if pending:
-            head = np.concatenate([v for _, v in pending])
-            factor = _pre_factor(head, np.concatenate([t for t, _ in pending]), max(source.rows, held), f_limit)
-            del head
-        else:
-            factor = 1
+        factor = 1
+        if held > HEAD_ROWS:  # longer than the head (a shorter record is read whole)
+            head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
+            head_time = np.concatenate([t for t, _ in pending])[:HEAD_ROWS]
+            factor = _pre_factor(head, head_time, f_limit)
+            del head, head_time
     stream = Decimator(factor, len(wanted))
     capacity = source.rows // factor + 2 * FIR_HALF_LENGTH + 16
     out = np.empty((capacity, len(wanted)))
