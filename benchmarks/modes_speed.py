@@ -300,7 +300,7 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
                 peak = float(np.median([m for _, m in values]))
                 print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
             peaks[(channels, samples)] = float(np.median([m for _, m in runs["rigidid modes CSV"]]))
-            freqs = " ".join(f"{f:.4f}" for f in modes[0][:, 0])
+            freqs = " ".join(f"{f:.4f}" for f in np.unique(modes[0][:, 0]))
             print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; frequencies: {freqs} Hz; "
                   f"CSV, .npy and .npz modes equal to 1e-9: {same}")  # fmt: skip
         load = os.getloadavg()

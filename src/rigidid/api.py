@@ -829,6 +829,17 @@ def estimate_modes(
     return table, result
 
 
+def _streamed_content(streamed: Sequence[Any], dt: float) -> tuple[float, float] | None:
+    """The content range from the spectra the reader measured on the raw heads (None: let the estimation)."""
+    from rigidid.core.timedomain.preprocess import content_from_spectrum
+
+    spectra = [r.spectrum for r in streamed]
+    if any(s is None for s in spectra) or len({s[1].shape for s in spectra}) != 1:
+        return None
+    total = np.sum([s[1] for s in spectra], axis=0)
+    return content_from_spectrum(spectra[0][0], total, 0.5 / dt)
+
+
 def _estimate_streamed(
     lay: LayoutFile,
     paths: Sequence[PathLike],
@@ -870,6 +881,7 @@ def _estimate_streamed(
         decimate=None if decimate is None else 1,
         progress=progress,
         energies=[r.energy for r in streamed],
+        content=_streamed_content(streamed, dts[0] / factor),
     )
     if factor > 1:
         impacts = tuple(

@@ -98,6 +98,10 @@ class StreamedRecord:
         Data rows in the file.
     energy : ndarray, shape (m,)
         ``channel_energy(data)`` (computed once, for the decay check and the impact).
+    spectrum : (ndarray, ndarray) or None
+        ``content_spectrum`` of the free decay in the first :data:`HEAD_ROWS`
+        raw rows, at the file's sample rate (None for a record no longer
+        than that, read whole): the estimation's content range comes from it.
     """
 
     data: Array
@@ -106,6 +110,7 @@ class StreamedRecord:
     offset: int
     rows: int
     energy: Array
+    spectrum: tuple[Array, Array] | None = None
 
 
 class _Source:
@@ -241,22 +246,33 @@ class _TimeCheck:
         return dt
 
 
-def _pre_factor(head: Array, time: Array, f_limit: float | None) -> int:
-    """The pre-decimation factor from the first :data:`HEAD_ROWS` rows of a longer record."""
-    from rigidid.core.timedomain.preprocess import content_range, decimation_for, find_impact
+def _head_content(head: Array, time: Array) -> tuple[float, tuple[Array, Array]] | None:
+    """Sample interval and content spectrum of the decay in the head of a record (None if none is found)."""
+    from rigidid.core.timedomain.preprocess import content_spectrum, find_impact
 
     dt = float(time[-1] - time[0]) / (time.shape[0] - 1)
     if not dt > 0.0:
-        return 1
+        return None
     try:
         start = find_impact(head, dt).start
     except InputError:  # an all-zero head: the checks after reading will say what is wrong
-        return 1
-    f_high = content_range([head[start:]], dt)[1]
+        return None
+    freqs, total = content_spectrum([head[start:]], dt)
+    return (dt, (freqs, total)) if total.size else None
+
+
+def _pre_factor(dt: float, spectrum: tuple[Array, Array], f_limit: float | None) -> int:
+    """The pre-decimation factor from the content of the head (see the module documentation)."""
+    from rigidid.core.timedomain.preprocess import content_from_spectrum, decimation_for
+
+    f_high = content_from_spectrum(*spectrum, 0.5 / dt)[1]
     if f_limit is not None:
         f_high = min(f_high, f_limit)
-    pulse_cap = int(PULSE_WIDTH / (PULSE_SAMPLES * dt))
-    return max(1, min(decimation_for(f_high, dt) // PRE_SAFETY, pulse_cap, MAX_PRE_FACTOR))
+    first = decimation_for(f_high, dt)
+    cap = max(1, min(first // PRE_SAFETY, int(PULSE_WIDTH / (PULSE_SAMPLES * dt)), MAX_PRE_FACTOR))
+    # a divisor of the factor the content gives, if one is near the cap: the two stages then add up to it
+    divisor = next((d for d in range(cap, 0, -1) if first % d == 0), 1)
+    return divisor if 2 * divisor >= cap else cap
 
 
 def read_record_streamed(
@@ -310,19 +326,23 @@ def read_record_streamed(
     peaks = np.zeros(len(wanted))
     pending: list[tuple[Array, Array]] = []
     blocks = iter(source.blocks)
-    if factor is None:  # hold the head raw until the factor is chosen
-        held = 0
-        for t, values in blocks:
-            pending.append((t, values))
-            held += t.shape[0]
-            if held > HEAD_ROWS:
-                break
+    held = 0  # hold the head raw: its content chooses the factor and is the estimation's
+    for t, values in blocks:
+        pending.append((t, values))
+        held += t.shape[0]
+        if held > HEAD_ROWS:
+            break
+    spectrum = None
+    if held > HEAD_ROWS:  # longer than the head (a shorter record is read whole, not pre-decimated)
+        head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
+        found = _head_content(head, np.concatenate([t for t, _ in pending])[:HEAD_ROWS])
+        del head
+        if found is not None:
+            spectrum = found[1]
+            if factor is None:
+                factor = _pre_factor(found[0], spectrum, f_limit)
+    if factor is None:
         factor = 1
-        if held > HEAD_ROWS:  # longer than the head (a shorter record is read whole)
-            head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
-            head_time = np.concatenate([t for t, _ in pending])[:HEAD_ROWS]
-            factor = _pre_factor(head, head_time, f_limit)
-            del head, head_time
     stream = Decimator(factor, len(wanted))
     capacity = source.rows // factor + 2 * FIR_HALF_LENGTH + 16
     out = np.empty((capacity, len(wanted)))
@@ -361,4 +381,4 @@ def read_record_streamed(
     offset = FIR_HALF_LENGTH * factor if factor > 1 else 0
     energy = channel_energy(data)
     _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * factor), src, energy)
-    return StreamedRecord(data, dt * factor, factor, offset, n, energy)
+    return StreamedRecord(data, dt * factor, factor, offset, n, energy, spectrum)

@@ -177,6 +177,7 @@ def estimate_modes(
     criteria: Criteria | None = None,
     progress: ProgressCallback | None = None,
     energies: Sequence[Array] | None = None,
+    content: tuple[float, float] | None = None,
 ) -> ModalEstimate:
     """Natural frequencies, damping ratios and complex mode shapes from impact records.
 
@@ -239,6 +240,9 @@ def estimate_modes(
     energies : sequence of ndarray, shape (n_k,), optional
         ``channel_energy`` of each record when the caller has it (the record
         reader computes it for its decay check): used to find the impacts.
+    content : (float, float), optional
+        ``content_range`` of the free decays when the caller measured it (the
+        streamed reader, on the records before it decimated them).
 
     Returns
     -------
@@ -314,7 +318,8 @@ def estimate_modes(
         decays.append(rec[impact.start :])
 
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
-    content = content_range(decays, dt)
+    if content is None:
+        content = content_range(decays, dt)
     factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
     options = _Options(method, n_modes, band, max_order, crit, content, progress)
     for attempt, factor in enumerate(factors):

@@ -32,7 +32,9 @@ __all__ = [
     "auto_decimation",
     "band_limit",
     "channel_energy",
+    "content_from_spectrum",
     "content_range",
+    "content_spectrum",
     "decimate",
     "decimation_for",
     "find_impact",
@@ -213,14 +215,35 @@ def content_range(records: Sequence[Array], dt: float, *, floor_factor: float = 
     when most of the band holds no mode; otherwise `f_high` comes out high,
     which is the safe side for decimation.
     """
-    nyquist = 0.5 / dt
+    freqs, total = content_spectrum(records, dt)
+    return content_from_spectrum(freqs, total, 0.5 / dt, floor_factor=floor_factor)
+
+
+def content_spectrum(records: Sequence[Array], dt: float) -> tuple[Array, Array]:
+    """The summed, normalised Welch spectrum :func:`content_range` judges.
+
+    Parameters
+    ----------
+    records : sequence of ndarray, shape (n_k, p)
+        Free decays.
+    dt : float
+        Sample interval (s).
+
+    Returns
+    -------
+    freqs, total : ndarray, shape (m,)
+        Frequencies (Hz) and the spectrum summed over records and channels
+        (empty when no record has 64 samples). Spectra of records read apart
+        with the same segment length add up: the record reader computes one
+        per record as it reads and the estimation adds them.
+    """
     parts = [rec[: 1 << 18] for rec in records if rec.shape[0] >= 64]
     if not parts:
-        return 0.0, nyquist
+        return np.zeros(0), np.zeros(0)
     seg = min(4096, *(part.shape[0] for part in parts))
     window = np.hanning(seg + 2)[1:-1]
     total = np.zeros(seg // 2 + 1)
-    freqs = np.fft.rfftfreq(seg, dt)
+    freqs: Array = np.asarray(np.fft.rfftfreq(seg, dt), dtype=float)
     for part in parts:
         starts = list(range(0, part.shape[0] - seg + 1, seg // 2))
         for i in range(part.shape[1]):
@@ -231,6 +254,15 @@ def content_range(records: Sequence[Array], dt: float, *, floor_factor: float = 
             segments = np.lib.stride_tricks.sliding_window_view(column, seg)[starts]
             segments = (segments - segments.mean(axis=1, keepdims=True)) * window
             total += np.mean(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0) / var
+    return freqs, total
+
+
+def content_from_spectrum(
+    freqs: Array, total: Array, nyquist: float, *, floor_factor: float = 3.0
+) -> tuple[float, float]:
+    """:func:`content_range` from a :func:`content_spectrum` (``(0, nyquist)`` if it is empty)."""
+    if total.size == 0:
+        return 0.0, nyquist
     smooth = np.convolve(total, np.ones(5) / 5.0, mode="same")
     floor = float(np.median(smooth))
     significant = np.flatnonzero(smooth[2:] > floor_factor * floor) + 2
