@@ -229,6 +229,29 @@ setup.run_by_name("ssicov")
 """
 )
 
+ESTIMATION_CODE = """
+import sys, time, numpy as np
+from rigidid.core.timedomain import estimate_modes
+from rigidid.core.timedomain.preprocess import decimate, decimation_for
+from rigidid.core.timedomain.gram import lagged_gram
+from rigidid.core.timedomain.era import era_basis, era_modes
+table = np.load(sys.argv[1])
+time_, data = table[:, 0], np.ascontiguousarray(table[:, 1:])
+del table
+dt = (time_[-1] - time_[0]) / (time_.shape[0] - 1)
+t0 = time.perf_counter()
+q = decimation_for(40.0, dt)
+low = decimate(data, q)
+_, _, vt = np.linalg.svd(low.T @ low)
+fitted = low @ vt[:12].T
+gram, _ = lagged_gram([fitted], 20)
+era_modes(era_basis(gram, fitted.shape[1]), 12, dt * q)
+t1 = time.perf_counter()
+estimate_modes([data], dt)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+
 PYOMA_PYTHON = Path(__file__).resolve().parents[1] / ".pyoma-venv" / "bin" / "python"
 
 
@@ -300,6 +323,15 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
                 peak = float(np.median([m for _, m in values]))
                 print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
             peaks[(channels, samples)] = float(np.median([m for _, m in runs["rigidid modes CSV"]]))
+            alone = [
+                [float(v) for v in subprocess.run(
+                    [sys.executable, "-c", ESTIMATION_CODE, str(npy)], capture_output=True, text=True, check=True
+                ).stdout.split()]
+                for _ in range(repeat)
+            ]  # fmt: skip
+            floor_est, ours_est = np.median(alone, axis=0)
+            print(f"estimation alone on the loaded record (no reading): floor {floor_est:.2f} s, "
+                  f"rigidid estimate_modes {ours_est:.2f} s ({ours_est / floor_est:.2f}x)")  # fmt: skip
             freqs = " ".join(f"{f:.4f}" for f in np.unique(modes[0][:, 0]))
             print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; frequencies: {freqs} Hz; "
                   f"CSV, .npy and .npz modes equal to 1e-9: {same}")  # fmt: skip
