@@ -124,3 +124,12 @@ def test_a_time_jump_late_in_the_file_names_its_line(
     with pytest.raises(InputError, match="differs from the sample interval") as whole:
         read_record(target, ids)
     assert whole.value.location == err.value.location
+
+
+def test_reading_reports_progress_to_the_end(engine: tuple[Path, list[str], list[Path]], small_blocks: None) -> None:
+    folder, ids, paths = engine
+    calls: list[tuple[str, float, float | None]] = []
+    read_record_streamed(paths[0], ids, progress=lambda task, done, total: calls.append((task, done, total)))
+    assert calls and all(task == f"reading {paths[0].name}" for task, _, _ in calls)
+    assert [done for _, done, _ in calls] == sorted(done for _, done, _ in calls)
+    assert calls[-1][1] == calls[-1][2] == paths[0].stat().st_size
