@@ -127,7 +127,7 @@ def test_a_time_jump_late_in_the_file_names_its_line(
 
 
 def test_reading_reports_progress_to_the_end(engine: tuple[Path, list[str], list[Path]], small_blocks: None) -> None:
-    folder, ids, paths = engine
+    _, ids, paths = engine
     calls: list[tuple[str, float, float | None]] = []
     read_record_streamed(paths[0], ids, progress=lambda task, done, total: calls.append((task, done, total)))
     assert calls and all(task == f"reading {paths[0].name}" for task, _, _ in calls)
