@@ -133,3 +133,18 @@ def test_reading_reports_progress_to_the_end(engine: tuple[Path, list[str], list
     assert calls and all(task == f"reading {paths[0].name}" for task, _, _ in calls)
     assert [done for _, done, _ in calls] == sorted(done for _, done, _ in calls)
     assert calls[-1][1] == calls[-1][2] == paths[0].stat().st_size
+
+
+def test_spectrum_while_reading_is_the_estimations(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    """The content spectrum accumulated block by block is content_spectrum of the decay."""
+    from rigidid.core.timedomain.preprocess import content_spectrum, find_impact
+
+    _, ids, paths = engine
+    streamed = read_record_streamed(paths[0], ids)
+    data, dt = read_record(paths[0], ids)
+    freqs, total = content_spectrum([data[find_impact(data, dt).start :]], dt)
+    assert streamed.spectrum is not None
+    np.testing.assert_allclose(streamed.spectrum[0], freqs, rtol=1e-15)
+    np.testing.assert_allclose(streamed.spectrum[1], total, rtol=1e-9)

@@ -99,9 +99,11 @@ class StreamedRecord:
     energy : ndarray, shape (m,)
         ``channel_energy(data)`` (computed once, for the decay check and the impact).
     spectrum : (ndarray, ndarray) or None
-        ``content_spectrum`` of the free decay in the first :data:`HEAD_ROWS`
-        raw rows, at the file's sample rate (None for a record no longer
-        than that, read whole): the estimation's content range comes from it.
+        ``content_spectrum`` of the first 2^18 raw samples of the free decay
+        (the impact located in the first :data:`HEAD_ROWS` rows), accumulated
+        while reading, at the file's sample rate: what the estimation computes
+        on a whole record. None for a record of at most :data:`HEAD_ROWS`
+        rows (read whole, the estimation measures it).
     """
 
     data: Array
@@ -246,8 +248,69 @@ class _TimeCheck:
         return dt
 
 
-def _head_content(head: Array, time: Array) -> tuple[float, tuple[Array, Array]] | None:
-    """Sample interval and content spectrum of the decay in the head of a record (None if none is found)."""
+class _Welch:
+    """``content_spectrum`` of the decay ``record[start : start + 2^18]`` fed block by block.
+
+    The segments (4096 samples, half overlap, Hann window, mean removed) are
+    transformed as soon as they are complete; each channel's sum is divided by
+    the variance of its whole part at the end, as
+    :func:`~rigidid.core.timedomain.preprocess.content_spectrum` does.
+    """
+
+    SEG = 4096
+    SPAN = 1 << 18
+
+    def __init__(self, start: int, dt: float, channels: int) -> None:
+        self.start, self.dt = start, dt
+        self.window = np.hanning(self.SEG + 2)[1:-1]
+        self.power = np.zeros((channels, self.SEG // 2 + 1))
+        self.segments = 0
+        self.sums = np.zeros(channels)
+        self.squares = np.zeros(channels)
+        self.count = 0
+        self.buffer = np.empty((0, channels))
+        self.buffer_at = start  # raw row of buffer[0]
+        self.next = start  # raw row where the next segment starts
+
+    def add(self, values: Array, first_row: int) -> None:
+        """Feed raw rows ``first_row ...`` (blocks in order)."""
+        end = self.start + self.SPAN
+        lo, hi = max(first_row, self.start), min(first_row + values.shape[0], end)
+        if hi <= lo:
+            return
+        part = values[lo - first_row : hi - first_row]
+        self.sums += part.sum(axis=0)
+        self.squares += np.einsum("ij,ij->j", part, part)
+        self.count += part.shape[0]
+        self.buffer = np.concatenate([self.buffer, part]) if self.buffer.shape[0] else part
+        starts = []
+        while self.next + self.SEG <= hi:
+            starts.append(self.next - self.buffer_at)
+            self.next += self.SEG // 2
+        if starts:
+            index = np.asarray(starts)[:, None] + np.arange(self.SEG)
+            for i in range(self.power.shape[0]):
+                segments = self.buffer[index, i]
+                segments = (segments - segments.mean(axis=1, keepdims=True)) * self.window
+                self.power[i] += np.sum(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0)
+            self.segments += len(starts)
+        drop = self.next - self.buffer_at
+        self.buffer = self.buffer[drop:].copy()
+        self.buffer_at = self.next
+
+    def spectrum(self) -> tuple[Array, Array] | None:
+        """Frequencies and the summed normalised spectrum (None: decay shorter than a segment)."""
+        if self.segments == 0 or self.count < self.SEG:
+            return None
+        var = self.squares / self.count - (self.sums / self.count) ** 2
+        keep = var > 0.0
+        total = (self.power[keep] / self.segments / var[keep, None]).sum(axis=0)
+        freqs: Array = np.asarray(np.fft.rfftfreq(self.SEG, self.dt), dtype=float)
+        return freqs, total
+
+
+def _head_content(head: Array, time: Array) -> tuple[float, tuple[Array, Array], int] | None:
+    """Sample interval, content spectrum of the decay in the head and the decay's start (None: none found)."""
     from rigidid.core.timedomain.preprocess import content_spectrum, find_impact
 
     dt = float(time[-1] - time[0]) / (time.shape[0] - 1)
@@ -258,7 +321,7 @@ def _head_content(head: Array, time: Array) -> tuple[float, tuple[Array, Array]]
     except InputError:  # an all-zero head: the checks after reading will say what is wrong
         return None
     freqs, total = content_spectrum([head[start:]], dt)
-    return (dt, (freqs, total)) if total.size else None
+    return (dt, (freqs, total), start) if total.size else None
 
 
 def _pre_factor(dt: float, spectrum: tuple[Array, Array], f_limit: float | None) -> int:
@@ -332,15 +395,15 @@ def read_record_streamed(
         held += t.shape[0]
         if held > HEAD_ROWS:
             break
-    spectrum = None
+    welch: _Welch | None = None
     if held > HEAD_ROWS:  # longer than the head (a shorter record is read whole, not pre-decimated)
         head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
         found = _head_content(head, np.concatenate([t for t, _ in pending])[:HEAD_ROWS])
         del head
         if found is not None:
-            spectrum = found[1]
+            welch = _Welch(found[2], found[0], len(wanted))
             if factor is None:
-                factor = _pre_factor(found[0], spectrum, f_limit)
+                factor = _pre_factor(found[0], found[1], f_limit)
     if factor is None:
         factor = 1
     stream = Decimator(factor, len(wanted))
@@ -350,6 +413,8 @@ def read_record_streamed(
 
     def feed(t: Array, values: Array) -> None:
         nonlocal out, capacity, filled
+        if welch is not None:
+            welch.add(values, times.rows)
         times.add(t)
         np.maximum(peaks, np.max(np.abs(values), axis=0), out=peaks)
         done = stream.push(values)
@@ -381,4 +446,5 @@ def read_record_streamed(
     offset = FIR_HALF_LENGTH * factor if factor > 1 else 0
     energy = channel_energy(data)
     _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * factor), src, energy)
+    spectrum = welch.spectrum() if welch is not None else None
     return StreamedRecord(data, dt * factor, factor, offset, n, energy, spectrum)
