@@ -148,3 +148,22 @@ def test_spectrum_while_reading_is_the_estimations(
     assert streamed.spectrum is not None
     np.testing.assert_allclose(streamed.spectrum[0], freqs, rtol=1e-15)
     np.testing.assert_allclose(streamed.spectrum[1], total, rtol=1e-9)
+
+
+def test_npy_is_read_in_blocks_to_the_same_record(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    folder, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    target = folder / "blocks.npy"
+    np.save(target, np.column_stack([np.arange(data.shape[0]) * dt, data]))
+    from_npy = read_record_streamed(target, ids)
+    from_csv = read_record_streamed(paths[0], ids)
+    assert from_npy.factor == from_csv.factor > 1
+    np.testing.assert_allclose(from_npy.data, from_csv.data, rtol=0, atol=STREAMED_DECIMATION)
+    bad = data.copy()
+    bad[5000, 3] = np.inf
+    np.save(target, np.column_stack([np.arange(data.shape[0]) * dt, bad]))
+    with pytest.raises(InputError, match="NaN or infinite") as err:
+        read_record_streamed(target, ids)
+    assert "row 5001" in str(err.value) and ids[3] in str(err.value)

@@ -38,6 +38,7 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -145,8 +146,12 @@ def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None
 
 
 def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.binary_records import read_binary
+    from rigidid.io.binary_records import npy_blocks, read_binary
 
+    if path.suffix.lower() == ".npy" and path.is_file():
+        found = npy_blocks(path, _BLOCK)
+        if found is not None:
+            return _npy_source(path, wanted, src, progress, *found)
     raw = read_binary(path)
     if raw.names is None:
         if raw.data.shape[1] != len(wanted):
@@ -183,6 +188,37 @@ def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCa
             yield t, values
 
     return _Source(blocks(), n, lambda _n: lambda k: (k if k >= 0 else _n + k) + 1, list, step)
+
+
+def _npy_source(
+    path: Path, wanted: list[str], src: str, progress: ProgressCallback | None, n: int, columns: int, raw: Any
+) -> _Source:
+    """A plain ``.npy`` record (time, then the sensors in layout order) read block by block."""
+    if columns - 1 != len(wanted):
+        raise InputError(
+            f"{columns - 1} sensor columns after time, the layout has {len(wanted)} sensors",
+            source=src,
+            location="columns",
+        )
+    task = f"reading {path.name}"
+
+    def blocks() -> Iterator[tuple[Array, Array]]:
+        done = 0
+        for table in raw:
+            finite = np.isfinite(table).all(axis=1)
+            if not finite.all():
+                k = int(np.flatnonzero(~finite)[0])
+                j = int(np.argmin(np.isfinite(table[k])))
+                name = "time" if j == 0 else wanted[j - 1]
+                raise InputError(
+                    "a value is NaN or infinite", source=src, location=f"{_where(done + k + 1)}, {_column(name)}"
+                )
+            done += table.shape[0]
+            if progress is not None:
+                progress(task, float(done), float(n))
+            yield np.ascontiguousarray(table[:, 0]), np.ascontiguousarray(table[:, 1:])
+
+    return _Source(blocks(), n, lambda _n: lambda k: (k if k >= 0 else _n + k) + 1, list)
 
 
 class _TimeCheck:
