@@ -198,29 +198,28 @@ def npy_blocks(path: str | os.PathLike[str], rows: int) -> tuple[int, int, Any] 
         little-endian float64 array (then :func:`read_binary` loads it whole)
         or not a ``.npy`` file.
     """
-    fh = Path(path).open("rb")  # noqa: SIM115 - closed by the generator below, or on the early returns
-    try:
-        version = np.lib.format.read_magic(fh)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
-        else:
-            fh.close()
+    with Path(path).open("rb") as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+            if version == (1, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+            elif version == (2, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+            else:
+                return None
+        except (ValueError, OSError, EOFError):
             return None
-    except (ValueError, OSError, EOFError):
-        fh.close()
-        return None
+        offset = fh.tell()
     if fortran or dtype != np.dtype("<f8") or len(shape) != 2 or shape[1] < 2:
-        fh.close()
         return None
     n, columns = int(shape[0]), int(shape[1])
 
     def blocks() -> Any:
-        with fh:
+        with Path(path).open("rb") as data:
+            data.seek(offset)
             for start in range(0, n, rows):
                 count = min(rows, n - start) * columns
-                block = np.fromfile(fh, dtype="<f8", count=count)
+                block = np.fromfile(data, dtype="<f8", count=count)
                 if block.size != count:
                     raise InputError("the file is shorter than its header says", source=str(path))
                 yield block.reshape(-1, columns)

@@ -195,6 +195,7 @@ def _npy_source(
 ) -> _Source:
     """A plain ``.npy`` record (time, then the sensors in layout order) read block by block."""
     if columns - 1 != len(wanted):
+        raw.close()
         raise InputError(
             f"{columns - 1} sensor columns after time, the layout has {len(wanted)} sensors",
             source=src,
@@ -204,19 +205,22 @@ def _npy_source(
 
     def blocks() -> Iterator[tuple[Array, Array]]:
         done = 0
-        for table in raw:
-            finite = np.isfinite(table).all(axis=1)
-            if not finite.all():
-                k = int(np.flatnonzero(~finite)[0])
-                j = int(np.argmin(np.isfinite(table[k])))
-                name = "time" if j == 0 else wanted[j - 1]
-                raise InputError(
-                    "a value is NaN or infinite", source=src, location=f"{_where(done + k + 1)}, {_column(name)}"
-                )
-            done += table.shape[0]
-            if progress is not None:
-                progress(task, float(done), float(n))
-            yield np.ascontiguousarray(table[:, 0]), np.ascontiguousarray(table[:, 1:])
+        try:
+            for table in raw:
+                finite = np.isfinite(table).all(axis=1)
+                if not finite.all():
+                    k = int(np.flatnonzero(~finite)[0])
+                    j = int(np.argmin(np.isfinite(table[k])))
+                    name = "time" if j == 0 else wanted[j - 1]
+                    raise InputError(
+                        "a value is NaN or infinite", source=src, location=f"{_where(done + k + 1)}, {_column(name)}"
+                    )
+                done += table.shape[0]
+                if progress is not None:
+                    progress(task, float(done), float(n))
+                yield np.ascontiguousarray(table[:, 0]), np.ascontiguousarray(table[:, 1:])
+        finally:
+            raw.close()  # the file, also when a bad value stops the reading
 
     return _Source(blocks(), n, lambda _n: lambda k: (k if k >= 0 else _n + k) + 1, list)
 
