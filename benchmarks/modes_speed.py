@@ -17,19 +17,24 @@ baseline, of the pole nearest each true mode).
 
 Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method era]``
 
-``--floor [CHANNELSxSAMPLES]`` (default 32x1000000) instead times the whole
-command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as
-CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
-Python that reads the CSV with ``pandas.read_csv``, decimates with the
-project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12
-leading principal directions, forms the Gram matrix with ``lagged_gram`` (20
-block rows) and realises 12 states with
-``era_basis``/``era_modes``; and the same floor loading the ``.npz``
-with ``numpy.load``), interleaved, ``--repeat`` times (3); it prints
-medians of wall time (start-up included) and of peak resident memory (the
-child's own ``VmHWM``, written at exit; ``ru_maxrss`` would include the
-benchmark process's memory at fork time), and their ratios to the floor: the
-machine is shared, ratios measured in one run are the figures to compare.
+``--floor [CHANNELSxSAMPLES,...]`` (default 32x1000000) instead times, per case, the whole
+command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as CSV, ``.npy``
+and ``.npz``, against a plain numpy floor run in the same way (a fresh Python that reads the
+CSV with ``pandas.read_csv`` or the ``.npy`` with ``numpy.load``, decimates with the
+project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12 leading
+principal directions, forms the Gram matrix with ``lagged_gram`` (20 block rows) and
+realises 12 states with ``era_basis``/``era_modes``) and against pyOMA2's SSI-cov
+(``pyoma-2`` from PyPI, in its own virtual environment ``.pyoma-venv`` at the repository
+root, never a project dependency: the same pandas/numpy read, ``decimate_data`` with the
+floor's factor and scipy's FIR, 20 block rows, orders up to 24). Contenders run
+interleaved, ``--repeat`` times (3); it prints medians of wall time (start-up included) and
+of peak resident memory (the child's own ``VmHWM``, written at exit), their ratios to the
+CSV floor, the estimation alone on the loaded record (the floor's steps against
+``estimate_modes``), whether the CSV, ``.npy`` and ``.npz`` modes agree to 1e-9, and the
+load average: the machine is shared, ratios measured in one run are the figures to
+compare. ``--keep DIR`` writes the records there once and reuses them.
+
+Run: ``python benchmarks/modes_speed.py --floor 32x1000000,8x1000000,8x10000000 --keep /tmp/cases``
 """
 
 from __future__ import annotations
