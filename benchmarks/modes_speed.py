@@ -17,19 +17,24 @@ baseline, of the pole nearest each true mode).
 
 Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method era]``
 
-``--floor [CHANNELSxSAMPLES]`` (default 32x1000000) instead times the whole
-command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as
-CSV and as ``.npz``, against a plain numpy floor run in the same way (a fresh
-Python that reads the CSV with ``pandas.read_csv``, decimates with the
-project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12
-leading principal directions, forms the Gram matrix with ``lagged_gram`` (20
-block rows) and realises 12 states with
-``era_basis``/``era_modes``; and the same floor loading the ``.npz``
-with ``numpy.load``), interleaved, ``--repeat`` times (3); it prints
-medians of wall time (start-up included) and of peak resident memory (the
-child's own ``VmHWM``, written at exit; ``ru_maxrss`` would include the
-benchmark process's memory at fork time), and their ratios to the floor: the
-machine is shared, ratios measured in one run are the figures to compare.
+``--floor [CHANNELSxSAMPLES,...]`` (default 32x1000000) instead times, per case, the whole
+command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as CSV, ``.npy``
+and ``.npz``, against a plain numpy floor run in the same way (a fresh Python that reads the
+CSV with ``pandas.read_csv`` or the ``.npy`` with ``numpy.load``, decimates with the
+project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12 leading
+principal directions, forms the Gram matrix with ``lagged_gram`` (20 block rows) and
+realises 12 states with ``era_basis``/``era_modes``) and against pyOMA2's SSI-cov
+(``pyoma-2`` from PyPI, in its own virtual environment ``.pyoma-venv`` at the repository
+root, never a project dependency: the same pandas/numpy read, ``decimate_data`` with the
+floor's factor and scipy's FIR, 20 block rows, orders up to 24). Contenders run
+interleaved, ``--repeat`` times (3); it prints medians of wall time (start-up included) and
+of peak resident memory (the child's own ``VmHWM``, written at exit), their ratios to the
+CSV floor, the estimation alone on the loaded record (the floor's steps against
+``estimate_modes``), whether the CSV, ``.npy`` and ``.npz`` modes agree to 1e-9, and the
+load average: the machine is shared, ratios measured in one run are the figures to
+compare. ``--keep DIR`` writes the records there once and reuses them.
+
+Run: ``python benchmarks/modes_speed.py --floor 32x1000000,8x1000000,8x10000000 --keep /tmp/cases``
 """
 
 from __future__ import annotations
@@ -152,14 +157,19 @@ def _peak():  # VmHWM: this process's own peak resident set (reset by exec, unli
 atexit.register(_peak)
 """
 
-CLI_CODE = PEAK_PREAMBLE + """
+CLI_CODE = (
+    PEAK_PREAMBLE
+    + """
 import sys
 from rigidid.cli import main
 sys.argv = ["rigidid", *sys.argv[1:]]
 main()
 """
+)
 
-FLOOR_CODE = PEAK_PREAMBLE + """
+FLOOR_CODE = (
+    PEAK_PREAMBLE
+    + """
 import sys, numpy as np, pandas as pd
 from rigidid.core.timedomain.preprocess import decimate, decimation_for
 from rigidid.core.timedomain.gram import lagged_gram
@@ -167,6 +177,9 @@ from rigidid.core.timedomain.era import era_basis, era_modes
 if sys.argv[1].endswith(".npz"):
     with np.load(sys.argv[1]) as npz:
         time, data = npz["time"], npz["data"]
+elif sys.argv[1].endswith(".npy"):
+    table = np.load(sys.argv[1])
+    time, data = table[:, 0], table[:, 1:]
 else:
     table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
     time, data = table[:, 0], table[:, 1:]
@@ -182,6 +195,7 @@ poles, _ = era_modes(era_basis(gram, fitted.shape[1]), 12, dt * q)
 f = np.sort(np.abs(poles[poles.imag > 0]) / (2 * np.pi))
 print(" ".join(f"{v:.3f}" for v in f))
 """
+)
 
 
 def _run_peak(cmd: list[str], folder: Path) -> tuple[float, float]:
@@ -197,56 +211,139 @@ def _run_peak(cmd: list[str], folder: Path) -> tuple[float, float]:
     return wall, float(peak_file.read_text()) / 1024.0
 
 
-def floor_comparison(channels: int, samples: int, repeat: int) -> None:
-    """`rigidid modes` on CSV and .npz against the numpy floor; medians of `repeat` interleaved runs."""
+PYOMA_CODE = (
+    PEAK_PREAMBLE
+    + """
+import logging, sys, numpy as np, pandas as pd
+logging.disable(logging.INFO)
+from pyoma2.setup import SingleSetup
+from pyoma2.algorithms import SSI
+if sys.argv[1].endswith(".npy"):
+    table = np.load(sys.argv[1])
+else:
+    table = pd.read_csv(sys.argv[1], engine="c").to_numpy()
+time, data = table[:, 0], np.ascontiguousarray(table[:, 1:])
+del table
+fs = (time.shape[0] - 1) / (time[-1] - time[0])
+setup = SingleSetup(data, fs)
+del data
+setup.decimate_data(int(0.5 * fs / (4 * 40.0)), ftype="fir")  # the floor's factor, scipy's FIR
+alg = SSI(name="ssicov", method="cov", br=20, ordmax=24)
+setup.add_algorithms(alg)
+setup.run_by_name("ssicov")
+"""
+)
+
+ESTIMATION_CODE = """
+import sys, time, numpy as np
+from rigidid.core.timedomain import estimate_modes
+from rigidid.core.timedomain.preprocess import decimate, decimation_for
+from rigidid.core.timedomain.gram import lagged_gram
+from rigidid.core.timedomain.era import era_basis, era_modes
+table = np.load(sys.argv[1])
+time_, data = table[:, 0], np.ascontiguousarray(table[:, 1:])
+del table
+dt = (time_[-1] - time_[0]) / (time_.shape[0] - 1)
+t0 = time.perf_counter()
+q = decimation_for(40.0, dt)
+low = decimate(data, q)
+_, _, vt = np.linalg.svd(low.T @ low)
+fitted = low @ vt[:12].T
+gram, _ = lagged_gram([fitted], 20)
+era_modes(era_basis(gram, fitted.shape[1]), 12, dt * q)
+t1 = time.perf_counter()
+estimate_modes([data], dt)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+
+PYOMA_PYTHON = Path(__file__).resolve().parents[1] / ".pyoma-venv" / "bin" / "python"
+
+
+def _case_files(folder: Path, channels: int, samples: int) -> tuple[Path, Path, Path, Path]:
+    """The record as CSV, .npy, .npz and the layout (written once; kept in `folder`)."""
     from records_scenario import layout
     from rigidid.io.binary_records import write_binary
     from rigidid.io.records import read_record
 
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        t0 = time.perf_counter()
+    ids = [f"s{i + 1}" for i in range(channels)]
+    pos, dirs = layout(channels)
+    sensors = [
+        {"id": sid, "position": p.tolist(), "direction": d.tolist()} for sid, p, d in zip(ids, pos, dirs, strict=True)
+    ]
+    lay = folder / f"layout{channels}.json"
+    lay.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "sensors": sensors}))
+    csv = folder / f"record_{channels}x{samples}.csv"
+    npy, npz = csv.with_suffix(".npy"), csv.with_suffix(".npz")
+    if not csv.exists():
         csv = _write_case(folder, channels, samples)
-        ids = [f"s{i + 1}" for i in range(channels)]
-        pos, dirs = layout(channels)
-        sensors = [
-            {"id": sid, "position": p.tolist(), "direction": d.tolist()}
-            for sid, p, d in zip(ids, pos, dirs, strict=True)
-        ]
-        lay = folder / "layout.json"
-        lay.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "sensors": sensors}))
+    if not (npy.exists() and npz.exists()):
         data, dt = read_record(csv, ids)
-        npz = folder / "record.npz"
-        write_binary(npz, np.arange(data.shape[0]) * dt, data, ids)
+        time_ = np.arange(data.shape[0]) * dt
+        write_binary(npz, time_, data, ids)
+        np.save(npy, np.column_stack([time_, data]))
         del data
-        print(f"{channels} channels x {samples} samples: CSV {csv.stat().st_size / 1e6:.0f} MB, "
-              f"npz {npz.stat().st_size / 1e6:.0f} MB (written in {time.perf_counter() - t0:.0f} s); "
-              f"medians of {repeat} interleaved runs")  # fmt: skip
-        cli = [sys.executable, "-c", CLI_CODE, "modes", str(lay)]
-        commands = {
-            "floor (pandas + FIR + Gram ERA)": [sys.executable, "-c", FLOOR_CODE, str(csv)],
-            "floor from .npz (np.load)": [sys.executable, "-c", FLOOR_CODE, str(npz)],
-            "rigidid modes CSV": [*cli, str(csv), "-o", str(folder / "m1.csv")],
-            "rigidid modes .npz": [*cli, str(npz), "-o", str(folder / "m2.csv")],
-        }
-        runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
-        for _ in range(repeat):
-            for name, cmd in commands.items():
-                wall, peak = _run_peak(cmd, folder)
-                runs[name].append((wall, peak))
-        same = np.allclose(
-            np.loadtxt(folder / "m1.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
-            np.loadtxt(folder / "m2.csv", delimiter=",", skiprows=1, usecols=(1, 2)),
-            rtol=1e-9,
-        )
-    floor_wall = float(np.median([w for w, _ in runs["floor (pandas + FIR + Gram ERA)"]]))
-    floor_peak = float(np.median([m for _, m in runs["floor (pandas + FIR + Gram ERA)"]]))
-    print(f"{'contender':<34} {'wall s':>7} {'x floor':>8} {'peak MB':>8} {'x floor':>8}")
-    for name, values in runs.items():
-        wall = float(np.median([w for w, _ in values]))
-        peak = float(np.median([m for _, m in values]))
-        print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
-    print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; CSV and .npz modes equal to 1e-9: {same}")
+    return csv, npy, npz, lay
+
+
+def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None, pyoma: bool) -> None:
+    """`rigidid modes` on CSV, .npy and .npz against the numpy floor and pyOMA2; medians of interleaved runs."""
+    import os
+
+    with contextlib.ExitStack() as stack:
+        folder = Path(keep) if keep else Path(stack.enter_context(tempfile.TemporaryDirectory()))
+        folder.mkdir(parents=True, exist_ok=True)
+        load = os.getloadavg()
+        print(f"load average at start: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f} ({os.cpu_count()} CPUs)")
+        peaks: dict[tuple[int, int], float] = {}
+        for channels, samples in cases:
+            t0 = time.perf_counter()
+            csv, npy, npz, lay = _case_files(folder, channels, samples)
+            print(f"\n{channels} channels x {samples} samples: CSV {csv.stat().st_size / 1e6:.0f} MB, "
+                  f".npy {npy.stat().st_size / 1e6:.0f} MB (ready in {time.perf_counter() - t0:.0f} s); "
+                  f"medians of {repeat} interleaved runs")  # fmt: skip
+            cli = [sys.executable, "-c", CLI_CODE, "modes", str(lay)]
+            commands = {
+                "floor CSV (pandas + FIR + Gram ERA)": [sys.executable, "-c", FLOOR_CODE, str(csv)],
+                "floor .npy (np.load)": [sys.executable, "-c", FLOOR_CODE, str(npy)],
+                "rigidid modes CSV": [*cli, str(csv), "-o", str(folder / "m1.csv")],
+                "rigidid modes .npy": [*cli, str(npy), "-o", str(folder / "m2.csv")],
+                "rigidid modes .npz": [*cli, str(npz), "-o", str(folder / "m3.csv")],
+            }
+            if pyoma:
+                commands["pyOMA2 SSI-cov CSV (pandas)"] = [str(PYOMA_PYTHON), "-c", PYOMA_CODE, str(csv)]
+                commands["pyOMA2 SSI-cov .npy"] = [str(PYOMA_PYTHON), "-c", PYOMA_CODE, str(npy)]
+            runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
+            for _ in range(repeat):
+                for name, cmd in commands.items():
+                    runs[name].append(_run_peak(cmd, folder))
+            modes = [np.loadtxt(folder / f"m{k}.csv", delimiter=",", skiprows=1, usecols=(1, 2)) for k in (1, 2, 3)]
+            same = all(np.allclose(m, modes[0], rtol=1e-9, atol=0) for m in modes[1:])
+            floor = runs["floor CSV (pandas + FIR + Gram ERA)"]
+            floor_wall = float(np.median([w for w, _ in floor]))
+            floor_peak = float(np.median([m for _, m in floor]))
+            print(f"{'contender':<34} {'wall s':>7} {'x floor':>8} {'peak MB':>8} {'x floor':>8}")
+            for name, values in runs.items():
+                wall = float(np.median([w for w, _ in values]))
+                peak = float(np.median([m for _, m in values]))
+                print(f"{name:<34} {wall:>7.2f} {wall / floor_wall:>8.2f} {peak:>8.0f} {peak / floor_peak:>8.2f}")
+            peaks[(channels, samples)] = float(np.median([m for _, m in runs["rigidid modes CSV"]]))
+            alone = [
+                [float(v) for v in subprocess.run(
+                    [sys.executable, "-c", ESTIMATION_CODE, str(npy)], capture_output=True, text=True, check=True
+                ).stdout.split()]
+                for _ in range(repeat)
+            ]  # fmt: skip
+            floor_est, ours_est = np.median(alone, axis=0)
+            print(f"estimation alone on the loaded record (no reading): floor {floor_est:.2f} s, "
+                  f"rigidid estimate_modes {ours_est:.2f} s ({ours_est / floor_est:.2f}x)")  # fmt: skip
+            freqs = " ".join(f"{f:.4f}" for f in np.unique(modes[0][:, 0]))
+            print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; frequencies: {freqs} Hz; "
+                  f"CSV, .npy and .npz modes equal to 1e-9: {same}")  # fmt: skip
+        load = os.getloadavg()
+        print(f"\nload average at end: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
+        for (c, n), peak in peaks.items():
+            print(f"rigidid modes CSV peak, {c} channels x {n} rows: {peak:.0f} MB")
 
 
 def main() -> None:
@@ -254,12 +351,20 @@ def main() -> None:
     parser.add_argument("--cases", help="comma-separated CHANNELSxSAMPLES (default: 8 and 32 x 1e4, 1e5, 1e6)")
     parser.add_argument("--method", default=None, help="estimator (default: the package default)")
     parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
-    parser.add_argument("--floor", nargs="?", const="32x1000000", help="rigidid modes (CSV, .npz) against the floor")
+    parser.add_argument(
+        "--floor", nargs="?", const="32x1000000", help="CHANNELSxSAMPLES,...: rigidid modes against the floor"
+    )
+    parser.add_argument("--keep", help="--floor: folder to write the records to and reuse (default: a temporary one)")
+    parser.add_argument("--no-pyoma", action="store_true", help="--floor: leave pyOMA2 out")
     parser.add_argument("--repeat", type=int, default=3, help="runs per contender for --floor (medians)")
     args = parser.parse_args()
     if args.floor:
-        c, n = args.floor.split("x")
-        floor_comparison(int(c), int(n), args.repeat)
+        floor_cases = [(int(c), int(n)) for c, n in (item.split("x") for item in args.floor.split(","))]
+        pyoma = not args.no_pyoma and PYOMA_PYTHON.exists()
+        if not pyoma and not args.no_pyoma:
+            print(f"pyOMA2 left out: no {PYOMA_PYTHON} (make it: python -m venv .pyoma-venv; "
+                  ".pyoma-venv/bin/pip install pyoma-2)")  # fmt: skip
+        floor_comparison(floor_cases, args.repeat, args.keep, pyoma)
         return
     if args.child:
         kind, path, channels, method = args.child

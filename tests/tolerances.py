@@ -129,3 +129,11 @@ FRF_UFF_ASCII_REL = 1.5e-12
 UFF_E13_REL = 5e-6
 """An abscissa written as E13.5 (6 significant digits) comes back within half a unit of its sixth
 digit: the format's own bound, not an observation."""
+STREAMED_DECIMATION = 1e-12
+"""Absolute difference between the streaming decimator and the whole-record one on unit-variance
+noise (observed <= 4e-16: chunk boundaries only reorder floating-point sums)."""
+
+STREAMED_VS_WHOLE_FREQUENCY = 5e-5
+"""Relative frequency difference between the streamed, two-stage decimation (pre-factor while
+reading, the rest after) and the whole-record route (observed 1.8e-5), on the engine sample's 2 s records with the
+pre-decimation forced on small blocks (tests/test_streamed_records.py)."""

@@ -905,6 +905,8 @@ def estimate_modes(
             arrays.append(item)
         else:
             paths.append(item)
+    if paths and not arrays:
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress)
     arrays += load_records(paths, lay)
     dts = [dt for _, dt in arrays]
     if max(dts) - min(dts) > 1e-9 * max(dts):
@@ -923,6 +925,70 @@ def estimate_modes(
     )
     ids = tuple(s.id for s in lay.sensors)
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    return table, result
+
+
+def _streamed_content(streamed: Sequence[Any], dt: float) -> tuple[float, float] | None:
+    """The content range from the spectra the reader measured on the raw heads (None: let the estimation)."""
+    from rigidid.core.timedomain.preprocess import content_from_spectrum
+
+    spectra = [r.spectrum for r in streamed]
+    if any(s is None for s in spectra) or len({s[1].shape for s in spectra}) != 1:
+        return None
+    total = np.sum([s[1] for s in spectra], axis=0)
+    return content_from_spectrum(spectra[0][0], total, 0.5 / dt)
+
+
+def _estimate_streamed(
+    lay: LayoutFile,
+    paths: Sequence[PathLike],
+    method: str | None,
+    n_modes: int,
+    band: tuple[float, float] | None,
+    max_order: int | None,
+    decimate: int | None,
+    progress: ProgressCallback | None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """:func:`estimate_modes` on record files read in blocks and decimated as they arrive.
+
+    The first record chooses the pre-decimation factor (:mod:`rigidid.io.streamed_records`)
+    or takes the user's `decimate` whole; the others share it. The estimate reports
+    the total factor, the impacts in the files' rows.
+    """
+    from rigidid.core.timedomain import DEFAULT_METHOD, Impact
+    from rigidid.core.timedomain import estimate_modes as estimate
+    from rigidid.io.streamed_records import read_record_streamed
+
+    ids = [s.id for s in lay.sensors]
+    f_limit = float(band[1]) if band is not None else None
+    streamed = [read_record_streamed(paths[0], ids, factor=decimate, f_limit=f_limit, progress=progress)]
+    factor = streamed[0].factor
+    streamed += [read_record_streamed(p, ids, factor=factor, progress=progress) for p in paths[1:]]
+    dts = [r.dt for r in streamed]
+    if max(dts) - min(dts) > 1e-9 * max(dts):
+        raise InputError(
+            f"records have different sample intervals ({min(dts) / factor:.6g} to {max(dts) / factor:.6g} s)",
+            source="records",
+        )
+    result = estimate(
+        [r.data for r in streamed],
+        dts[0],
+        method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
+        n_modes=n_modes,
+        band=band,
+        max_order=max_order,
+        decimate=None if decimate is None else 1,
+        progress=progress,
+        energies=[r.energy for r in streamed],
+        content=_streamed_content(streamed, dts[0] / factor),
+    )
+    if factor > 1:
+        impacts = tuple(
+            Impact(*(r.offset + k * factor for k in (i.onset, i.peak, i.start)))
+            for r, i in zip(streamed, result.impacts, strict=False)
+        )
+        result = replace(result, decimation=result.decimation * factor, impacts=impacts)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, tuple(ids), result.shapes)
     return table, result
 
 

@@ -435,6 +435,7 @@ def _estimate(
     decimate: int | None,
     option: str = "--modal-method",
     source: str | None = None,
+    paths: list[Path] | None = None,
 ) -> tuple[ModeTable, ModalEstimate]:
     from rigidid import api
     from rigidid.core.timedomain import METHODS
@@ -446,7 +447,7 @@ def _estimate(
 
     with _naming(source), terminal_progress() as progress:
         return api.estimate_modes(
-            data.layout, data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
+            data.layout, paths or data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
             decimate=decimate, progress=progress,
         )  # fmt: skip
 
@@ -683,11 +684,19 @@ def modes(
         if output == "-" and json_path == "-":
             raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
         _check_outputs({"--output": output, "--json": json_path})
-        data = _test_data(layout, records or [], True, units, geometry)
+        # record files are read in blocks and decimated as they arrive (io/streamed_records.py)
+        streamed = bool(records) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
+        if streamed:
+            from rigidid import api
+
+            data = api.TestData(api.load_layout(layout))
+        else:
+            data = _test_data(layout, records or [], True, units, geometry)
         option = "--modal-method" if method is None else "--method"
         table, estimate = _estimate(
-            data, modal_method, n_modes, band, max_order, decimate, option=option, source=_source(layout, records)
-        )
+            data, modal_method, n_modes, band, max_order, decimate, option=option, source=_source(layout, records),
+            paths=list(records or []) if streamed else None,
+        )  # fmt: skip
         text = modes_csv_text(table)
         with OutputSet() as outs:  # every output or none
             if json_path is not None:

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
 
-__all__ = ["BINARY_SUFFIXES", "RawRecord", "read_binary", "write_binary"]
+__all__ = ["BINARY_SUFFIXES", "RawRecord", "npy_blocks", "read_binary", "write_binary"]
 
 Array = NDArray[np.float64]
 
@@ -185,6 +185,46 @@ def _read_h5(path: Path, src: str) -> RawRecord:
         if "data" in fh and isinstance(fh["data"], h5py.Dataset):
             attrs.update({k: v for k, v in fh["data"].attrs.items() if k in ("dt", "sample_rate")})
     return _from_mapping(fields, attrs, src)
+
+
+def npy_blocks(path: str | os.PathLike[str], rows: int) -> tuple[int, int, Any] | None:
+    """A plain ``.npy`` record read `rows` rows at a time, without holding it whole.
+
+    Returns
+    -------
+    (n, columns, blocks) or None
+        Rows, columns and an iterator of float64 arrays ``(<= rows, columns)``
+        (time in column 0); None when the file is not a C-ordered 2-D
+        little-endian float64 array (then :func:`read_binary` loads it whole)
+        or not a ``.npy`` file.
+    """
+    with Path(path).open("rb") as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+            if version == (1, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+            elif version == (2, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+            else:
+                return None
+        except (ValueError, OSError, EOFError):
+            return None
+        offset = fh.tell()
+    if fortran or dtype != np.dtype("<f8") or len(shape) != 2 or shape[1] < 2:
+        return None
+    n, columns = int(shape[0]), int(shape[1])
+
+    def blocks() -> Any:
+        with Path(path).open("rb") as data:
+            data.seek(offset)
+            for start in range(0, n, rows):
+                count = min(rows, n - start) * columns
+                block = np.fromfile(data, dtype="<f8", count=count)
+                if block.size != count:
+                    raise InputError("the file is shorter than its header says", source=str(path))
+                yield block.reshape(-1, columns)
+
+    return n, columns, blocks()
 
 
 def read_binary(path: str | os.PathLike[str]) -> RawRecord:

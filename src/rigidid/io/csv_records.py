@@ -34,7 +34,7 @@ import os
 import re
 import stat
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -46,8 +46,17 @@ from rigidid.io.columns import NON_SENSOR_PREFIXES, match_columns
 from rigidid.io.columns import column as _column
 from rigidid.io.columns import row as _where
 from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
+from rigidid.progress import ProgressCallback
 
-__all__ = ["CHUNK_ROWS", "MAX_HEADER_BYTES", "NON_SENSOR_PREFIXES", "RawCsv", "read_csv_columns"]
+__all__ = [
+    "CHUNK_ROWS",
+    "MAX_HEADER_BYTES",
+    "NON_SENSOR_PREFIXES",
+    "CsvHead",
+    "RawCsv",
+    "csv_blocks",
+    "read_csv_columns",
+]
 
 Array = NDArray[np.float64]
 
@@ -205,8 +214,61 @@ def _estimate_rows(fh: Any, size: int, head: bytes, header_size: int) -> int:
     return max(16, int((size - header_size) / max(shortest, 1.0) * 1.02) + 16)
 
 
+class CsvHead:
+    """What the header of a CSV record says, yielded first by :func:`csv_blocks`.
+
+    Attributes
+    ----------
+    rows : int
+        Rows to preallocate (an estimate from the file size, a few per cent high).
+    line_of : callable
+        ``line_of(n_rows)`` gives the row-to-line map of a record of `n_rows` data rows.
+    time_tokens : callable
+        The time cells of the last rows as written.
+    """
+
+    def __init__(self, rows: int, line_of: Callable[[int], Callable[[int], int]], time_tokens: Callable[[], list[str]]):
+        self.rows, self.line_of, self.time_tokens = rows, line_of, time_tokens
+
+
 def read_csv_columns(path: str | os.PathLike[str], wanted: list[str]) -> RawCsv:
     """Parse a CSV record in chunks, its sensor columns in the order of `wanted`.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and row/column (see the module documentation).
+    """
+    blocks = csv_blocks(path, wanted)
+    head = next(blocks)
+    assert isinstance(head, CsvHead)
+    capacity = head.rows
+    data = np.empty((capacity, len(wanted)))
+    time = np.empty(capacity)
+    filled = 0
+    for item in blocks:
+        assert not isinstance(item, CsvHead)
+        t, values = item
+        rows = t.shape[0]
+        if filled + rows > capacity:
+            capacity = max(filled + rows, int(capacity * 1.25))
+            data = np.resize(data, (capacity, len(wanted)))
+            time = np.resize(time, capacity)
+        data[filled : filled + rows] = values
+        time[filled : filled + rows] = t
+        filled += rows
+    return RawCsv(data[:filled], time[:filled], head.line_of(filled), head.time_tokens)
+
+
+def csv_blocks(
+    path: str | os.PathLike[str], wanted: list[str], progress: ProgressCallback | None = None
+) -> Iterator[CsvHead | tuple[Array, Array]]:
+    """Parse a CSV record chunk by chunk: first a :class:`CsvHead`, then ``(time, data)`` blocks.
+
+    Each block has at most :data:`CHUNK_ROWS` rows, its sensor columns in the
+    order of `wanted`, checked (field count, numbers, finite) before it is
+    yielded. `progress` is called with ``("reading <file name>", bytes,
+    file size)`` after each chunk.
 
     Raises
     ------
@@ -264,8 +326,7 @@ def read_csv_columns(path: str | os.PathLike[str], wanted: list[str]) -> RawCsv:
             )
         n_fields = len(header)
         capacity = _estimate_rows(fh, size, head, len(header_bytes))
-        data = np.empty((capacity, len(wanted)))
-        time = np.empty(capacity)
+        yield CsvHead(capacity, lambda n: _line_map(p, dialect, n), _tail_tokens(p, dialect))
         fh.seek(len(header_bytes))
         reader = pd.read_csv(
             _Bounded(fh, size - len(header_bytes), src),
@@ -280,6 +341,7 @@ def read_csv_columns(path: str | os.PathLike[str], wanted: list[str]) -> RawCsv:
             dtype=None,
         )
         filled = 0
+        task = f"reading {p.name}"
         columns = [0, *order]
         try:
             for chunk in reader:
@@ -296,25 +358,22 @@ def read_csv_columns(path: str | os.PathLike[str], wanted: list[str]) -> RawCsv:
                     time_column, sensor_columns = 0, list(range(1, len(columns)))
                 del chunk
                 rows = values.shape[0]
-                if filled + rows > capacity:
-                    capacity = max(filled + rows, int(capacity * 1.25))
-                    data = np.resize(data, (capacity, len(wanted)))
-                    time = np.resize(time, capacity)
-                block = data[filled : filled + rows]
-                time[filled : filled + rows] = values[:, time_column]
-                np.take(values, sensor_columns, axis=1, out=block)
+                time_block = values[:, time_column].copy()
+                block = np.take(values, sensor_columns, axis=1)
                 del values
-                finite = np.isfinite(block).all(axis=1) & np.isfinite(time[filled : filled + rows])
+                finite = np.isfinite(block).all(axis=1) & np.isfinite(time_block)
                 if not finite.all():
                     k = int(np.flatnonzero(~finite)[0])
                     line = _line_map(p, dialect, filled + rows)(filled + k)
                     raise _diagnose(p, dialect, header, line, src)
                 filled += rows
+                if progress is not None:
+                    progress(task, float(fh.tell()), float(size))
+                yield time_block, block
         except pd.errors.ParserError:
             start = _line_map(p, dialect, filled + 1)(filled) if filled else 2
             raise _diagnose(p, dialect, header, _first_bad_line(p, dialect, n_fields, start), src) from None
         except pd.errors.EmptyDataError:
-            filled = 0
+            return
         except UnicodeDecodeError:
             raise InputError("not a text file (UTF-8)", source=src) from None
-    return RawCsv(data[:filled], time[:filled], _line_map(p, dialect, filled), _tail_tokens(p, dialect))

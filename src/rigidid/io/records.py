@@ -102,10 +102,12 @@ def _check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callabl
     return dt
 
 
-def _check_decay(data: Array, line_of: Callable[[int], int], src: str) -> None:
+def _check_decay(data: Array, line_of: Callable[[int], int], src: str, energy: Array | None = None) -> Array:
+    """Raise unless the record decays after its energy peak; return its ``channel_energy``."""
     from rigidid.core.timedomain.preprocess import channel_energy
 
-    energy = channel_energy(data)
+    if energy is None:
+        energy = channel_energy(data)
     peak = int(np.argmax(energy))
     after = energy[peak:]
     k = after.shape[0] // 10
@@ -125,6 +127,7 @@ def _check_decay(data: Array, line_of: Callable[[int], int], src: str) -> None:
             source=src,
             location=f"rows {first}-{last}",
         )
+    return energy
 
 
 def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array, float]:

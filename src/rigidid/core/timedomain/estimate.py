@@ -176,6 +176,8 @@ def estimate_modes(
     pulse_width: float = 0.005,
     criteria: Criteria | None = None,
     progress: ProgressCallback | None = None,
+    energies: Sequence[Array] | None = None,
+    content: tuple[float, float] | None = None,
 ) -> ModalEstimate:
     """Natural frequencies, damping ratios and complex mode shapes from impact records.
 
@@ -235,6 +237,12 @@ def estimate_modes(
     progress : ProgressCallback, optional
         Called with ``("decimating", done, records)`` and ``("model-order
         sweep", done, orders)`` (:mod:`rigidid.progress`).
+    energies : sequence of ndarray, shape (n_k,), optional
+        ``channel_energy`` of each record when the caller has it (the record
+        reader computes it for its decay check): used to find the impacts.
+    content : (float, float), optional
+        ``content_range`` of the free decays when the caller measured it (the
+        streamed reader, on the records before it decimated them).
 
     Returns
     -------
@@ -303,13 +311,15 @@ def estimate_modes(
     # (1) free decays
     impacts: list[Impact] = []
     decays: list[Array] = []
-    for rec in decays_in:
-        impact = find_impact(rec, dt, pulse_width=pulse_width) if trim else Impact(0, 0, 0)
+    for k, rec in enumerate(decays_in):
+        energy = energies[k] if energies is not None and k < len(energies) else None
+        impact = find_impact(rec, dt, pulse_width=pulse_width, energy=energy) if trim else Impact(0, 0, 0)
         impacts.append(impact)
         decays.append(rec[impact.start :])
 
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
-    content = content_range(decays, dt)
+    if content is None:
+        content = content_range(decays, dt)
     factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
     options = _Options(method, n_modes, band, max_order, crit, content, progress)
     for attempt, factor in enumerate(factors):

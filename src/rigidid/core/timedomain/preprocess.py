@@ -27,11 +27,14 @@ from rigidid.errors import InputError
 
 __all__ = [
     "FIR_HALF_LENGTH",
+    "Decimator",
     "Impact",
     "auto_decimation",
     "band_limit",
     "channel_energy",
+    "content_from_spectrum",
     "content_range",
+    "content_spectrum",
     "decimate",
     "decimation_for",
     "find_impact",
@@ -110,6 +113,7 @@ def find_impact(
     *,
     threshold: float = 0.01,
     pulse_width: float = 0.005,
+    energy: Array | None = None,
 ) -> Impact:
     """Locate the impact in a record and the start of the free decay after it.
 
@@ -127,6 +131,9 @@ def find_impact(
         Longest expected duration of the impact force (s). The energy peak is
         sought within this window after the onset, and the free decay starts
         half a window after that peak (at least one sample).
+    energy : ndarray, shape (n,), optional
+        ``channel_energy(record)`` when the caller has it already (the record
+        reader computes it for its decay check), so it is computed once.
 
     Returns
     -------
@@ -143,7 +150,8 @@ def find_impact(
     sample 0 and only the first half pulse window is dropped, which costs
     little: a free decay can start anywhere after the force has ended.
     """
-    energy = channel_energy(record)
+    if energy is None or energy.shape != (record.shape[0],):
+        energy = channel_energy(record)
     if energy.size == 0 or not np.any(energy > 0.0):
         raise InputError("the record is empty or all zero")
     top = float(energy.max())
@@ -207,14 +215,35 @@ def content_range(records: Sequence[Array], dt: float, *, floor_factor: float = 
     when most of the band holds no mode; otherwise `f_high` comes out high,
     which is the safe side for decimation.
     """
-    nyquist = 0.5 / dt
+    freqs, total = content_spectrum(records, dt)
+    return content_from_spectrum(freqs, total, 0.5 / dt, floor_factor=floor_factor)
+
+
+def content_spectrum(records: Sequence[Array], dt: float) -> tuple[Array, Array]:
+    """The summed, normalised Welch spectrum :func:`content_range` judges.
+
+    Parameters
+    ----------
+    records : sequence of ndarray, shape (n_k, p)
+        Free decays.
+    dt : float
+        Sample interval (s).
+
+    Returns
+    -------
+    freqs, total : ndarray, shape (m,)
+        Frequencies (Hz) and the spectrum summed over records and channels
+        (empty when no record has 64 samples). Spectra of records read apart
+        with the same segment length add up: the record reader computes one
+        per record as it reads and the estimation adds them.
+    """
     parts = [rec[: 1 << 18] for rec in records if rec.shape[0] >= 64]
     if not parts:
-        return 0.0, nyquist
+        return np.zeros(0), np.zeros(0)
     seg = min(4096, *(part.shape[0] for part in parts))
     window = np.hanning(seg + 2)[1:-1]
     total = np.zeros(seg // 2 + 1)
-    freqs = np.fft.rfftfreq(seg, dt)
+    freqs: Array = np.asarray(np.fft.rfftfreq(seg, dt), dtype=float)
     for part in parts:
         starts = list(range(0, part.shape[0] - seg + 1, seg // 2))
         for i in range(part.shape[1]):
@@ -225,6 +254,15 @@ def content_range(records: Sequence[Array], dt: float, *, floor_factor: float = 
             segments = np.lib.stride_tricks.sliding_window_view(column, seg)[starts]
             segments = (segments - segments.mean(axis=1, keepdims=True)) * window
             total += np.mean(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0) / var
+    return freqs, total
+
+
+def content_from_spectrum(
+    freqs: Array, total: Array, nyquist: float, *, floor_factor: float = 3.0
+) -> tuple[float, float]:
+    """:func:`content_range` from a :func:`content_spectrum` (``(0, nyquist)`` if it is empty)."""
+    if total.size == 0:
+        return 0.0, nyquist
     smooth = np.convolve(total, np.ones(5) / 5.0, mode="same")
     floor = float(np.median(smooth))
     significant = np.flatnonzero(smooth[2:] > floor_factor * floor) + 2
@@ -348,6 +386,82 @@ def decimate(record: Array, factor: int) -> Array:
     for a in range(-FIR_HALF_LENGTH, FIR_HALF_LENGTH + 1):
         out += phases[a + FIR_HALF_LENGTH] @ cube[first + a : stop + a]
     return out
+
+
+class Decimator:
+    """:func:`decimate` fed chunk by chunk: the same output, memory bounded by the output.
+
+    Parameters
+    ----------
+    factor : int
+        Decimation factor ``q >= 1``.
+    channels : int
+        Columns of every chunk.
+
+    Notes
+    -----
+    The raw rows a later output sample still needs (at most ``(2 H + 2) q``
+    with ``H`` = :data:`FIR_HALF_LENGTH`) are carried from one chunk to the
+    next, so :meth:`push` returns, and :meth:`finish` completes, exactly the
+    samples ``decimate(record, factor)`` computes on the whole record: output
+    ``k`` is produced as soon as raw block ``k + H + 1`` is complete, which is
+    also the condition under which the whole-record filter keeps it. Chunk
+    boundaries only change the order of floating-point sums (differences of
+    order 1e-16 relative). With ``factor == 1`` chunks are passed through.
+
+    Examples
+    --------
+    >>> x = np.random.default_rng(0).standard_normal((5000, 2))
+    >>> d = Decimator(4, 2)
+    >>> y = np.concatenate([d.push(x[:1234]), d.push(x[1234:]), d.finish()])
+    >>> bool(np.allclose(y, decimate(x, 4), rtol=0.0, atol=1e-12))
+    True
+    """
+
+    def __init__(self, factor: int, channels: int) -> None:
+        self.factor = int(factor)
+        self.channels = int(channels)
+        taps = np.zeros((2 * FIR_HALF_LENGTH + 1) * max(self.factor, 1))
+        if self.factor > 1:
+            taps[: 2 * FIR_HALF_LENGTH * self.factor + 1] = fir_taps(self.factor)
+        self._phases = taps.reshape(2 * FIR_HALF_LENGTH + 1, max(self.factor, 1))
+        self._buffer = np.empty((0, self.channels))
+        self._base = 0  # block index of the buffer's first row
+        self._next = FIR_HALF_LENGTH  # next output sample
+        self.rows_in = 0
+
+    def push(self, chunk: Array) -> Array:
+        """Feed the next raw rows; return the output samples they complete, shape (k, channels)."""
+        self.rows_in += chunk.shape[0]
+        if self.factor <= 1:
+            return chunk
+        q, half = self.factor, FIR_HALF_LENGTH
+        buffer = np.concatenate([self._buffer, chunk]) if self._buffer.shape[0] else chunk
+        blocks = buffer.shape[0] // q
+        last = self._base + blocks - 2 - half  # last output whose blocks (up to k + H + 1) are complete
+        out = np.zeros((max(0, last + 1 - self._next), self.channels))
+        if out.shape[0]:
+            cube = buffer[: blocks * q].reshape(blocks, q, self.channels)
+            lo = self._next - self._base
+            for a in range(-half, half + 1):
+                out += self._phases[a + half] @ cube[lo + a : lo + a + out.shape[0]]
+            self._next += out.shape[0]
+        keep = self._next - half - self._base  # first block still needed
+        self._buffer = buffer[keep * q :].copy()
+        self._base += keep
+        return out
+
+    def finish(self) -> Array:
+        """End of the record: no further output (as :func:`decimate`, the last blocks are lost).
+
+        Raises
+        ------
+        InputError
+            If the record was too short for the filter.
+        """
+        if self.factor > 1 and self.rows_in // self.factor - FIR_HALF_LENGTH - 1 <= FIR_HALF_LENGTH:
+            raise InputError(f"the record is too short to decimate by {self.factor} ({self.rows_in} samples)")
+        return np.zeros((0, self.channels))
 
 
 def band_limit(record: Array, dt: float, band: tuple[float, float], *, order: int = 4) -> Array:

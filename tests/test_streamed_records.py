@@ -1,0 +1,169 @@
+"""Records read block by block and decimated as they arrive (io/streamed_records.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigidid import api
+from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, channel_energy, decimate
+from rigidid.errors import InputError
+from rigidid.io import streamed_records
+from rigidid.io.binary_records import write_binary
+from rigidid.io.records import read_record, write_record
+from rigidid.io.streamed_records import read_record_streamed
+
+from .tolerances import STREAMED_DECIMATION, STREAMED_VS_WHOLE_FREQUENCY
+
+ROOT = Path(__file__).resolve().parents[1]
+ENGINE = ROOT / "samples" / "engine-on-mounts"
+
+
+@pytest.fixture(scope="module")
+def engine(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[str], list[Path]]:
+    folder = tmp_path_factory.mktemp("streamed")
+    paths = api.simulate_records(
+        ENGINE / "body.json", ENGINE / "layout.json", folder, sample_rate=16384.0, duration=2.0, noise=0.01, seed=3
+    )
+    ids = [s.id for s in api.load_layout(ENGINE / "layout.json").sensors]
+    return folder, ids, paths
+
+
+@pytest.fixture
+def small_blocks(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Pre-decimate records of a few thousand rows (the defaults need 2^18 rows)."""
+    monkeypatch.setattr(streamed_records, "HEAD_ROWS", 4096)
+    monkeypatch.setattr(streamed_records, "_BLOCK", 1000)
+
+
+def test_short_record_is_read_as_read_record_reads_it(engine: tuple[Path, list[str], list[Path]]) -> None:
+    _, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    streamed = read_record_streamed(paths[0], ids)
+    assert streamed.factor == 1 and streamed.offset == 0 and streamed.rows == data.shape[0]
+    np.testing.assert_array_equal(streamed.data, data)
+    assert streamed.dt == pytest.approx(dt, rel=1e-15)
+    np.testing.assert_allclose(streamed.energy, channel_energy(data), rtol=1e-15)
+
+
+@pytest.mark.parametrize("factor", [3, 7])
+def test_given_factor_equals_whole_record_decimation(engine: tuple[Path, list[str], list[Path]], factor: int) -> None:
+    _, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    streamed = read_record_streamed(paths[0], ids, factor=factor)
+    assert streamed.offset == FIR_HALF_LENGTH * factor
+    np.testing.assert_allclose(streamed.data, decimate(data, factor), rtol=0.0, atol=STREAMED_DECIMATION)
+    assert streamed.dt == pytest.approx(dt * factor, rel=1e-12)
+
+
+def test_pre_decimated_modes_are_the_same_whatever_the_format(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    folder, ids, paths = engine
+    _, whole = api.estimate_modes(
+        ENGINE / "layout.json", api.load_records(paths, api.load_layout(ENGINE / "layout.json"))
+    )
+    _, from_csv = api.estimate_modes(ENGINE / "layout.json", paths)
+    assert from_csv.decimation > 1 and from_csv.decimation % read_record_streamed(paths[0], ids).factor == 0
+    assert read_record_streamed(paths[0], ids).factor > 1
+    converted = []
+    for path in paths:
+        data, dt = read_record(path, ids)
+        target = folder / f"{path.stem}.npz"
+        write_binary(target, np.arange(data.shape[0]) * dt, data, ids)
+        converted.append(target)
+    _, from_npz = api.estimate_modes(ENGINE / "layout.json", converted)
+    np.testing.assert_allclose(from_npz.frequency_hz, from_csv.frequency_hz, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(from_npz.damping_ratio, from_csv.damping_ratio, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(np.abs(from_npz.shapes), np.abs(from_csv.shapes), rtol=1e-9, atol=1e-12)
+    # two-stage decimation against the whole-record path: the same modes within the noise
+    np.testing.assert_allclose(from_csv.frequency_hz, whole.frequency_hz, rtol=STREAMED_VS_WHOLE_FREQUENCY)
+    # impacts are reported in the file's rows
+    for impact, path in zip(from_csv.impacts, paths, strict=True):
+        data, dt = read_record(path, ids)
+        raw = api.estimate_modes(ENGINE / "layout.json", [(data, dt)])[1].impacts[0]
+        assert abs(impact.onset - raw.onset) <= 2 * from_csv.decimation
+
+
+def _bad_copy(folder: Path, ids: list[str], source: Path, row: int, column: int, value: float) -> Path:
+    data, dt = read_record(source, ids)
+    time = np.arange(data.shape[0]) * dt
+    data[row, column] = value
+    target = folder / f"bad_{row}_{column}.csv"
+    write_record(target, time, data, ids)
+    return target
+
+
+def test_a_bad_value_late_in_the_file_names_line_and_column(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    folder, ids, paths = engine
+    rows = read_record(paths[0], ids)[0].shape[0]
+    target = _bad_copy(folder, ids, paths[0], rows - 100, 2, np.nan)
+    with pytest.raises(InputError) as err:
+        read_record_streamed(target, ids)
+    assert str(target) in str(err.value)
+    assert f"row {rows - 100 + 2}" in str(err.value) and ids[2] in str(err.value)
+
+
+def test_a_time_jump_late_in_the_file_names_its_line(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    folder, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    time = np.arange(data.shape[0]) * dt
+    k = data.shape[0] - 300
+    time[k:] += 0.5 * dt
+    target = folder / "jump.csv"
+    write_record(target, time, data, ids)
+    with pytest.raises(InputError, match="differs from the sample interval") as err:
+        read_record_streamed(target, ids)
+    assert f"row {k + 2}" in str(err.value)
+    with pytest.raises(InputError, match="differs from the sample interval") as whole:
+        read_record(target, ids)
+    assert whole.value.location == err.value.location
+
+
+def test_reading_reports_progress_to_the_end(engine: tuple[Path, list[str], list[Path]], small_blocks: None) -> None:
+    _, ids, paths = engine
+    calls: list[tuple[str, float, float | None]] = []
+    read_record_streamed(paths[0], ids, progress=lambda task, done, total: calls.append((task, done, total)))
+    assert calls and all(task == f"reading {paths[0].name}" for task, _, _ in calls)
+    assert [done for _, done, _ in calls] == sorted(done for _, done, _ in calls)
+    assert calls[-1][1] == calls[-1][2] == paths[0].stat().st_size
+
+
+def test_spectrum_while_reading_is_the_estimations(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    """The content spectrum accumulated block by block is content_spectrum of the decay."""
+    from rigidid.core.timedomain.preprocess import content_spectrum, find_impact
+
+    _, ids, paths = engine
+    streamed = read_record_streamed(paths[0], ids)
+    data, dt = read_record(paths[0], ids)
+    freqs, total = content_spectrum([data[find_impact(data, dt).start :]], dt)
+    assert streamed.spectrum is not None
+    np.testing.assert_allclose(streamed.spectrum[0], freqs, rtol=1e-15)
+    np.testing.assert_allclose(streamed.spectrum[1], total, rtol=1e-9)
+
+
+def test_npy_is_read_in_blocks_to_the_same_record(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None
+) -> None:
+    folder, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    target = folder / "blocks.npy"
+    np.save(target, np.column_stack([np.arange(data.shape[0]) * dt, data]))
+    from_npy = read_record_streamed(target, ids)
+    from_csv = read_record_streamed(paths[0], ids)
+    assert from_npy.factor == from_csv.factor > 1
+    np.testing.assert_allclose(from_npy.data, from_csv.data, rtol=0, atol=STREAMED_DECIMATION)
+    bad = data.copy()
+    bad[5000, 3] = np.inf
+    np.save(target, np.column_stack([np.arange(data.shape[0]) * dt, bad]))
+    with pytest.raises(InputError, match="NaN or infinite") as err:
+        read_record_streamed(target, ids)
+    assert "row 5001" in str(err.value) and ids[3] in str(err.value)
