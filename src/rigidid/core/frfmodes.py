@@ -51,8 +51,10 @@ __all__ = [
     "body_from_scaled_modes",
     "fit_frf_modes",
     "plscf_poles",
+    "refine_poles",
     "residues_lsfd",
     "rigid_band",
+    "rigid_shapes",
 ]
 
 Array = NDArray[np.float64]
@@ -283,18 +285,20 @@ def plscf_poles(
         raise InputError("orders must be positive")
     basis = np.exp(1j * np.outer(w * dt, np.arange(n_max + 1)))  # (f, n+1)
     out: list[tuple[int, CArray, CArray]] = []
-    # per response: X (f, n+1) weighted, Y = -kron(X, H_o) (f, (n+1) q)
+    # per response: X (f, n+1) weighted, Y = -kron(X, H_o) (f, (n+1) q); the blocks of a lower order are
+    # the leading blocks of the highest order's, so they are formed once
+    big = (n_max + 1) * q
+    blocks = []
+    for o in range(p):
+        xw = basis * wts[o][:, None]
+        yw = -(xw[:, :, None] * hb[o].T[:, None, :]).reshape(nf, big)
+        blocks.append(((xw.conj().T @ xw).real, (xw.conj().T @ yw).real, (yw.conj().T @ yw).real))
     for n in orders:
-        x_all = basis[:, : n + 1]
         size = (n + 1) * q
         m_mat = np.zeros((size, size))
         keep: list[Array] = []
-        for o in range(p):
-            xw = x_all * wts[o][:, None]
-            yw = -(xw[:, :, None] * hb[o].T[:, None, :]).reshape(nf, size)
-            r_o = (xw.conj().T @ xw).real
-            s_o = (xw.conj().T @ yw).real
-            t_o = (yw.conj().T @ yw).real
+        for r_all, s_all, t_all in blocks:
+            r_o, s_o, t_o = r_all[: n + 1, : n + 1], s_all[: n + 1, :size], t_all[:size, :size]
             rs = np.linalg.solve(r_o, s_o)
             m_mat += t_o - s_o.T @ rs
             keep.append(rs)
@@ -326,7 +330,7 @@ def residues_lsfd(
     *,
     band: tuple[float, float] | None = None,
     lower: bool = False,
-    upper: bool = True,
+    upper: bool | int = True,
     weighting: str = "relative",
 ) -> tuple[CArray, CArray, CArray, float]:
     """Residues of accelerance FRFs with known poles, by least squares in the frequency domain.
@@ -341,9 +345,11 @@ def residues_lsfd(
         Poles (rad/s, ``Im > 0``) of every mode in the band.
     band : (float, float), optional
         Band (Hz); all lines by default.
-    lower, upper : bool
-        Fit a lower residual (a constant in accelerance: modes below the band)
-        and an upper residual (``(w / w_top)^2``: modes above the band).
+    lower : bool
+        Fit a lower residual (a constant in accelerance: modes below the band).
+    upper : bool or int
+        Fit an upper residual (``(w / w_top)^2``: modes above the band); an
+        integer ``n`` fits the ``n`` terms ``(w / w_top)^2 .. (w / w_top)^(2 n)``.
     weighting : {"relative", "none"}
         As :func:`plscf_poles`, per response and reference pair.
 
@@ -352,7 +358,8 @@ def residues_lsfd(
     residues : ndarray of complex, shape (n, p, q)
         Receptance residues ``R_k``.
     lower, upper : ndarray of complex, shape (p, q)
-        The residual terms (zero when not fitted).
+        The residual terms (zero when not fitted; `upper` is the coefficient of
+        ``(w / w_top)^2``).
     residual : float
         Weighted RMS misfit over the weighted RMS of the data.
 
@@ -369,47 +376,13 @@ def residues_lsfd(
         raise InputError("poles must be finite with positive imaginary parts")
     (lo, hi), sel = _band_lines(freq, band)
     hb = h[:, :, sel]
-    p, q, nf = hb.shape
     w = 2.0 * np.pi * freq[sel]
-    iw = 1j * w
-    w_top = float(w[-1])
-    cols = []
-    for lk in lam:
-        g1 = -(w**2) / (iw - lk)
-        g2 = -(w**2) / (iw - np.conj(lk))
-        cols.extend([g1 + g2, 1j * (g1 - g2)])  # real and imaginary part of R_k
-    n_modal = len(cols)
-    if lower:
-        cols.extend([np.ones(nf, dtype=complex), 1j * np.ones(nf)])
-    if upper:
-        cols.extend([(w / w_top) ** 2 + 0j, 1j * (w / w_top) ** 2])
-    g = np.stack(cols, axis=1)
-    if g.shape[1] > 2 * nf:
+    g, n_modal = _design(w, lam, lower, upper)
+    if g.shape[1] > 2 * w.size:
         raise InputError(f"band {lo:g}-{hi:g} Hz holds too few lines for {lam.size} modes")
-    if weighting == "none":
-        wts = np.ones((p, q, nf))
-    elif weighting == "relative":
-        mag = np.abs(hb)
-        floor = 1e-3 * np.median(mag, axis=2, keepdims=True) + np.finfo(float).tiny
-        wts = 1.0 / np.maximum(mag, floor)
-    else:
-        raise InputError(f"weighting must be 'relative' or 'none', got {weighting!r}")
-    coef = np.zeros((g.shape[1], p, q))
-    num = den = 0.0
-    for o in range(p):
-        for j in range(q):
-            gw = g * wts[o, j][:, None]
-            yw = hb[o, j] * wts[o, j]
-            design = np.concatenate([gw.real, gw.imag])
-            target = np.concatenate([yw.real, yw.imag])
-            scale = np.linalg.norm(design, axis=0)
-            scale[scale == 0.0] = 1.0
-            sol, _, rank, _ = np.linalg.lstsq(design / scale, target, rcond=None)
-            if rank < design.shape[1]:
-                raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
-            coef[:, o, j] = sol / scale
-            num += float(np.sum((design @ coef[:, o, j] - target) ** 2))
-            den += float(np.sum(target**2))
+    wts = _pair_weights(hb, weighting)
+    coef, resid, den = _solve_pairs(g, hb, wts)
+    p, q = hb.shape[:2]
     residues = (coef[0:n_modal:2] + 1j * coef[1:n_modal:2]).astype(complex)
     k = n_modal
     low = np.zeros((p, q), dtype=complex)
@@ -419,7 +392,127 @@ def residues_lsfd(
         k += 2
     if upper:
         up = coef[k] + 1j * coef[k + 1]
-    return residues, low, up, float(np.sqrt(num / max(den, np.finfo(float).tiny)))
+    return residues, low, up, float(np.linalg.norm(resid) / max(den, np.finfo(float).tiny))
+
+
+def _design(w: Array, lam: CArray, lower: bool, upper: bool | int) -> tuple[CArray, int]:
+    """LSFD columns (f, 2 n + residual terms): real and imaginary part of each residue, then the residuals."""
+    iw = 1j * w
+    w_top = float(w[-1])
+    cols = []
+    for lk in lam:
+        g1 = -(w**2) / (iw - lk)
+        g2 = -(w**2) / (iw - np.conj(lk))
+        cols.extend([g1 + g2, 1j * (g1 - g2)])
+    n_modal = len(cols)
+    if lower:
+        cols.extend([np.ones(w.size, dtype=complex), 1j * np.ones(w.size)])
+    for power in range(1, int(upper) + 1):
+        cols.extend([(w / w_top) ** (2 * power) + 0j, 1j * (w / w_top) ** (2 * power)])
+    return np.stack(cols, axis=1), n_modal
+
+
+def _pair_weights(hb: CArray, weighting: str) -> Array:
+    """Weights (p, q, f): 1 / |H| floored at 1e-3 of the pair's median, or ones."""
+    if weighting == "none":
+        return np.ones(hb.shape)
+    if weighting != "relative":
+        raise InputError(f"weighting must be 'relative' or 'none', got {weighting!r}")
+    mag = np.abs(hb)
+    floor = 1e-3 * np.median(mag, axis=2, keepdims=True) + np.finfo(float).tiny
+    result: Array = 1.0 / np.maximum(mag, floor)
+    return result
+
+
+def _solve_pairs(g: CArray, hb: CArray, wts: Array) -> tuple[Array, Array, float]:
+    """Weighted least squares per response and reference pair: coefficients, stacked residuals, data norm.
+
+    All pairs at once: stacked QR of the column-scaled real designs ``[Re; Im]``.
+    """
+    p, q, nf = hb.shape
+    k = g.shape[1]
+    gw = g[None, :, :] * wts.reshape(p * q, nf)[:, :, None]  # (pq, f, k)
+    yw = (hb * wts).reshape(p * q, nf)
+    design = np.concatenate([gw.real, gw.imag], axis=1)  # (pq, 2f, k)
+    target = np.concatenate([yw.real, yw.imag], axis=1)  # (pq, 2f)
+    scale = np.linalg.norm(design, axis=1)  # (pq, k)
+    scale[scale == 0.0] = 1.0
+    qm, rm = np.linalg.qr(design / scale[:, None, :])
+    diag = np.abs(np.diagonal(rm, axis1=1, axis2=2))
+    if np.any(diag < 1e-12 * np.max(diag, axis=1, keepdims=True)):
+        raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
+    qty = np.einsum("bfk,bf->bk", qm, target)
+    sol = np.linalg.solve(rm, qty[:, :, None])[:, :, 0] / scale
+    resid = np.einsum("bfk,bk->bf", qm, qty) - target
+    coef = sol.T.reshape(k, p, q)
+    return coef, resid.reshape(-1), float(np.linalg.norm(target))
+
+
+def refine_poles(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    lower: bool = False,
+    upper: bool = True,
+    weighting: str = "relative",
+) -> CArray:
+    """Poles refined by nonlinear least squares on the FRFs, the residues projected out.
+
+    Parameters
+    ----------
+    frequencies, frf, band, lower, upper, weighting
+        As :func:`residues_lsfd`.
+    poles : array_like of complex, shape (n,)
+        Starting poles (rad/s, ``Im > 0``), e.g. from :func:`plscf_poles`.
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+        The poles minimising the weighted LSFD misfit (variable projection over
+        natural frequency and damping ratio of each pole; Levenberg-Marquardt).
+
+    Notes
+    -----
+    pLSCF solves a linearised problem whose noise bias is of the order of the
+    noise; the misfit of the full model to the data (weighted as
+    :func:`residues_lsfd`) is the maximum-likelihood criterion for complex
+    noise proportional to the FRF. The starting poles are kept when the
+    refinement does not lower it.
+    """
+    from scipy.optimize import least_squares
+
+    freq, h = _check(frequencies, frf)
+    lam0 = np.asarray(poles, dtype=complex).reshape(-1)
+    if lam0.size == 0 or np.any(lam0.imag <= 0.0) or not np.all(np.isfinite(lam0)):
+        raise InputError("poles must be finite with positive imaginary parts")
+    _, sel = _band_lines(freq, band)
+    hb = h[:, :, sel]
+    w = 2.0 * np.pi * freq[sel]
+    wts = _pair_weights(hb, weighting)
+
+    def to_poles(x: Array) -> CArray:
+        wn, z = np.exp(x[0::2]), np.clip(x[1::2], 1e-9, 0.999)
+        result: CArray = wn * (-z + 1j * np.sqrt(1.0 - z**2))
+        return result
+
+    def residual(x: Array) -> Array:
+        return _solve_pairs(_design(w, to_poles(x), lower, upper)[0], hb, wts)[1]
+
+    x0 = np.empty(2 * lam0.size)
+    x0[0::2] = np.log(np.abs(lam0))
+    x0[1::2] = -lam0.real / np.abs(lam0)
+    start = residual(x0)
+    try:
+        fit = least_squares(residual, x0, method="lm", x_scale="jac", max_nfev=100 * x0.size)
+    except IdentificationError:
+        return lam0
+    if not (np.all(np.isfinite(fit.x)) and np.all(fit.x[1::2] > 0.0) and fit.x[1::2].max() < 0.999):
+        return lam0
+    if float(fit.fun @ fit.fun) >= float(start @ start):
+        return lam0
+    return to_poles(fit.x)
 
 
 def _scaled_frame(positions: Array, directions: Array) -> tuple[Array, float, Array]:
@@ -447,6 +540,48 @@ def _rigid_modes(residues: CArray, t: Array, tf: Array) -> tuple[CArray, Array]:
         model = t @ np.outer(u[:, k], u[:, k]) @ tf.T
         miss[k] = float(np.linalg.norm(model - residues[k])) / max(float(np.linalg.norm(residues[k])), 1e-300)
     return u, miss
+
+
+def rigid_shapes(
+    residues: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+) -> tuple[CArray, CArray, Array]:
+    """Unity-modal-A shapes of rigid-body modes from their residues (the force scales them).
+
+    Parameters
+    ----------
+    residues : array_like of complex, shape (n, p, q)
+        Receptance residues of rigid-body modes.
+    positions, directions : array_like, shape (p, 3)
+        Sensors, rank 6.
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Force points and directions.
+
+    Returns
+    -------
+    shapes : ndarray of complex, shape (p, n)
+        ``T u_k``: each mode at the sensors, ``R_k ~ shapes_k participation_k^T``.
+    participation : ndarray of complex, shape (q, n)
+        ``T_f u_k``: each mode at the references along the force.
+    misfit : ndarray, shape (n,)
+        ``|T u u^T T_f^T - R_k| / |R_k|``: how far each residue is from a rigid-body mode's.
+
+    Notes
+    -----
+    ``T^+ R_k = u_k (T_f u_k)^T``: the leading left singular vector gives the
+    direction of ``u_k``, and the force its scale (one complex least-squares
+    factor); the sign of ``u_k`` is arbitrary, as for any mode.
+    """
+    res = np.asarray(residues, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    origin, span, t = _scaled_frame(pos, np.asarray(directions, dtype=float))
+    rpos = np.asarray(reference_positions, dtype=float)
+    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    u, misfit = _rigid_modes(res, t, tf)
+    return t @ u, tf @ u, misfit
 
 
 def body_from_scaled_modes(
@@ -542,6 +677,7 @@ def fit_frf_modes(
     lower: bool = False,
     upper: bool = True,
     weighting: str = "relative",
+    refine: bool = True,
     criteria: Criteria | None = None,
     progress: ProgressCallback | None = None,
 ) -> FrfModes:
@@ -573,6 +709,9 @@ def fit_frf_modes(
         Residual terms of the LSFD (:func:`residues_lsfd`).
     weighting : {"relative", "none"}
         Weighting of both fits (:func:`plscf_poles`).
+    refine : bool
+        Refine the poles of the diagram by nonlinear least squares on the FRFs
+        (:func:`refine_poles`) before the residues are taken.
     criteria : Criteria, optional
         Tolerances of the stabilisation diagram (default :class:`Criteria`).
     progress : ProgressCallback, optional
@@ -609,11 +748,9 @@ def fit_frf_modes(
     (lo, hi), _ = _band_lines(freq, band if band is not None else auto_poles)
     res_band = residue_band if residue_band is not None else (lo, hi)
     orders = list(range(1, top + 1))
-    models = []
-    for i, n in enumerate(orders):
-        models.extend(plscf_poles(freq, h, [n], band=(lo, hi), weighting=weighting))
-        if progress is not None:
-            progress("pLSCF orders", i + 1, len(orders))
+    models = plscf_poles(freq, h, orders, band=(lo, hi), weighting=weighting)
+    if progress is not None:
+        progress("pLSCF orders", len(orders), len(orders))
     diagram = stabilise(models, (lo, hi), criteria if criteria is not None else Criteria())
     clusters = cluster_stable(diagram, min_count=max(3, len(orders) // 3))
     if n_modes is not None:
@@ -627,6 +764,9 @@ def fit_frf_modes(
         raise IdentificationError(f"no stable mode in {lo:.4g}-{hi:.4g} Hz")
     clusters.sort(key=lambda c: abs(c.pole))
     lam = np.array([c.pole for c in clusters], dtype=complex)
+    if refine:
+        lam = refine_poles(freq, h, lam, band=res_band, lower=lower, upper=upper, weighting=weighting)
+        lam = lam[np.argsort(np.abs(lam))]
     residues, low, up, misfit = residues_lsfd(
         freq, h, lam, band=res_band, lower=lower, upper=upper, weighting=weighting
     )
@@ -647,7 +787,7 @@ def fit_frf_modes(
             pass
         else:
             tf = sensor_matrix((rpos - origin) / span, rdirs)
-            u, _ = _rigid_modes(residues[:6], t, tf)
+            u = _rigid_modes(residues[:6], t, tf)[0]
             shapes[:, :6] = t @ u
             part[:, :6] = tf @ u
             scaled[:6] = True
