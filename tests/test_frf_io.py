@@ -149,3 +149,6 @@ def test_identify_residues_takes_the_poles_from_the_modes_file(tmp_path: Path) -
     out = json.loads(done.stdout)
     assert "found in the FRFs" in out["route_reason"]
     assert abs(out["mass_measured"] / 40.0 - 1.0) < 0.01
+    scaled = out["scaled_modes"]  # absolute stiffness from the scaled modes: k_xx is the mounts' sum
+    assert abs(scaled["mass"] / 40.0 - 1.0) < 0.01
+    assert abs(scaled["stiffness_matrix"][0][0] / (29000.0 + 5800.0 + 6900.0 + 250700.0) - 1.0) < 0.02

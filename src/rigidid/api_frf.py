@@ -20,7 +20,7 @@ from rigidid.models import BodyFile, LayoutFile, ReferencesFile
 __all__ = ["FrfData", "MassLineResult", "fit_modes_frf", "identify_massline", "simulate_frf"]
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import FrfModes
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.massline import MassLine
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
@@ -62,6 +62,9 @@ class MassLineResult:
         Why this route was used.
     route : str
         ``"massline"`` or ``"residues"`` (scaled modes).
+    scaled : rigidid.core.frfmodes.ScaledBody or None
+        Route residues: the body from the six scaled rigid-body modes, with the
+        stiffness and damping in absolute units.
     """
 
     massline: MassLine
@@ -69,6 +72,7 @@ class MassLineResult:
     mass_given: float | None
     reason: str
     route: str = "massline"
+    scaled: ScaledBody | None = None
 
 
 def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
@@ -184,14 +188,16 @@ def identify_massline(
         from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
 
-        fitted = fit_frf_modes(freqs, h, pos, dirs, rpos, rdirs, n_modes=6)
-        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, fitted.poles, band=band)
+        fitted = fit_frf_modes(freqs, h, pos, dirs, rpos, rdirs, band=band, n_modes=6)
+        poles = fitted.poles
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
         reason = (
             "method residues: residues of the FRFs fitted with the six rigid-body poles found in the FRFs "
-            "(pLSCF, stabilisation diagram); their high-frequency limit is T M^-1 T_f^T, so the mass is measured "
-            "through the force"
+            "(pLSCF, stabilisation diagram, refined on the FRFs); their high-frequency limit is T M^-1 T_f^T, "
+            "so the mass is measured through the force"
         )
     elif modes is None:
+        poles = None
         result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
         reason = (
             "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
@@ -215,12 +221,20 @@ def identify_massline(
             "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
             "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
         )
+    scaled = None
+    if poles is not None:
+        from rigidid.core.frfmodes import body_from_scaled_modes, residues_lsfd, rigid_band
+
+        lam = np.asarray(poles)[np.argsort(np.abs(poles))]
+        fit_band = band if band is not None else rigid_band(freqs, h)[0]
+        scaled = body_from_scaled_modes(lam, residues_lsfd(freqs, h, lam, band=fit_band)[0], pos, dirs, rpos, rdirs)
     return MassLineResult(
         result,
         {"length": lay.units.length, "mass": lay.units.mass},
         mass if mass is not None else lay.mass,
         reason,
         "massline" if modes is None and method != "residues" else "residues",
+        scaled,
     )
 
 

@@ -493,6 +493,18 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         out["mass_given"] = float(result.mass_given)
         out["mass_difference"] = float(ml.mass - result.mass_given)
         out["mass_difference_relative"] = float(ml.mass / result.mass_given - 1.0)
+    sb = result.scaled
+    out["scaled_modes"] = (
+        None
+        if sb is None
+        else {
+            "mass": float(sb.mass),
+            "center_of_gravity": _vec(sb.center_of_gravity),
+            "inertia_tensor": _rows(sb.inertia_tensor),
+            "stiffness_matrix": _rows(sb.stiffness_matrix),
+            "damping_matrix": _rows(sb.damping_matrix),
+        }
+    )
     return out
 
 
