@@ -17,10 +17,13 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.models import BodyFile, LayoutFile, ReferencesFile
 
-__all__ = ["FrfData", "MassLineResult", "identify_massline", "simulate_frf"]
+__all__ = ["FrfData", "MassLineResult", "fit_modes_frf", "identify_massline", "simulate_frf"]
 
 if TYPE_CHECKING:
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.massline import MassLine
+    from rigidid.io.files import ModeTable
+    from rigidid.progress import ProgressCallback
 
 PathLike = str | os.PathLike[str]
 
@@ -59,6 +62,9 @@ class MassLineResult:
         Why this route was used.
     route : str
         ``"massline"`` or ``"residues"`` (scaled modes).
+    scaled : rigidid.core.frfmodes.ScaledBody or None
+        Route residues: the body from the six scaled rigid-body modes, with the
+        stiffness and damping in absolute units.
     """
 
     massline: MassLine
@@ -66,6 +72,7 @@ class MassLineResult:
     mass_given: float | None
     reason: str
     route: str = "massline"
+    scaled: ScaledBody | None = None
 
 
 def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
@@ -136,6 +143,7 @@ def identify_massline(
     band: tuple[float, float] | None = None,
     modes: PathLike | None = None,
     modes_used: tuple[int, ...] | None = None,
+    method: str = "massline",
 ) -> MassLineResult:
     """Mass, CG and inertia of a body from FRFs by the mass line, or from scaled modes.
 
@@ -157,6 +165,9 @@ def identify_massline(
         scaled modes (:func:`rigidid.core.massline.mass_from_residues`).
     modes_used : tuple of int, optional
         The six rigid-body mode labels of `modes` (default: all, if there are six).
+    method : {"massline", "residues"}
+        ``"residues"`` without `modes`: the six rigid-body poles are fitted to
+        the FRFs (:func:`rigidid.core.frfmodes.fit_frf_modes`).
 
     Returns
     -------
@@ -176,7 +187,20 @@ def identify_massline(
         freqs, h = load_frf_csv(frf, ids, rids)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
-    if modes is None:
+    if modes is None and method == "residues":
+        from rigidid.core.frfmodes import fit_frf_modes
+        from rigidid.core.massline import mass_from_residues
+
+        fitted = fit_frf_modes(freqs, h, pos, dirs, rpos, rdirs, band=band, n_modes=6)
+        poles = fitted.poles
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
+        reason = (
+            "method residues: residues of the FRFs fitted with the six rigid-body poles found in the FRFs "
+            "(pLSCF, stabilisation diagram, refined on the FRFs); their high-frequency limit is T M^-1 T_f^T, "
+            "so the mass is measured through the force"
+        )
+    elif modes is None:
+        poles = None
         result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
         reason = (
             "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
@@ -200,10 +224,84 @@ def identify_massline(
             "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
             "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
         )
+    scaled = None
+    if poles is not None:
+        from rigidid.core.frfmodes import body_from_scaled_modes, residues_lsfd, rigid_band
+
+        lam = np.asarray(poles)[np.argsort(np.abs(poles))]
+        fit_band = band if band is not None else rigid_band(freqs, h)[0]
+        scaled = body_from_scaled_modes(lam, residues_lsfd(freqs, h, lam, band=fit_band)[0], pos, dirs, rpos, rdirs)
     return MassLineResult(
         result,
         {"length": lay.units.length, "mass": lay.units.mass},
         mass if mass is not None else lay.mass,
         reason,
-        "massline" if modes is None else "residues",
+        "massline" if modes is None and method != "residues" else "residues",
+        scaled,
     )
+
+
+Arr = NDArray[np.float64]
+
+
+def _load_frf(
+    layout: LayoutFile | PathLike, frf: PathLike, references: ReferencesFile | PathLike
+) -> tuple[tuple[str, ...], Arr, NDArray[np.complex128], Arr, Arr, Arr, Arr]:
+    """Sensor ids, frequencies, FRFs (p, q, f), sensor positions and directions, reference positions and directions."""
+    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
+
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
+    refs = _references(references, lay)
+    ids, pos, dirs = files.layout_arrays(lay)
+    rids, rpos, rdirs = reference_arrays(refs)
+    is_uff = str(frf).lower().endswith((".uff", ".unv"))
+    freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
+    return ids, freqs, h, pos, dirs, rpos, rdirs
+
+
+def fit_modes_frf(
+    layout: LayoutFile | PathLike,
+    frf: PathLike,
+    references: ReferencesFile | PathLike,
+    *,
+    band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
+    max_order: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, FrfModes]:
+    """Modes from FRFs (``rigidid modes LAYOUT --frf FRF --references REFS``).
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The sensors (responses).
+    frf : path-like
+        FRF CSV or UFF (as :func:`identify_massline`).
+    references : ReferencesFile or path-like
+        The force points and directions.
+    band : (float, float), optional
+        Band of the fit (Hz); default from the FRF peaks
+        (:func:`rigidid.core.frfmodes.rigid_band`).
+    n_modes : int, optional
+        Modes to keep (default: every stable mode of the band).
+    max_order : int, optional
+        Highest pLSCF order.
+    progress : ProgressCallback, optional
+        Progress of the order sweep.
+
+    Returns
+    -------
+    modes : ModeTable
+        Labelled 1.. in ascending frequency; shapes of the six lowest modes
+        scaled to unity modal A by the force (see ``FrfModes.scaled``).
+    fitted : rigidid.core.frfmodes.FrfModes
+    """
+    from rigidid.core.frfmodes import fit_frf_modes
+    from rigidid.io.files import ModeTable
+
+    ids, freqs, h, pos, dirs, rpos, rdirs = _load_frf(layout, frf, references)
+    fitted = fit_frf_modes(
+        freqs, h, pos, dirs, rpos, rdirs, band=band, n_modes=n_modes, max_order=max_order, progress=progress
+    )
+    table = ModeTable.numbered(fitted.frequency_hz, fitted.damping_ratio, ids, fitted.shapes)
+    return table, fitted

@@ -669,12 +669,20 @@ def modes(
     ] = None,
     units: Units = None,
     geometry: Geometry = None,
+    frf: Annotated[
+        Path | None, typer.Option("--frf", help="Fit the modes to FRFs (CSV or UFF 58) instead.", show_default=False)
+    ] = None,
+    references: ReferencesPath = None,
 ) -> None:
-    """Estimate modal parameters from impact records (free decays) and write modes.csv."""
+    """Estimate modal parameters from impact records (free decays) or FRFs and write modes.csv."""
     with _reported():
         from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import modes_csv_text
         from rigidid.jsonout import estimate_to_dict
+
+        if frf is not None:
+            _modes_frf(layout, records, frf, references, output, json_path, band, max_order, n_modes)
+            return
 
         if method is not None:
             if modal_method is not None and modal_method != method:
@@ -813,6 +821,48 @@ def simulate(
             )
 
 
+def _modes_frf(
+    layout: Path,
+    records: list[Path] | None,
+    frf: Path,
+    references: Path | None,
+    output: str,
+    json_path: str | None,
+    band: tuple[float, float] | None,
+    max_order: int | None,
+    n_modes: int,
+) -> None:
+    """``modes --frf``: modes fitted to FRFs (rigidid.api_frf.fit_modes_frf), shapes scaled by the force."""
+    from rigidid import api_frf
+    from rigidid.io.atomic import OutputSet, write_text_atomic
+    from rigidid.io.files import modes_csv_text
+    from rigidid.jsonout import frf_modes_to_dict
+    from rigidid.progress import terminal_progress
+
+    if records:
+        raise InputError("give records or --frf, not both", source="--frf")
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    if output == "-" and json_path == "-":
+        raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
+    _check_outputs({"--output": output, "--json": json_path})
+    with terminal_progress() as progress:
+        table, fitted = api_frf.fit_modes_frf(
+            layout, frf, references, band=band, n_modes=n_modes, max_order=max_order, progress=progress
+        )
+    scaling = ["modal_a" if s else "unit_max" for s in fitted.scaled]
+    text = modes_csv_text(table, scaling=scaling)
+    with OutputSet() as outs:
+        if json_path is not None:
+            _write_json(json_path, frf_modes_to_dict(fitted))
+        if output == "-":
+            outs.stdout(text)
+        else:
+            write_text_atomic(output, text)
+    if output != "-":
+        sys.stderr.write(f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n")
+
+
 def _identify_massline(
     layout: Path,
     frf: Path | None,
@@ -836,14 +886,14 @@ def _identify_massline(
     if references is None:
         raise InputError("--frf needs --references REFS.json", source="--references")
     modes_file = None
-    if method == "residues":
-        if not modes or len(modes) != 1:
-            raise InputError("--method residues needs the test's modes.csv (its rigid-body poles)", source="MODES")
+    if method == "residues" and modes:
+        if len(modes) != 1:
+            raise InputError("--method residues takes one modes.csv (its rigid-body poles)", source="MODES")
         modes_file = modes[0]
     parsed = _parse_modes(modes_used) if method == "residues" else None
     labels = tuple(parsed) if parsed is not None else None
     result = api_frf.identify_massline(
-        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels
+        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels, method=method
     )
     if json_path is not None:
         _write_json(json_path, massline_to_dict(result))

@@ -20,6 +20,7 @@ from rigidid import __version__
 if TYPE_CHECKING:
     from rigidid.api import IdentifyResult, PlanResult
     from rigidid.api_frf import MassLineResult
+    from rigidid.core.frfmodes import FrfModes
     from rigidid.core.layout_check import LayoutReport
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import PredictedFigures, Prediction, ReferenceReport, SensorPlan
@@ -559,4 +560,53 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         out["mass_given"] = float(result.mass_given)
         out["mass_difference"] = float(ml.mass - result.mass_given)
         out["mass_difference_relative"] = float(ml.mass / result.mass_given - 1.0)
+    sb = result.scaled
+    out["scaled_modes"] = (
+        None
+        if sb is None
+        else {
+            "mass": float(sb.mass),
+            "center_of_gravity": _vec(sb.center_of_gravity),
+            "inertia_tensor": _rows(sb.inertia_tensor),
+            "stiffness_matrix": _rows(sb.stiffness_matrix),
+            "damping_matrix": _rows(sb.damping_matrix),
+        }
+    )
     return out
+
+
+def frf_modes_to_dict(fitted: FrfModes) -> dict[str, Any]:
+    """JSON form of modes fitted to FRFs (``modes --frf --json``), with its stabilisation diagram.
+
+    Returns
+    -------
+    dict
+        ``{"method": "plscf", "band", "residue_band", "relative_residual", "modes": [{"mode",
+        "frequency_hz", "damping_ratio", "stable_count", "scaling"}], "stabilisation": [{"order",
+        "frequency_hz", "damping_ratio", "stable"}]}`` (the diagram as for records).
+    """
+    return {
+        "method": "plscf",
+        "band": [float(v) for v in fitted.band],
+        "residue_band": [float(v) for v in fitted.residue_band],
+        "relative_residual": float(fitted.residual),
+        "modes": [
+            {
+                "mode": k + 1,
+                "frequency_hz": float(fitted.frequency_hz[k]),
+                "damping_ratio": float(fitted.damping_ratio[k]),
+                "stable_count": int(fitted.stable_count[k]),
+                "scaling": "modal_a" if fitted.scaled[k] else "unit_max",
+            }
+            for k in range(fitted.poles.size)
+        ],
+        "stabilisation": [
+            {
+                "order": entry.order,
+                "frequency_hz": _vec(entry.frequency_hz),
+                "damping_ratio": _vec(entry.damping_ratio),
+                "stable": [bool(v) for v in entry.stable],
+            }
+            for entry in fitted.diagram
+        ],
+    }

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.frfmodes import residues_lsfd
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
 
@@ -327,6 +328,7 @@ def mass_from_residues(
     poles: ArrayLike,
     *,
     band: tuple[float, float] | None = None,
+    weighting: str = "relative",
 ) -> MassLine:
     """Mass, CG and inertia from scaled rigid-body modes: residues fitted with known poles.
 
@@ -340,6 +342,11 @@ def mass_from_residues(
         Band (Hz) of the fit: it must hold the rigid-body modes and lie below the
         first elastic mode. Default: from the lowest line to half the first
         elastic peak (:func:`auto_band`), or the last line.
+    weighting : {"relative", "none"}
+        ``"relative"`` (default) weights every value by the inverse of its
+        magnitude (:func:`rigidid.core.frfmodes.residues_lsfd`), the
+        maximum-likelihood fit for noise proportional to the FRF; ``"none"``
+        is the unweighted fit of rigidid before this option.
 
     Returns
     -------
@@ -352,7 +359,10 @@ def mass_from_residues(
     The receptance is ``sum_k R_k / (i w - l_k) + conj``; the residues ``R_k``
     (``p x q``, complex, the scaled shapes times their participations) are fitted
     by linear least squares to the accelerance ``-w^2 x receptance`` with an
-    upper residual (``w^2``, ``w^4``). The high-frequency limit of the model,
+    upper residual (``w^2``, ``w^4``), each response and reference pair weighted
+    by ``1 / |H|`` (benchmarks/frf_accuracy.py: on mounts with 1 % noise and
+    exact poles the worst mass error of 20 trials went from 1.2 % unweighted to
+    0.4 %). The high-frequency limit of the model,
     ``sum_k 2 Re(l_k R_k) = T M^-1 T_f^T``, then gives the body as the mass
     line does, but from every line of the band including the resonances.
     """
@@ -390,26 +400,8 @@ def mass_from_residues(
     sv = np.linalg.svd(t, compute_uv=False)
     if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
         raise IdentificationError("the sensors do not see six independent rigid-body motions")
-    w = 2.0 * np.pi * f[sel]
-    iw = 1j * w
-    w0 = float(w[-1])
-    cols = []
-    for lk in lam:
-        g1 = -(w**2) / (iw - lk)
-        g2 = -(w**2) / (iw - np.conj(lk))
-        cols.extend([g1 + g2, 1j * (g1 - g2)])  # real and imaginary part of R_k
-    cols.extend([(w / w0) ** 2 + 0j, (w / w0) ** 4 + 0j])
-    g = np.stack(cols, axis=1)
-    design = np.concatenate([g.real, g.imag])
-    y = h[:, :, sel].reshape(p * q, n_f).T
-    target = np.concatenate([y.real, y.imag])
-    coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
-    if rank < design.shape[1]:
-        raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
-    fitted = design @ coef
-    residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
-    r = coef[0:12:2] + 1j * coef[1:12:2]  # (6, p q)
-    h_inf = np.sum(2.0 * (lam[:, None] * r).real, axis=0).reshape(p, q)  # T M^-1 T_f^T
+    r, _, _, residual = residues_lsfd(f, h, lam, band=(lo, hi), upper=2, weighting=weighting)  # (6, p, q)
+    h_inf = np.sum(2.0 * (lam[:, None, None] * r).real, axis=0)  # T M^-1 T_f^T
     y0 = np.linalg.lstsq(t, h_inf, rcond=None)[0]
     m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
     return MassLine(

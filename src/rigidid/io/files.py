@@ -40,6 +40,9 @@ __all__ = [
 
 MODES_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "sensor", "real", "imag")
 _REQUIRED = MODES_COLUMNS[:5]
+MODES_OPTIONAL = ("scaling",)
+"""Optional ``modes.csv`` columns: ``scaling`` (``modal_a`` for shapes scaled by the force, written by
+``rigidid modes --frf``; ``unit_max`` otherwise) is read and ignored by the identification."""
 
 M = TypeVar("M", bound=BaseModel)
 # a plain decimal number: no underscores ("1_0"), no hex, no words but nan/inf (refused by the model)
@@ -349,7 +352,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
                 f"missing column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
             )
     for name in columns:
-        if name not in MODES_COLUMNS:
+        if name not in MODES_COLUMNS and name not in MODES_OPTIONAL:
             raise InputError(
                 f"unknown column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
             )
@@ -363,6 +366,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         if len(row) != len(columns):
             raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
         record: dict[str, Any] = {c: _modes_cell(c, v, dialect) for c, v in zip(columns, row, strict=True)}
+        record.pop("scaling", None)
         for name in ("mode", "frequency_hz", "damping_ratio", "real", "imag"):
             cell = record.get(name)
             if cell is None:
@@ -476,11 +480,15 @@ def _modes_cell(column: str, cell: str, dialect: Dialect) -> str:
     return cell.strip() if column == "sensor" else decimal_point(cell.strip(), dialect)
 
 
-def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
-    """``modes.csv`` text of a mode table (values with `digits` significant digits)."""
+def modes_csv_text(table: ModeTable, digits: int = 10, scaling: Sequence[str] | None = None) -> str:
+    """``modes.csv`` text of a mode table (values with `digits` significant digits).
+
+    With `scaling` (one word per mode, e.g. ``modal_a``), an optional last column
+    ``scaling`` says how each mode's shape is scaled.
+    """
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(MODES_COLUMNS)
+    writer.writerow(MODES_COLUMNS + (("scaling",) if scaling is not None else ()))
     fmt = f"{{:.{digits}g}}"
     for name, values in (
         ("frequency_hz", table.frequency_hz),
@@ -493,5 +501,6 @@ def modes_csv_text(table: ModeTable, digits: int = 10) -> str:
         f, z = fmt.format(table.frequency_hz[k]), fmt.format(table.damping_ratio[k])
         for i, sid in enumerate(table.sensor_ids):
             v = table.shapes[i, k]
-            writer.writerow([label, f, z, sid, fmt.format(v.real), fmt.format(v.imag)])
+            extra = [scaling[k]] if scaling is not None else []
+            writer.writerow([label, f, z, sid, fmt.format(v.real), fmt.format(v.imag), *extra])
     return out.getvalue()

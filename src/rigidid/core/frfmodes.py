@@ -1,0 +1,807 @@
+"""Modes from FRFs: poles by pLSCF with a stabilisation diagram, residues by least squares, scaled shapes.
+
+The poles come from the poly-reference least-squares complex frequency-domain
+estimator (pLSCF): for every order ``n`` of a sweep, a right matrix-fraction
+model ``H(w) = B(z) A(z)^-1`` with ``z = exp(i w dt)`` and ``A`` a ``q x q``
+matrix polynomial common to all responses is fitted by linear least squares
+(weighted to relative errors), and the poles are the roots of ``det A(z)``.
+The sweep goes through the stabilisation diagram of the time-domain route
+(:func:`rigidid.core.timedomain.stabilisation.stabilise`, ``cluster_stable``).
+With the poles known, the residues ``R_k`` (``p x q``) follow by least squares
+in the frequency domain (LSFD) on the accelerance
+
+``H(w) = -w^2 sum_k [R_k / (i w - l_k) + conj(R_k) / (i w - conj(l_k))] + L + U w^2``
+
+with a lower residual ``L`` (modes below the band) and an upper residual ``U``
+(modes above it), both optional. For a rigid body the residue of a mode with
+unity-modal-A scaling is ``T u u^T T_f^T`` (``u``: the mode in rigid-body
+coordinates), so the force scales the shapes, and the six scaled rigid-body
+modes give the mass matrix, the stiffness and the damping in absolute units:
+
+``M^-1 = sum 2 Re(l u u^T)``, ``K^-1 = -sum 2 Re(u u^T / l)``,
+``M^-1 C M^-1 = -sum 2 Re(l^2 u u^T)``
+
+(the expansion of the receptance ``(M s^2 + C s + K)^-1`` at large and at
+zero ``s``).
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994.
+.. [2] B. Peeters, H. Van der Auweraer, P. Guillaume, J. Leuridan, "The
+   PolyMAX frequency-domain method: a new standard for modal parameter
+   estimation?", Shock and Vibration 11 (2004) 395-409.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigidid.core.geometry import sensor_matrix, transfer_matrix
+from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
+from rigidid.errors import IdentificationError, InputError
+from rigidid.progress import ProgressCallback
+
+__all__ = [
+    "FrfModes",
+    "ScaledBody",
+    "body_from_scaled_modes",
+    "fit_frf_modes",
+    "plscf_poles",
+    "refine_poles",
+    "residues_lsfd",
+    "rigid_band",
+    "rigid_shapes",
+]
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+
+MIN_LINES = 20
+"""Fewest frequency lines in the band of a modal fit."""
+
+
+@dataclass(frozen=True)
+class FrfModes:
+    """Modes fitted to FRFs.
+
+    Attributes
+    ----------
+    poles : ndarray of complex, shape (n,)
+        Poles (rad/s, ``Im > 0``), ascending frequency.
+    residues : ndarray of complex, shape (n, p, q)
+        Receptance residues ``R_k`` (length / force / s).
+    shapes : ndarray of complex, shape (p, n)
+        Mode shapes at the sensors: the left factor of the rank-one fit of each
+        residue, unity-modal-A scaled (``R_k ~ shape_k participation_k^T``)
+        when `scaled` is true for that mode, else scaled so the largest value
+        is ``1 + 0j``.
+    participation : ndarray of complex, shape (q, n)
+        The right factor (the shape at the references, along the force).
+    scaled : ndarray of bool, shape (n,)
+        Whether each shape is scaled by the force (rigid-body modes: see
+        :func:`fit_frf_modes`).
+    stable_count : ndarray of int, shape (n,)
+        Orders of the sweep at which each mode was stable.
+    diagram : tuple of OrderPoles
+        The stabilisation diagram (per polynomial order: poles, stable flags,
+        shapes at the sensors).
+    band : (float, float)
+        Band of the pole fit (Hz).
+    residue_band : (float, float)
+        Band of the residue fit (Hz).
+    lower, upper : ndarray of complex, shape (p, q)
+        Lower residual (accelerance constant) and upper residual (coefficient
+        of ``(w / w_top)^2``); zero when not fitted.
+    residual : float
+        RMS misfit of the LSFD model relative to the RMS of the data
+        (weighted as fitted).
+    """
+
+    poles: CArray
+    residues: CArray
+    shapes: CArray
+    participation: CArray
+    scaled: NDArray[np.bool_]
+    stable_count: NDArray[np.int_]
+    diagram: tuple[OrderPoles, ...]
+    band: tuple[float, float]
+    residue_band: tuple[float, float]
+    lower: CArray
+    upper: CArray
+    residual: float
+
+    @property
+    def frequency_hz(self) -> Array:
+        """Undamped natural frequencies ``|lambda| / (2 pi)`` (Hz)."""
+        result: Array = np.abs(self.poles) / (2.0 * np.pi)
+        return result
+
+    @property
+    def damping_ratio(self) -> Array:
+        """``-Re(lambda) / |lambda|``."""
+        result: Array = -self.poles.real / np.abs(self.poles)
+        return result
+
+
+@dataclass(frozen=True)
+class ScaledBody:
+    """Mass, CG, inertia, stiffness and damping from six scaled rigid-body modes.
+
+    Attributes
+    ----------
+    mass : float
+        Mass (1 / accelerance unit).
+    center_of_gravity : ndarray, shape (3,)
+        Layout coordinates (length).
+    inertia_tensor : ndarray, shape (3, 3)
+        About the CG (mass length^2), tensor convention.
+    stiffness_matrix, damping_matrix : ndarray, shape (6, 6)
+        Support stiffness (mass / s^2) and damping (mass / s) at the CG, DOF
+        order x, y, z, rx, ry, rz (rotations in radians).
+    mass_matrix : ndarray, shape (6, 6)
+        The mass matrix at the CG, as fitted (its translational block is not
+        forced to ``m I``).
+    """
+
+    mass: float
+    center_of_gravity: Array
+    inertia_tensor: Array
+    stiffness_matrix: Array
+    damping_matrix: Array
+    mass_matrix: Array
+
+
+def rigid_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Default bands of the modal fit: poles of the rigid-body modes, and their residues.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz, ascending.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance.
+
+    Returns
+    -------
+    poles : (float, float)
+        From the first line to twice the highest rigid-body peak (at most the
+        geometric mean of it and the first elastic peak, at most the last line).
+    residues : (float, float)
+        From the first line to half the first elastic peak, or the last line.
+
+    Notes
+    -----
+    Peaks of ``sum |H|^2`` standing a factor 2 above their valleys; they are
+    split into rigid and elastic ones at the largest ratio between
+    neighbouring peaks when it exceeds 4 (one cluster: all rigid). Without
+    any peak, both bands are every line.
+    """
+    from scipy.signal import find_peaks
+
+    freq, h = _check(frequencies, frf)
+    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    first, last = float(freq[0]), float(freq[-1])
+    if idx.size == 0:
+        return (first, last), (first, last)
+    fp = freq[idx]
+    ratios = fp[1:] / fp[:-1]
+    if ratios.size and ratios.max() > 4.0:
+        split = int(np.argmax(ratios))
+        top, elastic = float(fp[split]), float(fp[split + 1])
+        return (first, min(2.0 * top, float(np.sqrt(top * elastic)))), (first, 0.5 * elastic)
+    top = float(fp[-1])
+    return (first, min(2.0 * top, last)), (first, last)
+
+
+def _band_lines(f: Array, band: tuple[float, float] | None) -> tuple[tuple[float, float], NDArray[np.bool_]]:
+    lo, hi = (float(f[0]), float(f[-1])) if band is None else (float(band[0]), float(band[1]))
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 <= lo < hi):
+        raise InputError(f"band must be two frequencies low < high, got {band}")
+    sel = (f >= lo) & (f <= hi)
+    n = int(np.count_nonzero(sel))
+    if n < MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n} frequency lines, need at least {MIN_LINES}")
+    return (lo, hi), sel
+
+
+def _check(f: ArrayLike, frf: ArrayLike) -> tuple[Array, CArray]:
+    freq = np.asarray(f, dtype=float).reshape(-1)
+    h = np.asarray(frf, dtype=complex)
+    if h.ndim != 3 or h.shape[2] != freq.size:
+        raise InputError(f"frf must have shape (sensors, references, frequencies), got {h.shape} for {freq.size} lines")
+    if freq.size < 2 or np.any(np.diff(freq) <= 0.0) or freq[0] <= 0.0:
+        raise InputError("frequencies must be positive and ascending")
+    if not (np.all(np.isfinite(h)) and np.all(np.isfinite(freq))):
+        raise InputError("frf holds NaN or infinite values")
+    return freq, h
+
+
+def _weights(h: CArray, weighting: str) -> Array:
+    """Per response and line (p, f): 1 / RMS over the references, floored at 1e-3 of its median."""
+    if weighting == "none":
+        return np.ones((h.shape[0], h.shape[2]))
+    if weighting != "relative":
+        raise InputError(f"weighting must be 'relative' or 'none', got {weighting!r}")
+    mag = np.sqrt(np.mean(np.abs(h) ** 2, axis=1))
+    floor = 1e-3 * np.median(mag, axis=1, keepdims=True) + np.finfo(float).tiny
+    result: Array = 1.0 / np.maximum(mag, floor)
+    return result
+
+
+def plscf_poles(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    orders: range | list[int],
+    *,
+    band: tuple[float, float] | None = None,
+    weighting: str = "relative",
+) -> list[tuple[int, CArray, CArray]]:
+    """Poles and shapes of pLSCF models of several orders (the input of a stabilisation diagram).
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz, ascending, positive.
+    frf : array_like of complex, shape (p, q, f)
+        FRFs (any consistent type; accelerance here).
+    orders : sequence of int
+        Polynomial orders ``n`` (each model has ``n q`` poles), ascending.
+    band : (float, float), optional
+        Band of the fit (Hz); all lines by default.
+    weighting : {"relative", "none"}
+        ``"relative"`` weights each response and line by the inverse of its RMS
+        over the references (errors relative to the value, as for noise
+        proportional to the FRF); ``"none"``: unweighted.
+
+    Returns
+    -------
+    list of (order, poles, shapes)
+        Poles (rad/s, all roots, both half planes) and their shapes at the
+        responses ``B(z_k) v_k`` (``p x k``).
+
+    Notes
+    -----
+    The reduced normal equations of [2]: per response ``o``, with ``X_o`` the
+    polynomial basis and ``Y_o = -X_o kron H_o`` weighted, ``M = sum_o (T_o -
+    S_o^T R_o^-1 S_o)`` with ``R = Re(X^H X)``, ``S = Re(X^H Y)``, ``T =
+    Re(Y^H Y)``; the highest coefficient ``A_n = I``; the roots from the block
+    companion matrix. ``dt = 1 / (2 f_high)``. Real coefficients, so the roots
+    come in conjugate pairs.
+    """
+    freq, h = _check(frequencies, frf)
+    (_, hi), sel = _band_lines(freq, band)
+    f, hb = freq[sel], h[:, :, sel]
+    p, q, nf = hb.shape
+    wts = _weights(hb, weighting)
+    dt = 1.0 / (2.0 * hi)
+    w = 2.0 * np.pi * f
+    n_max = max(orders)
+    if n_max < 1:
+        raise InputError("orders must be positive")
+    basis = np.exp(1j * np.outer(w * dt, np.arange(n_max + 1)))  # (f, n+1)
+    out: list[tuple[int, CArray, CArray]] = []
+    # per response: X (f, n+1) weighted, Y = -kron(X, H_o) (f, (n+1) q); the blocks of a lower order are
+    # the leading blocks of the highest order's, so they are formed once
+    big = (n_max + 1) * q
+    blocks = []
+    for o in range(p):
+        xw = basis * wts[o][:, None]
+        yw = -(xw[:, :, None] * hb[o].T[:, None, :]).reshape(nf, big)
+        blocks.append(((xw.conj().T @ xw).real, (xw.conj().T @ yw).real, (yw.conj().T @ yw).real))
+    for n in orders:
+        size = (n + 1) * q
+        m_mat = np.zeros((size, size))
+        keep: list[Array] = []
+        for r_all, s_all, t_all in blocks:
+            r_o, s_o, t_o = r_all[: n + 1, : n + 1], s_all[: n + 1, :size], t_all[:size, :size]
+            rs = np.linalg.solve(r_o, s_o)
+            m_mat += t_o - s_o.T @ rs
+            keep.append(rs)
+        m_mat = 0.5 * (m_mat + m_mat.T)
+        nq = n * q
+        alpha_low = -np.linalg.lstsq(m_mat[:nq, :nq], m_mat[:nq, nq:], rcond=None)[0]  # (n q, q)
+        alpha = np.vstack([alpha_low, np.eye(q)])  # rows: alpha_0 .. alpha_n stacked (each q x q)
+        comp = np.zeros((nq, nq))
+        if n > 1:
+            comp[: nq - q, q:] = np.eye(nq - q)
+        comp[nq - q :, :] = -alpha_low.reshape(n, q, q).transpose(1, 0, 2).reshape(q, nq)
+        z, vec = np.linalg.eig(comp)
+        lam = np.log(z.astype(complex)) / dt
+        v = vec[:q, :]  # right null vectors of A(z_k)
+        # shapes B_o(z_k) v_k with beta_o = -R_o^-1 S_o alpha
+        shapes = np.zeros((p, lam.size), dtype=complex)
+        zpow = z[None, :] ** np.arange(n + 1)[:, None]  # (n+1, k)
+        for o, rs in enumerate(keep):
+            beta = -rs @ alpha  # (n+1, q)
+            shapes[o] = np.einsum("rk,rj,jk->k", zpow, beta, v)
+        out.append((int(n), lam.astype(complex), shapes))
+    return out
+
+
+def residues_lsfd(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    lower: bool = False,
+    upper: bool | int = True,
+    weighting: str = "relative",
+) -> tuple[CArray, CArray, CArray, float]:
+    """Residues of accelerance FRFs with known poles, by least squares in the frequency domain.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance.
+    poles : array_like of complex, shape (n,)
+        Poles (rad/s, ``Im > 0``) of every mode in the band.
+    band : (float, float), optional
+        Band (Hz); all lines by default.
+    lower : bool
+        Fit a lower residual (a constant in accelerance: modes below the band).
+    upper : bool or int
+        Fit an upper residual (``(w / w_top)^2``: modes above the band); an
+        integer ``n`` fits the ``n`` terms ``(w / w_top)^2 .. (w / w_top)^(2 n)``.
+    weighting : {"relative", "none"}
+        As :func:`plscf_poles`, per response and reference pair.
+
+    Returns
+    -------
+    residues : ndarray of complex, shape (n, p, q)
+        Receptance residues ``R_k``.
+    lower, upper : ndarray of complex, shape (p, q)
+        The residual terms (zero when not fitted; `upper` is the coefficient of
+        ``(w / w_top)^2``).
+    residual : float
+        Weighted RMS misfit over the weighted RMS of the data.
+
+    Notes
+    -----
+    One real linear least-squares problem per response and reference pair
+    (real and imaginary parts stacked), ``2 n`` unknowns plus the residual
+    terms; weighted by ``1 / |H|`` (floored) with relative weighting, the
+    maximum-likelihood fit for noise proportional to the FRF.
+    """
+    freq, h = _check(frequencies, frf)
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    if lam.size == 0 or np.any(lam.imag <= 0.0) or not np.all(np.isfinite(lam)):
+        raise InputError("poles must be finite with positive imaginary parts")
+    (lo, hi), sel = _band_lines(freq, band)
+    hb = h[:, :, sel]
+    w = 2.0 * np.pi * freq[sel]
+    g, n_modal = _design(w, lam, lower, upper)
+    if g.shape[1] > 2 * w.size:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds too few lines for {lam.size} modes")
+    wts = _pair_weights(hb, weighting)
+    coef, resid, den = _solve_pairs(g, hb, wts)
+    p, q = hb.shape[:2]
+    residues = (coef[0:n_modal:2] + 1j * coef[1:n_modal:2]).astype(complex)
+    k = n_modal
+    low = np.zeros((p, q), dtype=complex)
+    up = np.zeros((p, q), dtype=complex)
+    if lower:
+        low = coef[k] + 1j * coef[k + 1]
+        k += 2
+    if upper:
+        up = coef[k] + 1j * coef[k + 1]
+    return residues, low, up, float(np.linalg.norm(resid) / max(den, np.finfo(float).tiny))
+
+
+def _design(w: Array, lam: CArray, lower: bool, upper: bool | int) -> tuple[CArray, int]:
+    """LSFD columns (f, 2 n + residual terms): real and imaginary part of each residue, then the residuals."""
+    iw = 1j * w
+    w_top = float(w[-1])
+    cols = []
+    for lk in lam:
+        g1 = -(w**2) / (iw - lk)
+        g2 = -(w**2) / (iw - np.conj(lk))
+        cols.extend([g1 + g2, 1j * (g1 - g2)])
+    n_modal = len(cols)
+    if lower:
+        cols.extend([np.ones(w.size, dtype=complex), 1j * np.ones(w.size)])
+    for power in range(1, int(upper) + 1):
+        cols.extend([(w / w_top) ** (2 * power) + 0j, 1j * (w / w_top) ** (2 * power)])
+    return np.stack(cols, axis=1), n_modal
+
+
+def _pair_weights(hb: CArray, weighting: str) -> Array:
+    """Weights (p, q, f): 1 / |H| floored at 1e-3 of the pair's median, or ones."""
+    if weighting == "none":
+        return np.ones(hb.shape)
+    if weighting != "relative":
+        raise InputError(f"weighting must be 'relative' or 'none', got {weighting!r}")
+    mag = np.abs(hb)
+    floor = 1e-3 * np.median(mag, axis=2, keepdims=True) + np.finfo(float).tiny
+    result: Array = 1.0 / np.maximum(mag, floor)
+    return result
+
+
+def _solve_pairs(g: CArray, hb: CArray, wts: Array) -> tuple[Array, Array, float]:
+    """Weighted least squares per response and reference pair: coefficients, stacked residuals, data norm.
+
+    All pairs at once: stacked QR of the column-scaled real designs ``[Re; Im]``.
+    """
+    p, q, nf = hb.shape
+    k = g.shape[1]
+    gw = g[None, :, :] * wts.reshape(p * q, nf)[:, :, None]  # (pq, f, k)
+    yw = (hb * wts).reshape(p * q, nf)
+    design = np.concatenate([gw.real, gw.imag], axis=1)  # (pq, 2f, k)
+    target = np.concatenate([yw.real, yw.imag], axis=1)  # (pq, 2f)
+    scale = np.linalg.norm(design, axis=1)  # (pq, k)
+    scale[scale == 0.0] = 1.0
+    qm, rm = np.linalg.qr(design / scale[:, None, :])
+    diag = np.abs(np.diagonal(rm, axis1=1, axis2=2))
+    if np.any(diag < 1e-12 * np.max(diag, axis=1, keepdims=True)):
+        raise IdentificationError("the residues cannot be separated in this band (poles too close?)")
+    qty = np.einsum("bfk,bf->bk", qm, target)
+    sol = np.linalg.solve(rm, qty[:, :, None])[:, :, 0] / scale
+    resid = np.einsum("bfk,bk->bf", qm, qty) - target
+    coef = sol.T.reshape(k, p, q)
+    return coef, resid.reshape(-1), float(np.linalg.norm(target))
+
+
+def refine_poles(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    lower: bool = False,
+    upper: bool = True,
+    weighting: str = "relative",
+) -> CArray:
+    """Poles refined by nonlinear least squares on the FRFs, the residues projected out.
+
+    Parameters
+    ----------
+    frequencies, frf, band, lower, upper, weighting
+        As :func:`residues_lsfd`.
+    poles : array_like of complex, shape (n,)
+        Starting poles (rad/s, ``Im > 0``), e.g. from :func:`plscf_poles`.
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+        The poles minimising the weighted LSFD misfit (variable projection over
+        natural frequency and damping ratio of each pole; Levenberg-Marquardt).
+
+    Notes
+    -----
+    pLSCF solves a linearised problem whose noise bias is of the order of the
+    noise; the misfit of the full model to the data (weighted as
+    :func:`residues_lsfd`) is the maximum-likelihood criterion for complex
+    noise proportional to the FRF. The starting poles are kept when the
+    refinement does not lower it.
+    """
+    from scipy.optimize import least_squares
+
+    freq, h = _check(frequencies, frf)
+    lam0 = np.asarray(poles, dtype=complex).reshape(-1)
+    if lam0.size == 0 or np.any(lam0.imag <= 0.0) or not np.all(np.isfinite(lam0)):
+        raise InputError("poles must be finite with positive imaginary parts")
+    _, sel = _band_lines(freq, band)
+    hb = h[:, :, sel]
+    w = 2.0 * np.pi * freq[sel]
+    wts = _pair_weights(hb, weighting)
+
+    def to_poles(x: Array) -> CArray:
+        wn, z = np.exp(x[0::2]), np.clip(x[1::2], 1e-9, 0.999)
+        result: CArray = wn * (-z + 1j * np.sqrt(1.0 - z**2))
+        return result
+
+    def residual(x: Array) -> Array:
+        return _solve_pairs(_design(w, to_poles(x), lower, upper)[0], hb, wts)[1]
+
+    x0 = np.empty(2 * lam0.size)
+    x0[0::2] = np.log(np.abs(lam0))
+    x0[1::2] = -lam0.real / np.abs(lam0)
+    start = residual(x0)
+    try:
+        fit = least_squares(residual, x0, method="lm", x_scale="jac", max_nfev=100 * x0.size)
+    except IdentificationError:
+        return lam0
+    if not (np.all(np.isfinite(fit.x)) and np.all(fit.x[1::2] > 0.0) and fit.x[1::2].max() < 0.999):
+        return lam0
+    if float(fit.fun @ fit.fun) >= float(start @ start):
+        return lam0
+    return to_poles(fit.x)
+
+
+def _scaled_frame(positions: Array, directions: Array) -> tuple[Array, float, Array]:
+    origin = positions.mean(axis=0)
+    span = float(np.max(np.linalg.norm(positions - origin, axis=1))) or 1.0
+    t = sensor_matrix((positions - origin) / span, directions)
+    sv = np.linalg.svd(t, compute_uv=False)
+    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
+        raise IdentificationError("the sensors do not see six independent rigid-body motions")
+    return origin, span, t
+
+
+def _rigid_modes(residues: CArray, t: Array, tf: Array) -> tuple[CArray, Array]:
+    """Unity-modal-A rigid-body modes ``u_k`` (6, n) with ``R_k = T u_k u_k^T T_f^T``, and the fit residual per mode."""
+    n = residues.shape[0]
+    u = np.zeros((6, n), dtype=complex)
+    miss = np.zeros(n)
+    for k in range(n):
+        y = np.linalg.lstsq(t, residues[k], rcond=None)[0]  # (6, q): u (T_f u)^T
+        left = np.linalg.svd(y)[0]
+        a = left[:, 0]
+        g = np.outer(a, tf @ a)
+        c2 = complex(np.vdot(g, y) / np.vdot(g, g))
+        u[:, k] = np.sqrt(c2) * a
+        model = t @ np.outer(u[:, k], u[:, k]) @ tf.T
+        miss[k] = float(np.linalg.norm(model - residues[k])) / max(float(np.linalg.norm(residues[k])), 1e-300)
+    return u, miss
+
+
+def rigid_shapes(
+    residues: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+) -> tuple[CArray, CArray, Array]:
+    """Unity-modal-A shapes of rigid-body modes from their residues (the force scales them).
+
+    Parameters
+    ----------
+    residues : array_like of complex, shape (n, p, q)
+        Receptance residues of rigid-body modes.
+    positions, directions : array_like, shape (p, 3)
+        Sensors, rank 6.
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Force points and directions.
+
+    Returns
+    -------
+    shapes : ndarray of complex, shape (p, n)
+        ``T u_k``: each mode at the sensors, ``R_k ~ shapes_k participation_k^T``.
+    participation : ndarray of complex, shape (q, n)
+        ``T_f u_k``: each mode at the references along the force.
+    misfit : ndarray, shape (n,)
+        ``|T u u^T T_f^T - R_k| / |R_k|``: how far each residue is from a rigid-body mode's.
+
+    Notes
+    -----
+    ``T^+ R_k = u_k (T_f u_k)^T``: the leading left singular vector gives the
+    direction of ``u_k``, and the force its scale (one complex least-squares
+    factor); the sign of ``u_k`` is arbitrary, as for any mode.
+    """
+    res = np.asarray(residues, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    origin, span, t = _scaled_frame(pos, np.asarray(directions, dtype=float))
+    rpos = np.asarray(reference_positions, dtype=float)
+    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    u, misfit = _rigid_modes(res, t, tf)
+    return t @ u, tf @ u, misfit
+
+
+def body_from_scaled_modes(
+    poles: ArrayLike,
+    residues: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+) -> ScaledBody:
+    """Mass, CG, inertia, stiffness and damping from the six rigid-body residues.
+
+    Parameters
+    ----------
+    poles : array_like of complex, shape (6,)
+        The rigid-body poles (rad/s, ``Im > 0``).
+    residues : array_like of complex, shape (6, p, q)
+        Their receptance residues (from :func:`residues_lsfd`).
+    positions, directions : array_like, shape (p, 3)
+        Sensors (length, unit axes), rank 6.
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Force points and unit directions.
+
+    Returns
+    -------
+    ScaledBody
+
+    Raises
+    ------
+    IdentificationError
+        If the sensors do not see six rigid-body motions, a mode's residue is
+        not excited by the references, or the mass is not positive.
+
+    Notes
+    -----
+    Each residue is projected on rigid-body motion, ``T^+ R_k = u_k (T_f
+    u_k)^T``, which fixes the scale of ``u_k`` (the force is known); then
+    ``M^-1 = sum_k 2 Re(l_k u_k u_k^T)``, ``K^-1 = -sum_k 2 Re(u_k u_k^T /
+    l_k)`` and ``M^-1 C M^-1 = -sum_k 2 Re(l_k^2 u_k u_k^T)``, exact for a
+    rigid body on massless mounts (eq. (1) of [1]) whatever the damping. The
+    mass, CG and inertia are read from ``M`` about the sensor centroid (mass
+    from the translational block's trace, CG from its coupling block); ``K``
+    and ``C`` are moved to the CG with the transfer matrix (eqs. (11)-(14)).
+    """
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    res = np.asarray(residues, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    rpos = np.asarray(reference_positions, dtype=float)
+    rdirs = np.asarray(reference_directions, dtype=float)
+    if lam.size != 6 or res.shape != (6, pos.shape[0], rpos.shape[0]):
+        raise InputError("poles and residues must be those of the six rigid-body modes, residues (6, p, q)")
+    origin, span, t = _scaled_frame(pos, dirs)
+    tf = sensor_matrix((rpos - origin) / span, rdirs)
+    u, _ = _rigid_modes(res, t, tf)
+    if np.any(np.linalg.norm(u, axis=0) == 0.0):
+        raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
+    m_inv = np.sum(2.0 * (lam[None, None, :] * u[:, None, :] * u[None, :, :]).real, axis=2)
+    k_inv = -np.sum(2.0 * (u[:, None, :] * u[None, :, :] / lam[None, None, :]).real, axis=2)
+    mcm = -np.sum(2.0 * (lam[None, None, :] ** 2 * u[:, None, :] * u[None, :, :]).real, axis=2)
+    m_s = np.linalg.solve(0.5 * (m_inv + m_inv.T), np.eye(6))
+    m_s = 0.5 * (m_s + m_s.T)
+    k_s = np.linalg.solve(0.5 * (k_inv + k_inv.T), np.eye(6))
+    c_s = m_s @ (0.5 * (mcm + mcm.T)) @ m_s
+    # scaled coordinates x~ = [x_t, span theta]: physical matrices D X~ D with D = diag(I, span I)
+    d = np.concatenate([np.ones(3), span * np.ones(3)])
+    m_o, k_o, c_o = (d[:, None] * x * d[None, :] for x in (m_s, k_s, 0.5 * (c_s + c_s.T)))
+    mass = float(np.trace(m_o[:3, :3]) / 3.0)
+    if not mass > 0.0:
+        raise IdentificationError(f"the scaled modes give a mass of {mass:.4g}, not positive")
+    # M_o = [[m I, -m S(c)], [m S(c), J_o]]: c from the coupling block (least squares over both blocks)
+    sc = 0.5 * (m_o[3:, :3] - m_o[:3, 3:]) / mass
+    c_rel = np.array([sc[2, 1] - sc[1, 2], sc[0, 2] - sc[2, 0], sc[1, 0] - sc[0, 1]]) / 2.0
+    cg = origin + c_rel
+    g = transfer_matrix(-c_rel)  # x_o = G x_g: the origin's motion from the CG's
+    m_g, k_g, c_g = (g.T @ x @ g for x in (m_o, k_o, c_o))
+    inertia = 0.5 * (m_g[3:, 3:] + m_g[3:, 3:].T)
+    return ScaledBody(mass, cg, inertia, 0.5 * (k_g + k_g.T), 0.5 * (c_g + c_g.T), 0.5 * (m_g + m_g.T))
+
+
+def fit_frf_modes(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    reference_positions: ArrayLike,
+    reference_directions: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    residue_band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
+    max_order: int | None = None,
+    lower: bool = False,
+    upper: bool = True,
+    weighting: str = "relative",
+    refine: bool = True,
+    criteria: Criteria | None = None,
+    progress: ProgressCallback | None = None,
+) -> FrfModes:
+    """Poles, residues and shapes from accelerance FRFs: pLSCF, stabilisation diagram, LSFD.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz, ascending, positive.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance: sensor ``i`` per unit force at reference ``j``.
+    positions, directions : array_like, shape (p, 3)
+        Sensors (length, unit axes).
+    reference_positions, reference_directions : array_like, shape (q, 3)
+        Force points and unit directions.
+    band : (float, float), optional
+        Band of the pole fit (Hz); default :func:`rigid_band`.
+    residue_band : (float, float), optional
+        Band of the residue fit (Hz), which may reach further up than the
+        poles' (the upper residual stands for what lies above); default
+        the poles' band.
+    n_modes : int, optional
+        Keep the `n_modes` modes stable at the most orders; default every mode
+        stable at a third of the orders or more.
+    max_order : int, optional
+        Highest polynomial order of the sweep (``n q`` poles); default
+        ``max(8, ceil(48 / q))``.
+    lower, upper : bool
+        Residual terms of the LSFD (:func:`residues_lsfd`).
+    weighting : {"relative", "none"}
+        Weighting of both fits (:func:`plscf_poles`).
+    refine : bool
+        Refine the poles of the diagram by nonlinear least squares on the FRFs
+        (:func:`refine_poles`) before the residues are taken.
+    criteria : Criteria, optional
+        Tolerances of the stabilisation diagram (default :class:`Criteria`).
+    progress : ProgressCallback, optional
+        Called per order of the sweep.
+
+    Returns
+    -------
+    FrfModes
+        Modes ascending in frequency. The six lowest are taken as the rigid-body
+        modes and their shapes scaled by the force (``scaled``), when the sensors
+        see six rigid-body motions; other shapes are scaled to a largest value of 1.
+
+    Raises
+    ------
+    InputError
+        Bad shapes, band or options.
+    IdentificationError
+        No stable mode (or fewer than `n_modes`).
+    """
+    freq, h = _check(frequencies, frf)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    rpos = np.asarray(reference_positions, dtype=float)
+    rdirs = np.asarray(reference_directions, dtype=float)
+    p, q = h.shape[:2]
+    if pos.shape != (p, 3) or dirs.shape != (p, 3) or rpos.shape != (q, 3) or rdirs.shape != (q, 3):
+        raise InputError(f"frf has {p} responses and {q} references; positions and directions must match")
+    if n_modes is not None and not (isinstance(n_modes, int) and n_modes >= 1):
+        raise InputError(f"n_modes must be a positive integer, got {n_modes}")
+    top = max_order if max_order is not None else max(8, -(-48 // q))
+    if not (isinstance(top, int) and top >= 3):
+        raise InputError(f"max_order must be an integer of at least 3, got {max_order}")
+    auto_poles = rigid_band(freq, h)[0]
+    (lo, hi), _ = _band_lines(freq, band if band is not None else auto_poles)
+    res_band = residue_band if residue_band is not None else (lo, hi)
+    orders = list(range(1, top + 1))
+    models = plscf_poles(freq, h, orders, band=(lo, hi), weighting=weighting)
+    if progress is not None:
+        progress("pLSCF orders", len(orders), len(orders))
+    diagram = stabilise(models, (lo, hi), criteria if criteria is not None else Criteria())
+    clusters = cluster_stable(diagram, min_count=max(3, len(orders) // 3))
+    if n_modes is not None:
+        if len(clusters) < n_modes:
+            raise IdentificationError(
+                f"{len(clusters)} stable mode(s) in {lo:.4g}-{hi:.4g} Hz, {n_modes} asked: widen the band or "
+                "raise the order"
+            )
+        clusters = clusters[:n_modes]
+    if not clusters:
+        raise IdentificationError(f"no stable mode in {lo:.4g}-{hi:.4g} Hz")
+    clusters.sort(key=lambda c: abs(c.pole))
+    lam = np.array([c.pole for c in clusters], dtype=complex)
+    if refine:
+        lam = refine_poles(freq, h, lam, band=res_band, lower=lower, upper=upper, weighting=weighting)
+        lam = lam[np.argsort(np.abs(lam))]
+    residues, low, up, misfit = residues_lsfd(
+        freq, h, lam, band=res_band, lower=lower, upper=upper, weighting=weighting
+    )
+    n = lam.size
+    shapes = np.zeros((p, n), dtype=complex)
+    part = np.zeros((q, n), dtype=complex)
+    scaled = np.zeros(n, dtype=bool)
+    for k in range(n):
+        left, sv, right = np.linalg.svd(residues[k])
+        a = left[:, 0] * sv[0]
+        b = right[0]
+        big = a[np.argmax(np.abs(a))]
+        shapes[:, k], part[:, k] = a / big, b * big
+    if n >= 6:
+        try:
+            origin, span, t = _scaled_frame(pos, dirs)
+        except IdentificationError:
+            pass
+        else:
+            tf = sensor_matrix((rpos - origin) / span, rdirs)
+            u = _rigid_modes(residues[:6], t, tf)[0]
+            shapes[:, :6] = t @ u
+            part[:, :6] = tf @ u
+            scaled[:6] = True
+    return FrfModes(
+        poles=lam,
+        residues=residues,
+        shapes=shapes,
+        participation=part,
+        scaled=scaled,
+        stable_count=np.array([c.count for c in clusters], dtype=int),
+        diagram=tuple(diagram),
+        band=(lo, hi),
+        residue_band=(float(res_band[0]), float(res_band[1])),
+        lower=low,
+        upper=up,
+        residual=misfit,
+    )

@@ -1,0 +1,134 @@
+"""Modes from FRFs (core/frfmodes.py): exact recovery, a noisy round trip, scaled shapes, the command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigidid.core.frf import accelerance
+from rigidid.core.frfmodes import body_from_scaled_modes, fit_frf_modes, residues_lsfd
+from rigidid.core.geometry import sensor_matrix
+from rigidid.core.simulate import body_modes, system_matrices
+from rigidid.errors import InputError
+from rigidid.io.files import load_modes
+
+from ..bodies import random_body, random_layout
+from ..conftest import DATA, SAMPLES
+
+FOUR = SAMPLES / "four-mounts"
+REFS = DATA / "frf" / "references.json"
+
+
+def _test(seed: int, noise: float = 0.0, lines: int = 400):  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    top = float(np.abs(body_modes(body, pos, dirs).poles).max()) / (2.0 * np.pi)
+    f = np.linspace(top / 50.0, 2.0 * top, lines)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, noise=noise, rng=rng)
+    return body, pos, dirs, rpos, f, h
+
+
+def test_exact_frfs_give_poles_residues_and_the_body_to_rounding() -> None:
+    body, pos, dirs, rpos, f, h = _test(0, lines=200)
+    truth = body_modes(body, pos, dirs)
+    poles = truth.poles[np.argsort(np.abs(truth.poles))]
+    fitted = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), band=(f[0], f[-1]), n_modes=6, upper=False, max_order=10)
+    # pLSCF alone gave 1.6e-5 here; the refinement on the FRFs takes the poles to rounding (observed 2e-15)
+    assert np.max(np.abs(fitted.poles / poles - 1.0)) < 1e-10
+    assert fitted.scaled.all() and fitted.residual < 1e-10
+    scaled = body_from_scaled_modes(fitted.poles, fitted.residues, pos, dirs, rpos, np.eye(3))
+    assert scaled.mass == pytest.approx(body.mass, rel=1e-8)
+    np.testing.assert_allclose(scaled.center_of_gravity, body.center_of_gravity, atol=1e-8)
+    np.testing.assert_allclose(scaled.inertia_tensor, body.inertia_tensor, rtol=1e-7, atol=1e-8 * body.mass)
+    _, k, c = system_matrices(body)  # at the CG
+    np.testing.assert_allclose(scaled.stiffness_matrix, k, rtol=1e-6, atol=1e-7 * np.abs(k).max())
+    np.testing.assert_allclose(scaled.damping_matrix, c, rtol=1e-6, atol=1e-7 * np.abs(c).max())
+    # the scaled shapes are the true modes at the sensors, unity modal A: R_k = shape_k participation_k^T
+    for k in range(6):
+        np.testing.assert_allclose(
+            np.outer(fitted.shapes[:, k], fitted.participation[:, k]),
+            fitted.residues[k],
+            atol=1e-8 * np.abs(fitted.residues[k]).max(),
+        )
+    mac = np.abs(np.sum(fitted.shapes.conj() * truth.shapes[:, np.argsort(np.abs(truth.poles))], axis=0)) ** 2
+    norms = (
+        np.sum(np.abs(fitted.shapes) ** 2, axis=0)
+        * np.sum(np.abs(truth.shapes) ** 2, axis=0)[np.argsort(np.abs(truth.poles))]
+    )
+    np.testing.assert_allclose(mac / norms, 1.0, atol=1e-10)
+
+
+def test_noisy_frfs_round_trip() -> None:
+    body, pos, dirs, rpos, f, h = _test(1, noise=0.01)
+    fitted = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6, refine=False)
+    truth = body_modes(body, pos, dirs).poles
+    truth = truth[np.argsort(np.abs(truth))]
+    assert np.max(np.abs(np.abs(fitted.poles) / np.abs(truth) - 1.0)) < 0.005
+    scaled = body_from_scaled_modes(fitted.poles, fitted.residues, pos, dirs, rpos, np.eye(3))
+    assert abs(scaled.mass / body.mass - 1.0) < 0.02
+    span = float(np.ptp(pos, axis=0).max())
+    assert np.linalg.norm(scaled.center_of_gravity - body.center_of_gravity) / span < 0.01
+    assert len(fitted.diagram) >= 8 and any(entry.stable.any() for entry in fitted.diagram)
+
+
+def test_lsfd_with_residual_terms_and_bad_poles() -> None:
+    body, pos, dirs, _rpos, f, h = _test(2)
+    poles = body_modes(body, pos, dirs).poles
+    res, low, up, misfit = residues_lsfd(f, h, poles, lower=True, upper=True)
+    assert misfit < 1e-8 and np.abs(low).max() < 1e-6 / body.mass and np.abs(up).max() < 1e-6 / body.mass
+    t = sensor_matrix(pos, dirs, body.center_of_gravity)
+    assert np.linalg.matrix_rank(np.linalg.lstsq(t, res[0], rcond=None)[0], tol=1e-6 * np.abs(res[0]).max()) == 1
+    with pytest.raises(InputError, match="positive imaginary"):
+        residues_lsfd(f, h, np.conj(poles))
+
+
+def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    cmd = [sys.executable, "-m", "rigidid", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, check=False)
+
+
+def test_modes_from_frfs_on_the_command_line_feed_identify(tmp_path: Path) -> None:
+    frf, fit, js = tmp_path / "frf.csv", tmp_path / "fit.csv", tmp_path / "fit.json"
+    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", tmp_path / "m.csv", "--frf", frf,
+               "--references", REFS, "--frf-noise", "0.01", "--seed", "1")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    done = run("modes", FOUR / "layout.json", "--frf", frf, "--references", REFS, "-o", fit, "--json", js)
+    assert done.returncode == 0, done.stderr
+    assert fit.read_text().splitlines()[0].endswith(",scaling") and ",modal_a" in fit.read_text()
+    ids = [s["id"] for s in json.loads((FOUR / "layout.json").read_text())["sensors"]]
+    assert len(load_modes(fit, ids).labels) == 6
+    out = json.loads(js.read_text())
+    assert out["method"] == "plscf" and out["stabilisation"] and all(m["scaling"] == "modal_a" for m in out["modes"])
+    done = run("identify", FOUR / "layout.json", fit, "--mass", "40", "--json", "-")
+    assert done.returncode == 0, done.stderr
+    truth = json.loads((FOUR / "body.json").read_text())["center_of_gravity"]
+    assert np.linalg.norm(np.array(json.loads(done.stdout)["center_of_gravity"]) - truth) < 0.01
+
+
+def test_modes_from_frfs_bad_inputs_are_one_line_exit_2(tmp_path: Path) -> None:
+    frf = tmp_path / "frf.csv"
+    frf.write_text("frequency_hz,response,reference,real,imag\n")
+    done = run("modes", FOUR / "layout.json", "--frf", frf)
+    assert done.returncode == 2 and "--references" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    import pyuff
+
+    x = np.arange(1.0, 100.0, 1.0)
+    cross = pyuff.prepare_58(
+        func_type=3, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=1, ord_data_type=6, num_pts=x.size,
+        abscissa_spacing=0, abscissa_spec_data_type=18, ordinate_spec_data_type=12, orddenom_spec_data_type=13,
+        data=np.ones(x.size, dtype=complex), x=x, id1="cross", rsp_ent_name="b", ref_ent_name="b",
+        abscissa_min=1.0, abscissa_inc=0.0,
+    )  # fmt: skip
+    uff = tmp_path / "cross.uff"
+    pyuff.UFF(str(uff)).write_sets([cross], mode="overwrite")
+    done = run("modes", FOUR / "layout.json", "--frf", uff, "--references", REFS)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert "cross" in done.stderr.lower()
