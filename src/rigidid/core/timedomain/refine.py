@@ -441,7 +441,7 @@ def refine_body(
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
-    std = _bound(theta, jm, s2, frame, pos_l, dirs)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], max(1, int(decimation)))
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -463,13 +463,36 @@ def _outputs(theta: Array, frame: _Frame, pos_l: Array, dirs: Array) -> Array:
     return np.concatenate([g, j.ravel(), k.ravel(), c.ravel(), w * frame.omega / (2 * np.pi), -lam.real / w])
 
 
-def _bound(theta: Array, jm: Array, s2: float, frame: _Frame, pos_l: Array, dirs: Array) -> dict[str, Array]:
-    """Cramér-Rao standard errors of the physical values (delta method)."""
-    info = jm.T @ jm
-    u, sv, vt = np.linalg.svd(info)
-    tol = sv[0] * 1e-12
-    inv = (vt.T / np.where(sv > tol, sv, np.inf)) @ u.T  # pseudo-inverse of the information
-    cov = s2 * inv
+def _bound(
+    theta: Array,
+    jm: Array,
+    s2: float,
+    frame: _Frame,
+    pos_l: Array,
+    dirs: Array,
+    residual: Array | None = None,
+    lengths: Sequence[int] | None = None,
+    factor: int = 1,
+) -> dict[str, Array]:
+    """Standard errors of the physical values (delta method) from the parameters' covariance.
+
+    With `residual` and `lengths` (decimated samples per impact): the calibrated
+    covariance of :func:`rigidid.core.timedomain.intervals.parameter_covariance`
+    (sandwich from the residual per impact and channel, the decimation filter's
+    correlation, the remaining Gauss-Newton step). Without: the textbook bound
+    ``s2 (J^T J)^+``.
+    """
+    if residual is not None and lengths is not None:
+        from rigidid.core.timedomain.intervals import parameter_covariance
+
+        n_linear = len(lengths) * (12 + pos_l.shape[0])
+        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
+    else:
+        info = jm.T @ jm
+        u, sv, vt = np.linalg.svd(info)
+        tol = sv[0] * 1e-12
+        inv = (vt.T / np.where(sv > tol, sv, np.inf)) @ u.T  # pseudo-inverse of the information
+        cov = s2 * inv
     base = _outputs(theta, frame, pos_l, dirs)
     grad = np.zeros((base.size, N_PARAMETERS))
     for i in range(N_PARAMETERS):
