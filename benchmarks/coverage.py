@@ -20,7 +20,8 @@ Regimes (8 s at 512 Hz each): ``mounts-1%`` (1 % noise), ``mounts-5%`` (5 % nois
 ``damping-2-6.5%`` (1 % noise, damping proportional to stiffness, 2.0-6.5 % over the modes).
 
 Run: ``python benchmarks/coverage.py [--draws 200] [--regimes mounts-1% ...] [--save DIR]``;
-``--table DIR`` prints the table again from saved draws (one ``coverage_<regime>.npz`` each).
+``--table DIR`` prints the table again from saved draws (``coverage_<regime>*.npz``, merged by seed);
+``--first-seed N`` starts at seed N (to split a regime over processes).
 """
 
 from __future__ import annotations
@@ -90,12 +91,12 @@ def draw(spec: dict[str, Any], seed: int, pos: np.ndarray, dirs: np.ndarray) -> 
             "cost": ref.normalised_cost}  # fmt: skip
 
 
-def run(name: str, draws: int, save: Path | None) -> dict[str, np.ndarray]:
+def run(name: str, draws: int, save: Path | None, first: int = 0) -> dict[str, np.ndarray]:
     refine._bound = _spy
     pos, dirs = layout(8)
     z, zt, good, evals, cost, seeds = [], [], [], [], [], []
     t0 = time.perf_counter()
-    for seed in range(draws):
+    for seed in range(first, first + draws):
         row = draw(REGIMES[name], seed, pos, dirs)
         seeds.append(seed)
         if row is None:
@@ -110,19 +111,19 @@ def run(name: str, draws: int, save: Path | None) -> dict[str, np.ndarray]:
         good.append(row["good"])
         evals.append(row["evaluations"])
         cost.append(row["cost"])
-        if save is not None and (seed + 1) % 10 == 0:
-            _save(save, name, z, zt, good, evals, cost, seeds, time.perf_counter() - t0)
-    out = _save(save, name, z, zt, good, evals, cost, seeds, time.perf_counter() - t0)
+        if save is not None and len(seeds) % 10 == 0:
+            _save(save, name, z, zt, good, evals, cost, seeds, time.perf_counter() - t0, first)
+    out = _save(save, name, z, zt, good, evals, cost, seeds, time.perf_counter() - t0, first)
     refine._bound = _original_bound
     return out
 
 
-def _save(save, name, z, zt, good, evals, cost, seeds, seconds):  # type: ignore[no-untyped-def]
+def _save(save, name, z, zt, good, evals, cost, seeds, seconds, first=0):  # type: ignore[no-untyped-def]
     out = {"z": np.array(z), "z_textbook": np.array(zt), "good": np.array(good), "evaluations": np.array(evals),
            "cost": np.array(cost), "seeds": np.array(seeds), "seconds": np.array(seconds)}  # fmt: skip
     if save is not None:
         save.mkdir(parents=True, exist_ok=True)
-        np.savez(save / f"coverage_{name}.npz", **out)
+        np.savez(save / (f"coverage_{name}.npz" if first == 0 else f"coverage_{name}_from{first}.npz"), **out)
     return out
 
 
@@ -157,18 +158,22 @@ def main() -> None:
     parser.add_argument("--regimes", nargs="+", default=list(REGIMES), choices=list(REGIMES))
     parser.add_argument("--save", type=Path, default=None, help="directory for the draws (npz per regime)")
     parser.add_argument("--table", type=Path, default=None, help="print the table from saved draws and stop")
+    parser.add_argument("--first-seed", type=int, default=0, help="seed of the first draw (to split a run)")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     if args.table is not None:
         results = {}
         for name in args.regimes:
-            f = args.table / f"coverage_{name}.npz"
-            if f.exists():
-                results[name] = dict(np.load(f))
+            parts = [dict(np.load(f)) for f in sorted(args.table.glob(f"coverage_{name}*.npz"))]
+            if parts:
+                merged = {k: np.concatenate([np.atleast_1d(p[k]) for p in parts]) for k in parts[0] if k != "seconds"}
+                _, once = np.unique(merged["seeds"], return_index=True)
+                results[name] = {k: v[once] for k, v in merged.items()}
+                results[name]["seconds"] = np.array(sum(float(p["seconds"]) for p in parts))
         table(results)
         return
     print(f"coverage of the record intervals, four-mounts, 8 sensors, 2 impacts, 8 s at 512 Hz, {args.draws} draws")
-    table({name: run(name, args.draws, args.save) for name in args.regimes})
+    table({name: run(name, args.draws, args.save, args.first_seed) for name in args.regimes})
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -113,3 +114,35 @@ def test_calibrated_intervals_cover_the_monte_carlo_errors(linearised) -> None: 
     # the setting is one where the textbook bound is wrong (over for some entries, under for others):
     # the test can tell; pooling the impacts' residual variance fails it too (Jzz ratio 0.60)
     assert np.max(np.abs(result["bound"][1] - 1.0)) > SANDWICH_VARIANCE_REL
+
+
+def test_the_refinement_reports_the_calibrated_covariance(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import rigidid.core.timedomain.intervals as intervals
+    from rigidid.core.timedomain.refine import refine_body
+
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
+    records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=128.0, duration=2.0, pretrigger=0.4)
+    rng = np.random.default_rng(3)
+    for level, rec in zip((0.005, 0.04), records, strict=True):  # the second impact four times noisier
+        rec += rng.standard_normal(rec.shape) * level * np.sqrt(np.mean(rec[60:] ** 2, axis=0))
+    _, k, c = system_matrices(body)
+    calls: list[intervals.ParameterCovariance] = []
+    original = intervals.parameter_covariance
+
+    def spy(*args, **kwargs):  # type: ignore[no-untyped-def]
+        calls.append(original(*args, **kwargs))
+        return calls[-1]
+
+    monkeypatch.setattr(intervals, "parameter_covariance", spy)
+    options = dict(starts=[53, 53], onsets=[51, 51], decimation=2, center_of_gravity=body.center_of_gravity,
+                   inertia_per_mass=body.inertia_tensor / body.mass, stiffness_per_mass=k / body.mass,
+                   damping_per_mass=c / body.mass, max_evaluations=0)  # fmt: skip
+    ref = refine_body(records, 1.0 / 128.0, pos, dirs, **options)  # type: ignore[arg-type]
+    assert len(calls) == 1
+    # what the route reports is the calibrated covariance, not the textbook bound
+    monkeypatch.setattr(
+        intervals, "parameter_covariance", lambda *a, **kw: replace(original(*a, **kw), matrix=original(*a, **kw).bound)
+    )
+    textbook = refine_body(records, 1.0 / 128.0, pos, dirs, **options)  # type: ignore[arg-type]
+    assert not np.allclose(ref.std["center_of_gravity"], textbook.std["center_of_gravity"], rtol=0.05)
