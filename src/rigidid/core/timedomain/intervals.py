@@ -188,8 +188,9 @@ def parameter_covariance(
         first += int(n) * channels
         blk = j[rows].reshape(int(n), channels, n_par)
         res = r[rows].reshape(int(n), channels)
-        v = np.mean(res**2, axis=0) * (n_rows / dof)
-        meat += np.einsum("tca,tcb,c->ab", blk, _correlate_rows(blk, rho), v, optimize=True)
+        w = np.sqrt(np.mean(res**2, axis=0) * (n_rows / dof))[None, :, None]
+        scaled = (blk * w).reshape(-1, n_par)
+        meat += scaled.T @ (_correlate_rows(blk, rho) * w).reshape(-1, n_par)
     meat = 0.5 * (meat + meat.T)
     step = -binv @ (j.T @ r)
     cov = binv @ meat @ binv + np.outer(step, step)
