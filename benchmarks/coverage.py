@@ -147,9 +147,20 @@ def table(results: dict[str, dict[str, np.ndarray]]) -> None:
         good = res["good"].astype(bool)
         a, b = np.mean(res["z"][good] ** 2, axis=0), np.mean(res["z_textbook"][good] ** 2, axis=0)
         print(f"| {name} | " + " | ".join(f"{x:.2f} / {y:.2f}" for x, y in zip(a, b, strict=True)) + " |")
+    print()
     for name, res in results.items():
-        ev = res["evaluations"][res["good"].astype(bool)]
-        print(f"{name}: {float(res['seconds']):.0f} s; fits stopped at the evaluation budget: {int(np.sum(ev >= 30))}")
+        good = res["good"].astype(bool)
+        ev, z, zt = res["evaluations"][good], res["z"][good][:, :6], res["z_textbook"][good][:, :6]
+        parts = []
+        for label, rows in (("converged", ev < 30), ("stopped at the budget", ev >= 30)):
+            if np.any(rows):
+                parts.append(f"{label} {int(rows.sum())}: coverage CG + J diag {np.mean(np.abs(z[rows]) <= 1.96):.3f} "
+                             f"(textbook {np.mean(np.abs(zt[rows]) <= 1.96):.3f})")  # fmt: skip
+        width = np.median(np.abs(zt / z))  # calibrated std over textbook std
+        print(
+            f"{name}: {float(res['seconds']):.0f} s of draws; median width calibrated / textbook {width:.2f}; "
+            + "; ".join(parts)
+        )
 
 
 def main() -> None:
