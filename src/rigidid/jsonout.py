@@ -337,12 +337,14 @@ def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
 
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
-    ``normalised_cost``, ``noise_from``, ``residuals`` and per quantity ``{"estimate", "std", "ci95"}``."""
+    ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from`` and per quantity
+    ``{"estimate", "std", "ci95"}``."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
         "normalised_cost": bound.normalised_cost,
         "noise_from": bound.noise_from,
         "residuals": bound.residuals,
+        "variance_from": bound.variance_from,
     }
     return {**head, **_body_intervals(bound)}
 

@@ -328,6 +328,11 @@ class RecordBoundResult(BaseModel):
     normalised_cost: float
     noise_from: Literal["pretrigger", "residual"]
     residuals: int
+    variance_from: Literal["sandwich"] | None = Field(
+        default=None,
+        description="how the std were estimated: sandwich = robust covariance from the fit's residual per impact "
+        "and channel, the decimation filter's correlation and the remaining Gauss-Newton step",
+    )
     center_of_gravity: Interval
 
 
