@@ -326,23 +326,27 @@ def _projector(design: Array) -> Any:
     return by_gram
 
 
-def _levenberg_marquardt(both: Any, theta0: Array, max_evaluations: int) -> tuple[Array, int, Array, Array]:
+def _levenberg_marquardt(
+    fun: Any, jacobian: Any, theta0: Array, max_evaluations: int
+) -> tuple[Array, int, Array, Array]:
     """Minimise ``|r(theta)|^2`` by Levenberg-Marquardt on the normal equations.
 
-    `both(theta)` gives the residual and its Jacobian. The damping is Marquardt's
-    (scaled by the diagonal of ``J^T J``), the step from a 51x51 solve: much cheaper than a
-    trust-region SVD of the tall Jacobian. Stops when a step lowers the cost by less than
-    1e-8 of it (relative) or `max_evaluations` is reached.
+    `fun(theta)` gives the residual, `jacobian(theta)` the residual and its Jacobian (computed
+    only at accepted points). The damping is Marquardt's (scaled by the diagonal of ``J^T J``),
+    the step from a 51x51 solve: much cheaper than a trust-region SVD of the tall Jacobian. A
+    rejected step multiplies the damping by 10, an accepted one divides it by 10. Stops when a
+    step lowers the cost by less than 1e-8 of it (relative) or after `max_evaluations`
+    residual evaluations.
     """
     theta = theta0
-    r, jm = both(theta)
+    r, jm = jacobian(theta)
     cost = float(r @ r)
     nfev = 1
-    mu = 1e-4
-    while nfev < max_evaluations:
+    mu = 1e-2
+    while nfev < max_evaluations and mu < 1e10:
         jtj = jm.T @ jm
         g = jm.T @ r
-        d = np.maximum(np.diag(jtj), 1e-12 * max(float(np.max(np.diag(jtj))), 1e-300))
+        d = np.maximum(np.diag(jtj), 1e-9 * max(float(np.max(np.diag(jtj))), 1e-300))
         try:
             step = np.linalg.solve(jtj + mu * np.diag(d), -g)
         except np.linalg.LinAlgError:
@@ -350,21 +354,20 @@ def _levenberg_marquardt(both: Any, theta0: Array, max_evaluations: int) -> tupl
             continue
         trial = theta + step
         try:
-            r_new, j_new = both(trial)
+            r_new = fun(trial)
             cost_new = float(r_new @ r_new)
         except np.linalg.LinAlgError:
             cost_new = math.inf
         nfev += 1
         if cost_new < cost:
             done = cost - cost_new <= 1e-8 * cost
-            theta, r, jm, cost = trial, r_new, j_new, cost_new
+            theta, cost = trial, cost_new
+            r, jm = jacobian(theta)
             mu = max(mu / 10.0, 1e-9)
             if done:
                 break
         else:
-            mu *= 4.0
-            if mu > 1e8:
-                break
+            mu *= 10.0
     return theta, nfev, r, jm
 
 
@@ -409,7 +412,7 @@ def refine_body(
     inertia_per_mass: ArrayLike,
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
-    max_evaluations: int = 30,
+    max_evaluations: int = 60,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -498,8 +501,11 @@ def refine_body(
     def both(theta: Array) -> tuple[Array, Array]:
         return _evaluate(theta, data, pos_l, dirs, omega, True)
 
+    def fun(theta: Array) -> Array:
+        return _evaluate(theta, data, pos_l, dirs, omega, False)[0]
+
     if max_evaluations > 0:
-        theta, nfev, r, jm = _levenberg_marquardt(both, theta0, max_evaluations)
+        theta, nfev, r, jm = _levenberg_marquardt(fun, both, theta0, max_evaluations)
     else:
         theta, nfev = theta0, 0
         r, jm = both(theta)
