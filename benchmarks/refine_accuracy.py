@@ -62,6 +62,7 @@ def main() -> None:
     parser.add_argument("--noise", type=float, nargs="+", default=[0.01, 0.05])
     parser.add_argument("--duration", type=float, default=8.0)
     parser.add_argument("--rate", type=float, default=512.0)
+    parser.add_argument("--verbose", action="store_true", help="one line per seed")
     parser.add_argument("--body", choices=["sample", "damped"], default="sample")
     args = parser.parse_args()
     body = BODY if args.body == "sample" else damped_body()
@@ -88,6 +89,12 @@ def main() -> None:
             # CRB at the truth: the error of a draw at the bound (norm of the CG std, largest diagonal std)
             rows["CRB at truth"].append((100 * np.linalg.norm(truth.std["center_of_gravity"]) / span,
                                          100 * np.max(np.diag(truth.std["inertia_per_mass"]) * MASS / jd)))  # fmt: skip
+            if args.verbose:
+                print(f"  seed {seed}: CG % span structured {rows['1 structured'][-1][0]:.4f} refined "
+                      f"{rows['3 output error'][-1][0]:.4f} bound {rows['CRB at truth'][-1][0]:.4f}; inertia % "
+                      f"{rows['1 structured'][-1][1]:.3f} / {rows['3 output error'][-1][1]:.3f} / "
+                      f"{rows['CRB at truth'][-1][1]:.3f}; cost {ref.normalised_cost:.3f}, {ref.evaluations} evals",
+                      flush=True)  # fmt: skip
             z_cg = np.abs(ref.center_of_gravity - CG) / ref.std["center_of_gravity"]
             z_j = np.abs(np.diag(ref.inertia_per_mass) * MASS - jd) / (np.diag(ref.std["inertia_per_mass"]) * MASS)
             covered += int(np.sum(z_cg <= 1.96) + np.sum(z_j <= 1.96))
