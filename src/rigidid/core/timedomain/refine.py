@@ -334,19 +334,19 @@ def _levenberg_marquardt(
     `fun(theta)` gives the residual, `jacobian(theta)` the residual and its Jacobian (computed
     only at accepted points). The damping is Marquardt's (scaled by the diagonal of ``J^T J``),
     the step from a 51x51 solve: much cheaper than a trust-region SVD of the tall Jacobian. A
-    rejected step multiplies the damping by 10, an accepted one divides it by 10. Stops when a
-    step lowers the cost by less than 1e-8 of it (relative) or after `max_evaluations`
-    residual evaluations.
+    rejected step multiplies the damping by 4, an accepted one divides it by 10. Stops when a
+    step lowers the cost by less than 1e-8 of it (relative) or 1e-3 (absolute: in noise-weighted
+    units, a move far below one standard error), or after `max_evaluations` residual evaluations.
     """
     theta = theta0
     r, jm = jacobian(theta)
     cost = float(r @ r)
     nfev = 1
-    mu = 1e-2
+    mu = 1e-4
     while nfev < max_evaluations and mu < 1e10:
         jtj = jm.T @ jm
         g = jm.T @ r
-        d = np.maximum(np.diag(jtj), 1e-9 * max(float(np.max(np.diag(jtj))), 1e-300))
+        d = np.maximum(np.diag(jtj), 1e-12 * max(float(np.max(np.diag(jtj))), 1e-300))
         try:
             step = np.linalg.solve(jtj + mu * np.diag(d), -g)
         except np.linalg.LinAlgError:
@@ -360,14 +360,14 @@ def _levenberg_marquardt(
             cost_new = math.inf
         nfev += 1
         if cost_new < cost:
-            done = cost - cost_new <= 1e-8 * cost
+            done = cost - cost_new <= max(1e-8 * cost, 1e-3)
             theta, cost = trial, cost_new
             r, jm = jacobian(theta)
             mu = max(mu / 10.0, 1e-9)
             if done:
                 break
         else:
-            mu *= 10.0
+            mu *= 4.0
     return theta, nfev, r, jm
 
 
