@@ -4,7 +4,10 @@ Base: samples/four-mounts (six modes 8.0-26.1 Hz, a pair 2.1 % apart), 8 sensors
 512 Hz, 8 s, 1 % noise, 0.1 s pre-trigger, the sample's own (non-proportional) damping
 0.3-6.9 %. Cells vary one factor: noise 0.5/2/5 %; 6, 12, 32 sensors
 (benchmarks/records_scenario.layout); 1, 2, 5 impacts; proportional damping giving a mean
-damping ratio of 0.1, 1, 5, 10 %; sample rate 2.5x and 100x the highest mode; records of 5 and
+damping ratio of 0.1, 1, 5, 10 %; close pairs 1 % and 3 % apart (every mount's y stiffness
+times 2.045, modes 26.1/26.35 Hz, or 0.94, 14.8/15.2 Hz); an elastic mode (1 % damping, 20 % of
+the record RMS, random shape) inside the band (18 Hz) or just above it (1.3x the highest mode);
+sample rate 2.5x and 100x the highest mode; records of 5 and
 100 periods of the lowest mode. Per cell: how many seeds gave six modes and a body (else the
 message), RMS errors over seeds of the CG (% of the sensor span, Euclidean) and of the inertia
 diagonal (%, RMS over the three entries) of the refined answer and of the structured one, and
@@ -43,7 +46,31 @@ def proportional(zeta: float):  # type: ignore[no-untyped-def]
     return replace(BODY, mounts=mounts)
 
 
-BASE = {"sensors": 8, "impacts": 2, "rate": 512.0, "duration": 8.0, "noise": 0.01, "zeta": None}
+def stiffer_y(factor: float):  # type: ignore[no-untyped-def]
+    """The sample body with every mount's y stiffness times `factor` (moves the modes into close pairs)."""
+    mounts = tuple(Mount(mt.position, mt.stiffness @ np.diag([1.0, factor, 1.0]), mt.damping) for mt in BODY.mounts)
+    return replace(BODY, mounts=mounts)
+
+
+def add_elastic(recs, f_hz: float, rate: float, seed: int):  # type: ignore[no-untyped-def]
+    """Add a 1 %-damped elastic mode at `f_hz` to every record from the impulse on: a seeded random
+    shape over the sensors, amplitude 20 % of each record's RMS (the rigid modes' model lacks it)."""
+    rng = np.random.default_rng(1000 + seed)
+    shape = rng.standard_normal(recs[0].shape[1])
+    w, zeta = 2 * np.pi * f_hz, 0.01
+    out = []
+    for r in recs:
+        n0 = round(0.1 * rate)
+        t = np.arange(r.shape[0] - n0) / rate
+        wave = np.exp(-zeta * w * t) * np.sin(w * np.sqrt(1 - zeta**2) * t + rng.uniform(0, 2 * np.pi))
+        extra = np.zeros_like(r)
+        extra[n0:] = np.outer(wave, shape) * (0.2 * np.sqrt(np.mean(r**2)) / np.sqrt(np.mean(wave**2)))
+        out.append(r + extra)
+    return out
+
+
+BASE = {"sensors": 8, "impacts": 2, "rate": 512.0, "duration": 8.0, "noise": 0.01, "zeta": None, "ky": 1.0,
+        "elastic": None}  # fmt: skip
 CELLS = {
     "base": {},
     "noise-0.5%": {"noise": 0.005},
@@ -58,6 +85,10 @@ CELLS = {
     "damping-1%": {"zeta": 0.01},
     "damping-5%": {"zeta": 0.05},
     "damping-10%": {"zeta": 0.10},
+    "pair-1%": {"ky": 2.045},
+    "pair-3%": {"ky": 0.94},
+    "elastic-in-band": {"elastic": 18.0},
+    "elastic-above-band": {"elastic": 1.3 * F_HIGH},
     "rate-2.5x": {"rate": 2.5 * F_HIGH},
     "rate-100x": {"rate": 100 * F_HIGH},
     "length-5-periods": {"duration": 5 / F_LOW},
@@ -68,6 +99,7 @@ CELLS = {
 def cell(spec: dict, seeds: int):  # type: ignore[no-untyped-def]
     s = {**BASE, **spec}
     body = BODY if s["zeta"] is None else proportional(s["zeta"])
+    body = body if s["ky"] == 1.0 else stiffer_y(s["ky"])
     pos, dirs = layout(int(s["sensors"]))
     impacts = (IMPACTS + MORE_IMPACTS)[: int(s["impacts"])]
     span = float(np.max(np.ptp(pos, axis=0)))
@@ -77,6 +109,8 @@ def cell(spec: dict, seeds: int):  # type: ignore[no-untyped-def]
     for seed in range(seeds):
         recs = impulse_records(body, pos, dirs, impacts, sample_rate=s["rate"], duration=s["duration"],
                                pretrigger=0.1, noise=s["noise"], seed=seed)  # fmt: skip
+        if s["elastic"] is not None:
+            recs = add_elastic(recs, s["elastic"], s["rate"], seed)
         dt = 1.0 / s["rate"]
         t0 = time.perf_counter()
         try:

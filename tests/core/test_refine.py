@@ -14,11 +14,15 @@ from rigidid.core.identify import identify
 from rigidid.core.simulate import system_matrices
 from rigidid.core.timedomain import estimate_modes, impulse_records
 from rigidid.core.timedomain.refine import (
+    MAX_ROWS,
     N_PARAMETERS,
     _Data,
     _evaluate,
+    _fit_factor,
     _Frame,
+    _levenberg_marquardt,
     _modes,
+    _projector,
     good_fit,
     record_bound,
     refine_body,
@@ -118,3 +122,42 @@ def test_a_bad_start_is_flagged_by_the_cost(rig) -> None:  # type: ignore[no-unt
         damping_per_mass=c, max_evaluations=2,
     )  # fmt: skip
     assert not good_fit(ref)
+
+
+def test_fit_runs_on_the_raw_samples_when_they_fit() -> None:
+    # decimation's filter drops FIR_HALF_LENGTH q samples at the start of each decay, where the
+    # most signal is: the refinement decimates only when the raw decays exceed MAX_ROWS
+    assert _fit_factor([4000, 4000], 8, 2) == 1
+    assert _fit_factor([MAX_ROWS // 8, MAX_ROWS // 8], 8, 4) == 2
+    assert _fit_factor([MAX_ROWS, MAX_ROWS], 8, 3) == 3  # nothing fits: the modal estimate's factor
+    assert _fit_factor([10, 10], 8, 0) == 1
+
+
+def test_projector_matches_least_squares() -> None:
+    rng = np.random.default_rng(3)
+    design = rng.standard_normal((200, 12)) * np.logspace(-3, 3, 12)  # badly scaled columns
+    y = rng.standard_normal((200, 3))
+    for x in (y[:, 0], y):
+        coef, resid = _projector(design)(x)
+        ref = np.linalg.lstsq(design, x, rcond=None)[0]
+        np.testing.assert_allclose(coef, ref, rtol=1e-8, atol=1e-12)
+        np.testing.assert_allclose(resid, x - design @ ref, atol=1e-10)
+
+
+def test_levenberg_marquardt_reaches_the_minimum_from_far() -> None:
+    # exponential decay fit from a start whose residual is ~100x the minimum's
+    t = np.linspace(0.0, 4.0, 80)
+    y = 2.0 * np.exp(-1.3 * t) + 0.5 * np.cos(3.0 * t)
+
+    def fun(p: np.ndarray) -> np.ndarray:
+        return np.asarray(p[0] * np.exp(-p[1] * t) + p[2] * np.cos(p[3] * t) - y)
+
+    def both(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        e, c = np.exp(-p[1] * t), np.cos(p[3] * t)
+        jm = np.column_stack([e, -p[0] * t * e, c, -p[2] * t * np.sin(p[3] * t)])
+        return fun(p), jm
+
+    theta, nfev, r, _ = _levenberg_marquardt(fun, both, np.array([1.0, 0.5, 1.0, 2.9]), 100)
+    np.testing.assert_allclose(theta, [2.0, 1.3, 0.5, 3.0], atol=1e-6)
+    assert float(r @ r) < 1e-12
+    assert nfev <= 100
