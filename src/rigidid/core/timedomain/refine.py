@@ -516,7 +516,8 @@ def refine_body(
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], max(1, int(decimation)))
+    fit_factor = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], fit_factor)
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
