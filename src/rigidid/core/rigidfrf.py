@@ -24,6 +24,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -179,10 +180,10 @@ def rigid_frf_fit(
         cols_k.append(_sym(e) @ xs)
     cols_c = [1j * u[:, None, None] * c for c in cols_k] if damping else []
     cols_g = []
-    for b in range(basis.shape[1]):
+    for jb in range(basis.shape[1]):
         for i in range(6 * q):
             g = np.zeros((n, 6 * q), dtype=complex)
-            g[:, i] = u**2 * basis[:, b]
+            g[:, i] = u**2 * basis[:, jb]
             cols_g.append(g.reshape(n, 6, q))
 
     def stack(cols: list[CArray]) -> Array:
@@ -206,8 +207,8 @@ def rigid_frf_fit(
     else:
         a_p, b_p = a_m, b
     nm = np.linalg.norm(a_m, axis=0)
-    sol, _, rank, sv = np.linalg.lstsq(a_p / nm, b_p, rcond=None)
-    if rank < 10 or sv[-1] < 1e-6 * sv[0]:
+    sol, _, rank_m, sv = np.linalg.lstsq(a_p / nm, b_p, rcond=None)
+    if rank_m < 10 or sv[-1] < 1e-6 * sv[0]:
         raise IdentificationError(
             f"the {q} reference(s) over these lines do not determine the mass, CG and inertia with the mounts "
             "fitted (at least 2 references at different points and in different directions, lines off the supports)"
@@ -231,7 +232,8 @@ def rigid_frf_fit(
         if not q2.shape[1]:
             return r2
         flat = r2.reshape(2 * n, -1)
-        return (flat - q2 @ (q2.T @ flat)).reshape(r2.shape)
+        out: Array = (flat - q2 @ (q2.T @ flat)).reshape(r2.shape)
+        return out
 
     sym_basis = [_sym(e) for e in np.eye(21)]
 
@@ -249,7 +251,7 @@ def rigid_frf_fit(
         a = a + 1j * u[:, None, None] * _sym(cc)[None]
         xm = -(u**2)[:, None, None] * np.linalg.solve(a, np.broadcast_to(tft.astype(complex), (n, 6, q)))
         ainv = np.linalg.solve(a, np.broadcast_to(np.eye(6, dtype=complex), (n, 6, 6)))
-        da = [-(u**2)[:, None, None] * mass_matrix_from_parameters(e)[None] for e in np.eye(10)]
+        da: list[NDArray[Any]] = [-(u**2)[:, None, None] * mass_matrix_from_parameters(e)[None] + 0j for e in np.eye(10)]
         da += [np.broadcast_to(sb, (n, 6, 6)) for sb in sym_basis]
         if damping:
             da += [1j * u[:, None, None] * sb[None] for sb in sym_basis]
