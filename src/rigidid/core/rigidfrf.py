@@ -251,7 +251,7 @@ def rigid_frf_fit(
         a = a + 1j * u[:, None, None] * _sym(cc)[None]
         xm = -(u**2)[:, None, None] * np.linalg.solve(a, np.broadcast_to(tft.astype(complex), (n, 6, q)))
         ainv = np.linalg.solve(a, np.broadcast_to(np.eye(6, dtype=complex), (n, 6, 6)))
-        da: list[NDArray[Any]] = [-(u**2)[:, None, None] * mass_matrix_from_parameters(e)[None] + 0j for e in np.eye(10)]
+        da: list[NDArray[Any]] = [-(u**2)[:, None, None] * mass_matrix_from_parameters(e)[None] for e in np.eye(10)]
         da += [np.broadcast_to(sb, (n, 6, 6)) for sb in sym_basis]
         if damping:
             da += [1j * u[:, None, None] * sb[None] for sb in sym_basis]
