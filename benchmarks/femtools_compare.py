@@ -20,7 +20,9 @@ its automatic band. femtools: ``rigid_body_properties`` as documented, (a) defau
 from rigidid's lower band edge to 60 Hz (a fifth of the elastic mode: chosen knowing the
 truth, in femtools' favour), (d) ``restraint="inertia", mount_k="fit"`` on rigidid's band,
 and on mounts (e) the true mount stiffness given (``mount_k``, truth rigidid does not get)
-on rigidid's band.
+on rigidid's band. rigidid's mass line chooses its mount model (``supports="auto"``: the exact
+rigid-body fit of ``rigidid.core.rigidfrf`` when it fits clearly better than the first-order
+correction); the first-order correction alone is shown on the documented example.
 
 Then femtools' documented example (its docstring of ``rigid_body_properties``: 12.5 kg, CG
 (0.1, -0.05, 0.2) m, inertia diag(0.8, 1.1, 1.5) kg m^2 on four 900 N/m springs, 24 sensors
@@ -198,6 +200,13 @@ def documented_example(rbpe: Any) -> None:
             lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
         ),
     ]
+    runs.append(
+        (
+            "rigidid mass_line first-order supports only",
+            lambda: mass_line(f, h, pos, dirs, pos[inputs], dirs[inputs], band=(6.0, 15.0), supports="first_order"),
+            lambda r: (r.mass, r.center_of_gravity, r.inertia_tensor),
+        )
+    )
     f_high = np.linspace(30.0, 75.0, 21)
     h_high = accelerance(body, pos, dirs, pos[inputs], dirs[inputs], f_high)
     runs.append(

@@ -69,6 +69,7 @@ def test_simulate_frf_then_identify_massline_from_the_command_line(tmp_path: Pat
     out = json.loads(done.stdout)
     body = json.loads((FOUR / "body.json").read_text())
     assert out["route"] == "massline" and out["band_source"] == "automatic"
+    assert out["supports"] in ("exact", "first_order") and out["supports_reason"] in out["route_reason"]
     assert abs(out["mass_measured"] / body["mass"] - 1.0) < 0.01
     assert out["mass_given"] == body["mass"]  # the layout's mass
     assert out["mass_difference"] == pytest.approx(out["mass_measured"] - body["mass"])

@@ -205,7 +205,7 @@ def identify_massline(
         reason = (
             "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
             "the mass is measured through the force, no mounts or mass needed"
-        )
+        ) + (f"; supports: {result.supports_reason}" if result.supports_reason else "")
     else:
         from rigidid.core.massline import mass_from_residues
         from rigidid.core.statespace import poles_from_modal

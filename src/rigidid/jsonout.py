@@ -554,6 +554,8 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         "frequencies_used": int(ml.frequencies_used),
         "relative_residual": float(ml.residual),
         "corrections": list(ml.corrections),
+        "supports": ml.supports,
+        "supports_reason": ml.supports_reason,
         "mass_given": None,
         "mass_difference": None,
         "mass_difference_relative": None,

@@ -24,6 +24,7 @@ parameters and ``q >= 2`` references in general position determine them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,6 +32,9 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.frfmodes import residues_lsfd
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
+
+if TYPE_CHECKING:
+    from rigidid.core.rigidfrf import RigidFrfFit
 
 __all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line"]
 
@@ -68,6 +72,11 @@ class MassLine:
         RMS relative misfit of the model to the rigid coordinates in the band.
     corrections : tuple of str
         The correction terms fitted (``"stiffness"``, ``"damping"``, ``"upper_residual"``).
+    supports : str
+        How the mounts were modelled: ``"first_order"`` (the ``1/w^2``, ``i/w`` terms),
+        ``"exact"`` (:func:`rigidid.core.rigidfrf.rigid_frf_fit`) or ``"none"``.
+    supports_reason : str
+        Why (one sentence; empty from :func:`mass_from_residues`).
     """
 
     mass: float
@@ -78,6 +87,8 @@ class MassLine:
     frequencies_used: int
     residual: float
     corrections: tuple[str, ...]
+    supports: str = "first_order"
+    supports_reason: str = ""
 
 
 def _peaks(s: Array) -> NDArray[np.intp]:
@@ -192,6 +203,7 @@ def mass_line(
     damping: bool = True,
     upper_residual: bool = True,
     elastic_frequency: float | None = None,
+    supports: str = "auto",
 ) -> MassLine:
     """Mass, CG and inertia from accelerance FRFs by the mass line.
 
@@ -215,6 +227,11 @@ def mass_line(
         that mode's own term ``x / (1 - x)``, ``x = (w / w_e)^2``, plus ``w^2``;
         without it, ``w^2`` and ``w^4``. Found with the band when the band is
         automatic.
+    supports : {"auto", "exact", "first_order"}
+        How the mounts enter: ``"first_order"`` the ``1/w^2`` and ``i/w`` terms
+        above; ``"exact"`` the rigid-body model ``K X + i w C X - w^2 M X = -w^2
+        T_f^T`` fitted line by line (:func:`rigidid.core.rigidfrf.rigid_frf_fit`);
+        ``"auto"`` the exact fit when `stiffness` is on (see Notes).
 
     Returns
     -------
@@ -237,7 +254,11 @@ def mass_line(
     well conditioned whatever the units. The fit is exact for a rigid body
     on massless mounts to first order in ``(w_rigid / w)^2`` with the
     stiffness term, and to first order in ``(w / w_elastic)^2`` with the
-    upper residual.
+    upper residual. With `supports` ``"exact"`` (or ``"auto"`` choosing it) the
+    mounts are modelled exactly (:mod:`rigidid.core.rigidfrf`) over at most
+    :data:`EXACT_LINES` evenly spaced lines of the band; ``"auto"`` takes that fit
+    when its relative misfit is below :data:`AUTO_EXACT_RATIO` times the
+    first-order fit's, and ``residual`` is then the exact fit's.
     """
     f = np.asarray(frequencies, dtype=float).reshape(-1)
     h = np.asarray(frf, dtype=complex)
@@ -305,7 +326,28 @@ def mass_line(
     fitted = design @ coef
     residual = float(np.sqrt(np.mean((fitted - target) ** 2)) / np.sqrt(np.mean(target**2)))
     y0 = coef[0].reshape(6, q)  # M^-1 T_f^T (scaled rigid coordinates per unit force)
-    m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+    support_model, why = _support_model(supports, stiffness)
+    fit: RigidFrfFit | None = None
+    if support_model in ("exact", "auto"):
+        from rigidid.core.rigidfrf import rigid_frf_fit
+
+        upper = design[:n_f, 1 + int(stiffness) + int(damping) :]  # the upper-residual columns (real)
+        every = -(-n_f // EXACT_LINES)  # every k-th line: the exact fit's cost grows with lines x references^2
+        try:
+            fit = rigid_frf_fit(
+                w[::every], y.reshape(6, q, n_f)[:, :, ::every], tf.T, damping=damping, residual_basis=upper[::every]
+            )
+        except IdentificationError:
+            if support_model == "exact":
+                raise
+            fit = None
+        if support_model == "auto":
+            support_model, why = _auto_supports(fit, residual)
+    if support_model == "exact" and fit is not None:
+        m, cg, inertia = _body_from_parameters(fit.parameters, origin, span)
+        residual = fit.residual
+    else:
+        m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
     return MassLine(
         mass=m,
         center_of_gravity=cg,
@@ -315,7 +357,58 @@ def mass_line(
         frequencies_used=n_f,
         residual=residual,
         corrections=extra,
+        supports=support_model,
+        supports_reason=why,
     )
+
+
+def _support_model(supports: str, stiffness: bool) -> tuple[str, str]:
+    """The mount model :func:`mass_line` uses, and why."""
+    if supports not in ("auto", "exact", "first_order"):
+        raise InputError(f"supports must be 'auto', 'exact' or 'first_order', got {supports!r}")
+    if not stiffness:
+        return "none", "no stiffness correction asked for: the mounts are neglected"
+    if supports == "first_order":
+        return "first_order", "first-order mount correction asked for"
+    if supports == "exact":
+        return "exact", "exact rigid-body fit of M, K and C asked for"
+    return "auto", ""
+
+
+EXACT_LINES = 300
+"""At most this many lines (every k-th of the band) go into the exact rigid-body fit of
+:func:`mass_line` (with six references and 2000 lines it took 17 s; 300 lines suffice for noise-free
+data, and on noisy data the exact fit is only taken when the first-order one misfits)."""
+
+AUTO_EXACT_RATIO = 0.5
+"""``supports="auto"`` takes the exact rigid-body fit when its misfit is below this share of the
+first-order fit's: on noisy FRFs far above the supports the two fit alike and the first-order one
+is the more accurate (benchmarks/femtools_compare.py, benchmarks/frf_accuracy.py); near the
+supports only the exact one fits (femtools' documented example)."""
+
+
+def _auto_supports(fit: RigidFrfFit | None, first_order_residual: float) -> tuple[str, str]:
+    """Choose between the exact and the first-order mount model by their misfits."""
+    if fit is None:
+        return "first_order", "the exact rigid-body fit is not determined by these lines: first-order mount correction"
+    if fit.residual < AUTO_EXACT_RATIO * first_order_residual:
+        return "exact", (
+            f"the exact rigid-body fit of M, K and C explains the band (misfit {fit.residual:.2g}) better than "
+            f"the first-order mount correction ({first_order_residual:.2g}): the supports are not negligible"
+        )
+    return "first_order", (
+        f"the first-order mount correction fits as well as the exact rigid-body fit (misfit "
+        f"{first_order_residual:.2g} against {fit.residual:.2g}): supports far below the band"
+    )
+
+
+def _body_from_parameters(theta: Array, origin: Array, span: float) -> tuple[float, Array, Array]:
+    """Mass, CG and inertia about the CG from the ten parameters of ``M`` in the scaled frame."""
+    m = float(theta[0])
+    c_scaled = theta[1:4] / m
+    j_o = _mass_matrix(theta)[3:, 3:]
+    inertia = span**2 * (j_o + m * skew(c_scaled) @ skew(c_scaled))
+    return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
 
 
 def mass_from_residues(

@@ -1,0 +1,110 @@
+"""The exact rigid-body fit of accelerance FRFs: known truth near and on the supports."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rigidid.core.frf import accelerance
+from rigidid.core.geometry import sensor_matrix
+from rigidid.core.massline import mass_line
+from rigidid.core.rigidfrf import mass_matrix_from_parameters, rigid_frf_fit
+from rigidid.core.simulate import Body, Mount, system_matrices
+from rigidid.errors import InputError
+from tests.bodies import random_body, random_layout
+from tests.tolerances import MASSLINE_EXACT_REL, RIGIDFRF_EXACT_REL, RIGIDFRF_NOISY
+
+
+def _soft_table_test():
+    """A 20 kg box on three vertical springs (three motions free), hammered at 5 points, 16 sensors."""
+    corners = np.array([[x, y, z] for x in (-0.6, 0.6) for y in (-0.3, 0.3) for z in (0.0, 0.5)])
+    pos = np.vstack([corners, corners[::2] + np.array([0.05, 0.0, 0.0])])
+    dirs = np.vstack([np.tile(np.eye(3)[[2]], (8, 1)), np.eye(3)[[0, 1, 0, 1]]])
+    dirs[:8:3] = np.eye(3)[0]
+    dirs[1:8:3] = np.eye(3)[1]
+    spring = np.diag([0.0, 0.0, 2.0e3])
+    feet = ([-0.5, -0.25, 0.0], [0.5, -0.25, 0.0], [0.0, 0.3, 0.0])
+    mounts = tuple(Mount(np.array(p), spring, np.zeros((3, 3))) for p in feet)
+    inertia = np.array([[0.9, 0.05, 0.0], [0.05, 2.1, -0.1], [0.0, -0.1, 2.6]])
+    body = Body(20.0, np.array([0.05, 0.02, 0.22]), inertia, mounts)
+    rpos = corners[[0, 3, 5, 6, 7]]
+    rdirs = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0], [0.0, 0.6, 0.8]])
+    return body, pos, dirs, rpos, rdirs
+
+
+def test_bodies_on_soft_supports_near_the_band_are_exact():
+    body, pos, dirs, rpos, rdirs = _soft_table_test()
+    k, m = system_matrices(body)[1], system_matrices(body)[0]
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real)) / (2 * np.pi)
+    f = np.linspace(1.6 * top, 4.0 * top, 25)  # just above the support modes
+    h = accelerance(body, pos, dirs, rpos, rdirs, f)
+    first = mass_line(f, h, pos, dirs, rpos, rdirs, band=(f[0], f[-1]), supports="first_order")
+    assert abs(first.mass / body.mass - 1.0) > 1e-3  # the first-order correction is not enough here
+    r = mass_line(f, h, pos, dirs, rpos, rdirs, band=(f[0], f[-1]))
+    assert r.supports == "exact" and "not negligible" in r.supports_reason
+    assert abs(r.mass / body.mass - 1.0) < RIGIDFRF_EXACT_REL
+    np.testing.assert_allclose(r.center_of_gravity, body.center_of_gravity, atol=RIGIDFRF_EXACT_REL)
+    np.testing.assert_allclose(r.inertia_tensor, body.inertia_tensor, atol=RIGIDFRF_EXACT_REL * 3.0)
+
+
+def _scaled(body, pos, dirs, rpos, rdirs, f, **kw):
+    """Rigid coordinates and force columns about the sensor centroid, as mass_line forms them."""
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, **kw)
+    origin = pos.mean(axis=0)
+    t = sensor_matrix(pos - origin, dirs)
+    x = np.linalg.lstsq(t, h.reshape(pos.shape[0], -1), rcond=None)[0].reshape(6, rpos.shape[0], f.size)
+    return origin, x, sensor_matrix(rpos - origin, rdirs).T
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_random_bodies_on_mounts_through_their_rigid_modes_are_exact(seed):
+    rng = np.random.default_rng(seed)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    m, k, _ = system_matrices(body)
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real)) / (2 * np.pi)
+    f = np.linspace(0.2 * top, 2.0 * top, 60)  # across the rigid-body modes, with damping
+    origin, x, tft = _scaled(body, pos, dirs, rpos, np.eye(3), f)
+    fit = rigid_frf_fit(2 * np.pi * f, x, tft)
+    mo = fit.mass_matrix
+    assert fit.residual < 1e-9
+    assert abs(mo[0, 0] / body.mass - 1.0) < RIGIDFRF_EXACT_REL
+    cg = origin + np.array([mo[5, 1], mo[3, 2], mo[4, 0]]) / mo[0, 0]  # [m c]x below the diagonal
+    np.testing.assert_allclose(cg, body.center_of_gravity, atol=RIGIDFRF_EXACT_REL * np.ptp(pos))
+    np.testing.assert_allclose(mo, mass_matrix_from_parameters(fit.parameters))
+    # the mounts as the three references see them: K X and C X reproduced (K itself is not determined)
+    w = 2 * np.pi * f
+    lhs = fit.stiffness @ x[:, :, 5] + 1j * w[5] * fit.damping @ x[:, :, 5] - w[5] ** 2 * mo @ x[:, :, 5]
+    np.testing.assert_allclose(lhs, -(w[5] ** 2) * tft, atol=1e-8 * np.abs(w[5] ** 2 * tft).max())
+
+
+def test_noisy_frfs_near_the_supports():
+    body, pos, dirs, rpos, rdirs = _soft_table_test()
+    m, k, _ = system_matrices(body)
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real)) / (2 * np.pi)
+    f = np.linspace(1.6 * top, 4.0 * top, 40)
+    origin, x, tft = _scaled(body, pos, dirs, rpos, rdirs, f, noise=0.01, rng=np.random.default_rng(8))
+    fit = rigid_frf_fit(2 * np.pi * f, x, tft, damping=False)
+    assert abs(fit.parameters[0] / body.mass - 1.0) < RIGIDFRF_NOISY["mass"]
+    cg = origin + fit.parameters[1:4] / fit.parameters[0]
+    assert np.linalg.norm(cg - body.center_of_gravity) / np.ptp(pos, axis=0).max() < RIGIDFRF_NOISY["cg_span"]
+
+
+def test_free_free_mass_line_is_still_exact_and_bad_arguments_are_refused():
+    rng = np.random.default_rng(1)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    f = np.linspace(0.25, 400.0, 800)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f)
+    for supports in ("exact", "first_order"):
+        r = mass_line(f, h, pos, dirs, rpos, np.eye(3), band=(200.0, 400.0), supports=supports)
+        assert r.supports == supports
+        assert abs(r.mass / body.mass - 1.0) < MASSLINE_EXACT_REL
+    with pytest.raises(InputError, match="supports"):
+        mass_line(f, h, pos, dirs, rpos, np.eye(3), band=(200.0, 400.0), supports="second")
+    with pytest.raises(InputError, match="shape"):
+        rigid_frf_fit(f, np.zeros((6, 3, 5)), np.zeros((6, 3)))
