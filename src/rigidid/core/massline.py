@@ -177,8 +177,7 @@ def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) ->
     if rank10 < 10 or svals[-1] < 1e-4 * svals[0]:
         raise IdentificationError(
             f"the {q} reference(s) do not determine the mass, CG and inertia from the mass line "
-            "(at least 3 references at different points and in different directions are needed; "
-            "`rigidid plan --references` checks a set)"
+            "(at least 3 references at different points and in different directions are needed)"
         )
     theta = sol / norms
     m = float(theta[0])
