@@ -398,6 +398,23 @@ def identify(
     )
 
 
+def _suspect_mode(ident: Identification) -> str:
+    """A sentence naming a used mode that fits rigid motion far worse than the others (an elastic mode?), or ''."""
+    residual = np.asarray(ident.diagnostics.rigid_fit_residual, dtype=float)
+    if residual.size < 2:
+        return ""
+    k = int(np.argmax(residual))
+    others = float(np.median(np.delete(residual, k)))
+    if not (residual[k] > 0.05 and residual[k] > 20.0 * others):
+        return ""
+    return (
+        f"; the mode at {ident.frequency_hz[k]:.4g} Hz fits rigid-body motion with a residual of "
+        f"{residual[k]:.2f} against {others:.2g} for the others: it may be an elastic mode taken for a "
+        "rigid one, which makes this answer wrong too; estimate one more mode (--n-modes 7) and choose "
+        "the six rigid-body modes (--modes), or end --band below it"
+    )
+
+
 def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -> list[str]:
     """Refuse modes that are not rigid-body modes; warn of a misfitting sensor or damping in percent."""
     import warnings
@@ -1486,7 +1503,9 @@ def with_refinement(
         )
     except (np.linalg.LinAlgError, InputError, ValueError) as exc:
         warnings.warn(
-            f"refinement on the records failed ({exc}); kept the answer from the modes", RefinementWarning, stacklevel=2
+            f"refinement on the records failed ({exc}); kept the answer from the modes" + _suspect_mode(ident),
+            RefinementWarning,
+            stacklevel=2,
         )
         return result
     finally:
@@ -1496,7 +1515,7 @@ def with_refinement(
         warnings.warn(
             f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
             "(about 1 at a good fit): a local minimum or a model that does not fit the records; "
-            "kept the answer from the modes",
+            "kept the answer from the modes" + _suspect_mode(ident),
             RefinementWarning,
             stacklevel=2,
         )
