@@ -69,3 +69,23 @@ def match_columns(
             location=where,
         )
     return [seen[s] for s in wanted], skipped
+
+
+def column_order(names: Sequence[str] | None, count: int, wanted: Sequence[str], src: str, where: str) -> list[int]:
+    """Index of each of `wanted` among a record's `count` sensor columns.
+
+    Unnamed columns (`names` None) must be the layout's sensors in layout order,
+    as many as it has; named ones are matched by :func:`match_columns`.
+
+    Raises
+    ------
+    InputError
+        Another number of unnamed columns, or what :func:`match_columns` refuses.
+    """
+    if names is None:
+        if count != len(wanted):
+            raise InputError(
+                f"{count} sensor columns after time, the layout has {len(wanted)} sensors", source=src, location=where
+            )
+        return list(range(count))
+    return match_columns(names, wanted, src, where)[0]

@@ -26,7 +26,7 @@ from rigidid.errors import InputError
 from rigidid.io.atomic import atomic_path
 from rigidid.io.binary_records import BINARY_SUFFIXES
 from rigidid.io.columns import column as _column
-from rigidid.io.columns import match_columns
+from rigidid.io.columns import column_order
 from rigidid.io.columns import row as _where
 
 __all__ = [
@@ -138,17 +138,8 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
     from rigidid.io.binary_records import read_binary
 
     raw = read_binary(path)
-    if raw.names is None:
-        if raw.data.shape[1] != len(wanted):
-            raise InputError(
-                f"{raw.data.shape[1]} sensor columns after time, the layout has {len(wanted)} sensors",
-                source=src,
-                location=raw.field,
-            )
-        data = raw.data
-    else:
-        order, _ = match_columns(raw.names, wanted, src, raw.field)
-        data = raw.data if order == list(range(len(order))) else np.ascontiguousarray(raw.data[:, order])
+    order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
+    data = raw.data if order == list(range(len(order))) else np.ascontiguousarray(raw.data[:, order])
     n = data.shape[0]
     if n < MIN_ROWS:
         raise InputError(f"{n} samples; a record needs at least {MIN_ROWS}", source=src, location=raw.field)

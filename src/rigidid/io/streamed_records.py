@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.io.binary_records import BINARY_SUFFIXES
 from rigidid.io.columns import column as _column
-from rigidid.io.columns import match_columns
+from rigidid.io.columns import column_order
 from rigidid.io.columns import row as _where
 from rigidid.progress import ProgressCallback
 
@@ -153,16 +153,7 @@ def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCa
         if found is not None:
             return _npy_source(path, wanted, src, progress, *found)
     raw = read_binary(path)
-    if raw.names is None:
-        if raw.data.shape[1] != len(wanted):
-            raise InputError(
-                f"{raw.data.shape[1]} sensor columns after time, the layout has {len(wanted)} sensors",
-                source=src,
-                location=raw.field,
-            )
-        order = list(range(len(wanted)))
-    else:
-        order, _ = match_columns(raw.names, wanted, src, raw.field)
+    order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
     n = raw.data.shape[0]
     step = raw.dt if raw.time is None else None
     task = f"reading {path.name}"
