@@ -151,7 +151,7 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
             "free_residual": fit.free_residual,
             "free_parameters": fit.free_parameters,
             "free_aic": fit.free_aic,
-            "adequate": fit.adequate,
+            "adequate": fit.aic_adequate,
             **mount_test_to_dict(result),
         }
     if result.torque_roll_axis is not None:
@@ -249,7 +249,7 @@ def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
 
 
 def mount_test_to_dict(result: IdentifyResult) -> dict[str, Any]:
-    """The mount model's F test keys: ``f_statistic``, ``f_dof``, ``p_value``, ``significance``, ``aic_adequate``...."""
+    """The mount model's F test keys: ``f_statistic``, ``f_dof``, ``p_value``, ``significance``, ``f_test_adequate``."""
     from rigidid.core.mounts import ADEQUATE_P
 
     assert result.mount_model is not None
@@ -260,7 +260,7 @@ def mount_test_to_dict(result: IdentifyResult) -> dict[str, Any]:
         "f_dof": None if model.f_dof is None else list(model.f_dof),
         "p_value": model.p_value,
         "significance": None if model.p_value is None else ADEQUATE_P,
-        "aic_adequate": fit.aic_adequate,
+        "f_test_adequate": model.adequate,
         "noise": None if fit.noise is None else noise_to_dict(fit.noise),
         "groups": (model.parameters - 9) // 6,
     }

@@ -423,10 +423,7 @@ class MountModelResult(_Strict):
     free_residual: float | None = Field(description="the same for the free route (null with five modes)")
     free_parameters: int
     free_aic: float | None
-    adequate: bool | None = Field(
-        description="the mount model explains the modes: the F test's p_value >= significance when it was made, "
-        "else the mount model's AIC is not worse than the free route's"
-    )
+    adequate: bool | None = Field(description="the mount model's AIC is not worse than the free route's")
     f_statistic: float | None = Field(
         default=None,
         description="F test of the mount model against any linear rigid-body model on noise-weighted output residuals",
@@ -434,7 +431,11 @@ class MountModelResult(_Strict):
     f_dof: tuple[int, int] | None = Field(default=None, description="its degrees of freedom (numerator, denominator)")
     p_value: float | None = Field(default=None, description="chance of an F this large when the mount model is right")
     significance: float | None = Field(default=None, description="p_value below this flags the mount model")
-    aic_adequate: bool | None = Field(default=None, description="the mount model's AIC is not worse than the free's")
+    f_test_adequate: bool | None = Field(
+        default=None,
+        description="the F test's verdict, p_value >= significance (null when no test could be made); "
+        "prefer it to adequate",
+    )
     noise: dict[str, float] | None = Field(default=None, description="noise levels weighting the output residuals")
     groups: int | None = Field(default=None, description="distinct mounts fitted (mounts of a group count once)")
 
