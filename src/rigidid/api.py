@@ -166,15 +166,16 @@ class MountModelFit:
         return None if self.free_residual is None else self._aic(self.free_residual, self.free_parameters)
 
     @property
-    def aic_adequate(self) -> bool | None:
-        """True when the mount model's AIC is not worse than the free matrices'."""
+    def adequate(self) -> bool | None:
+        """True when the mount model explains the modes as well as the free matrices (lower or equal AIC)."""
         free = self.free_aic
         return None if free is None else bool(self.aic <= free)
 
     @property
-    def adequate(self) -> bool | None:
-        """The verdict: the F test's (:attr:`MountModel.adequate`) when made, else :attr:`aic_adequate`."""
-        return self.aic_adequate if self.model.adequate is None else self.model.adequate
+    def verdict(self) -> bool | None:
+        """Does the mount model explain the modes: the F test's (:attr:`MountModel.adequate`) when it
+        could be made, else :attr:`adequate` (AIC, which flags correct noisy models too often)."""
+        return self.adequate if self.model.adequate is None else self.model.adequate
 
 
 @dataclass(frozen=True)

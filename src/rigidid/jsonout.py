@@ -151,7 +151,7 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
             "free_residual": fit.free_residual,
             "free_parameters": fit.free_parameters,
             "free_aic": fit.free_aic,
-            "adequate": fit.aic_adequate,
+            "adequate": fit.adequate,
             **mount_test_to_dict(result),
         }
     if result.torque_roll_axis is not None:

@@ -165,8 +165,8 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
                 "F test against any linear model",
                 f"F = {model.f_statistic:.3g} with ({model.f_dof[0]}, {model.f_dof[1]}) dof, p = {model.p_value:.3g}",
             )
-        verdict = "not tested" if fit.adequate is None else "the mounts explain the modes"
-        if fit.adequate is False:
+        verdict = "not tested" if fit.verdict is None else "the mounts explain the modes"
+        if fit.verdict is False:
             verdict = "INADEQUATE: a mount position or axis is off, or a support is missing; trust the free route"
         table.add_row("verdict", verdict)
         tables.append(table)

@@ -113,7 +113,7 @@ def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     for truth, adequate in ((body, True), (hidden, False)):
         modes = body_modes(truth, pos, dirs)
         _, fit = api._mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
-        assert fit.adequate is adequate, (fit.residual, fit.free_residual)
+        assert fit.verdict is adequate, (fit.residual, fit.free_residual)
 
 
 def _mounts_file(where: np.ndarray, axes: np.ndarray) -> object:
