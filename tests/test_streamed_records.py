@@ -167,3 +167,13 @@ def test_npy_is_read_in_blocks_to_the_same_record(
     with pytest.raises(InputError, match="NaN or infinite") as err:
         read_record_streamed(target, ids)
     assert "row 5001" in str(err.value) and ids[3] in str(err.value)
+
+
+def test_a_layout_with_a_sensor_id_twice_is_refused_by_both_readers(
+    engine: tuple[Path, list[str], list[Path]],
+) -> None:
+    _, ids, paths = engine
+    twice = [*ids[:-1], ids[0]]
+    for reader in (read_record, read_record_streamed):
+        with pytest.raises(InputError, match="sensor id twice"):
+            reader(paths[0], twice)

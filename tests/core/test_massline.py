@@ -103,3 +103,18 @@ def test_mass_from_residues_on_mounts_with_noise_and_an_elastic_mode(seed):
     assert inertia < RESIDUES_ON_MOUNTS["inertia"]
     with pytest.raises(InputError, match="six rigid-body poles"):
         mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles[:5])
+
+
+def test_sensors_that_do_not_see_six_rigid_motions_are_refused_by_both_routes():
+    from rigidid.core.massline import mass_from_residues
+    from rigidid.core.simulate import body_modes
+
+    _, body, pos, dirs, rpos, rdirs = _free_free(0)
+    f = np.linspace(0.25, 400.0, 800)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f)
+    poles = body_modes(body, pos, dirs).poles
+    flat = np.tile(np.array([[0.0, 0.0, 1.0]]), (pos.shape[0], 1))  # all along z: three motions unseen
+    with pytest.raises(IdentificationError, match="six independent rigid-body motions"):
+        mass_line(f, h, pos, flat, rpos, rdirs)
+    with pytest.raises(IdentificationError, match="six independent rigid-body motions"):
+        mass_from_residues(f, h, pos, flat, rpos, rdirs, poles)

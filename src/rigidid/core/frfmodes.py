@@ -515,7 +515,14 @@ def refine_poles(
     return to_poles(fit.x)
 
 
-def _scaled_frame(positions: Array, directions: Array) -> tuple[Array, float, Array]:
+def scaled_frame(positions: Array, directions: Array) -> tuple[Array, float, Array]:
+    """Origin (the sensor centroid), span (largest distance from it) and the sensor matrix in that frame.
+
+    Raises
+    ------
+    IdentificationError
+        The sensors do not see six independent rigid-body motions.
+    """
     origin = positions.mean(axis=0)
     span = float(np.max(np.linalg.norm(positions - origin, axis=1))) or 1.0
     t = sensor_matrix((positions - origin) / span, directions)
@@ -577,7 +584,7 @@ def rigid_shapes(
     """
     res = np.asarray(residues, dtype=complex)
     pos = np.asarray(positions, dtype=float)
-    origin, span, t = _scaled_frame(pos, np.asarray(directions, dtype=float))
+    origin, span, t = scaled_frame(pos, np.asarray(directions, dtype=float))
     rpos = np.asarray(reference_positions, dtype=float)
     tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
     u, misfit = _rigid_modes(res, t, tf)
@@ -634,7 +641,7 @@ def body_from_scaled_modes(
     rdirs = np.asarray(reference_directions, dtype=float)
     if lam.size != 6 or res.shape != (6, pos.shape[0], rpos.shape[0]):
         raise InputError("poles and residues must be those of the six rigid-body modes, residues (6, p, q)")
-    origin, span, t = _scaled_frame(pos, dirs)
+    origin, span, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - origin) / span, rdirs)
     u, _ = _rigid_modes(res, t, tf)
     if np.any(np.linalg.norm(u, axis=0) == 0.0):
@@ -782,7 +789,7 @@ def fit_frf_modes(
         shapes[:, k], part[:, k] = a / big, b * big
     if n >= 6:
         try:
-            origin, span, t = _scaled_frame(pos, dirs)
+            origin, span, t = scaled_frame(pos, dirs)
         except IdentificationError:
             pass
         else:

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.frfmodes import residues_lsfd
+from rigidid.core.frfmodes import residues_lsfd, scaled_frame
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
 
@@ -286,14 +286,9 @@ def mass_line(
     if n_f < MIN_LINES:
         raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {MIN_LINES}")
     # scaled frame: origin at the sensor centroid, lengths in units of the span
-    origin = pos.mean(axis=0)
-    span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
-    t = sensor_matrix((pos - origin) / span, dirs)
-    tf = sensor_matrix((rpos - origin) / span, rdirs)
+    origin, span, t = scaled_frame(pos, dirs)
     # in scaled coordinates rotations are per unit span: force columns T_f^T unchanged in form
-    sv = np.linalg.svd(t, compute_uv=False)
-    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
-        raise IdentificationError("the sensors do not see six independent rigid-body motions")
+    tf = sensor_matrix((rpos - origin) / span, rdirs)
     w = 2.0 * np.pi * f[sel]
     y = np.linalg.lstsq(t, h[:, :, sel].reshape(p, q * n_f), rcond=None)[0].reshape(6 * q, n_f)
     # per rigid coordinate and reference: constant (the mass line) plus correction terms
@@ -486,13 +481,8 @@ def mass_from_residues(
     top = float(np.abs(lam).max()) / (2.0 * np.pi)
     if hi < 2.0 * top:
         raise IdentificationError(f"the band must reach beyond the rigid-body modes (up to {top:.4g} Hz)")
-    origin = pos.mean(axis=0)
-    span = float(np.max(np.linalg.norm(pos - origin, axis=1))) or 1.0
-    t = sensor_matrix((pos - origin) / span, dirs)
+    origin, span, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
-    sv = np.linalg.svd(t, compute_uv=False)
-    if sv.size < 6 or sv[-1] < 1e-8 * sv[0]:
-        raise IdentificationError("the sensors do not see six independent rigid-body motions")
     r, _, _, residual = residues_lsfd(f, h, lam, band=(lo, hi), upper=2, weighting=weighting)  # (6, p, q)
     h_inf = np.sum(2.0 * (lam[:, None, None] * r).real, axis=0)  # T M^-1 T_f^T
     y0 = np.linalg.lstsq(t, h_inf, rcond=None)[0]

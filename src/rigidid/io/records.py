@@ -148,6 +148,14 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
     return data, (float(raw.dt) if raw.time is None and raw.dt is not None else dt)
 
 
+def layout_ids(sensor_ids: Sequence[str], src: str) -> list[str]:
+    """The layout's sensor ids as strings, the column names a record must have; refused when one repeats."""
+    wanted = [str(s) for s in sensor_ids]
+    if len(set(wanted)) != len(wanted):
+        raise InputError("the layout has a sensor id twice", source=src)
+    return wanted
+
+
 def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tuple[Array, float]:
     """Read one impact record, its columns ordered like the layout's sensors.
 
@@ -191,9 +199,7 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     plus one chunk. Blank lines are skipped (but counted in row numbers).
     """
     src = str(path)
-    wanted = [str(s) for s in sensor_ids]
-    if len(set(wanted)) != len(wanted):
-        raise InputError("the layout has a sensor id twice", source=src)
+    wanted = layout_ids(sensor_ids, src)
     p = Path(path)
     if p.suffix.lower() in BINARY_SUFFIXES:
         return _read_binary_record(p, wanted, src)

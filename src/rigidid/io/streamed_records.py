@@ -405,12 +405,10 @@ def read_record_streamed(
         row and column; and a record too short for `factor`.
     """
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, Decimator, channel_energy
-    from rigidid.io.records import MIN_ROWS, _check_decay
+    from rigidid.io.records import MIN_ROWS, _check_decay, layout_ids
 
     src = str(path)
-    wanted = [str(s) for s in sensor_ids]
-    if len(set(wanted)) != len(wanted):
-        raise InputError("the layout has a sensor id twice", source=src)
+    wanted = layout_ids(sensor_ids, src)
     p = Path(path)
     if p.suffix.lower() in BINARY_SUFFIXES:
         source = _binary_source(p, wanted, src, progress)
