@@ -177,3 +177,11 @@ def test_a_layout_with_a_sensor_id_twice_is_refused_by_both_readers(
     for reader in (read_record, read_record_streamed):
         with pytest.raises(InputError, match="sensor id twice"):
             reader(paths[0], twice)
+
+
+def test_a_universal_file_beside_a_layout_is_named_not_parsed_as_csv(tmp_path: Path) -> None:
+    uff = tmp_path / "hit1.uff"
+    uff.write_text("    -1\n    58\n")
+    for reader in (read_record, read_record_streamed):
+        with pytest.raises(InputError, match="universal file is not a record beside a layout"):
+            reader(uff, ["1", "2"])

@@ -148,6 +148,25 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
     return data, (float(raw.dt) if raw.time is None and raw.dt is not None else dt)
 
 
+def is_binary_record(path: Path, src: str) -> bool:
+    """Whether the suffix names a binary record (:mod:`rigidid.io.binary_records`) rather than CSV.
+
+    Raises
+    ------
+    InputError
+        A universal file (``.uff``/``.unv``): its records are read with its own geometry,
+        as the test's first argument, not beside a layout.json.
+    """
+    suffix = path.suffix.lower()
+    if suffix in (".uff", ".unv"):
+        raise InputError(
+            "a universal file is not a record beside a layout: give it as the test itself, in place of "
+            "layout.json (its dataset 58 records and geometry are read together)",
+            source=src,
+        )
+    return suffix in BINARY_SUFFIXES
+
+
 def layout_ids(sensor_ids: Sequence[str], src: str) -> list[str]:
     """The layout's sensor ids as strings, the column names a record must have; refused when one repeats."""
     wanted = [str(s) for s in sensor_ids]
@@ -201,7 +220,7 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     src = str(path)
     wanted = layout_ids(sensor_ids, src)
     p = Path(path)
-    if p.suffix.lower() in BINARY_SUFFIXES:
+    if is_binary_record(p, src):
         return _read_binary_record(p, wanted, src)
     from rigidid.io.csv_records import read_csv_columns
 

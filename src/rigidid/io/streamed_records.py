@@ -44,7 +44,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError
-from rigidid.io.binary_records import BINARY_SUFFIXES
 from rigidid.io.columns import column as _column
 from rigidid.io.columns import column_order
 from rigidid.io.columns import row as _where
@@ -405,15 +404,12 @@ def read_record_streamed(
         row and column; and a record too short for `factor`.
     """
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, Decimator, channel_energy
-    from rigidid.io.records import MIN_ROWS, _check_decay, layout_ids
+    from rigidid.io.records import MIN_ROWS, _check_decay, is_binary_record, layout_ids
 
     src = str(path)
     wanted = layout_ids(sensor_ids, src)
     p = Path(path)
-    if p.suffix.lower() in BINARY_SUFFIXES:
-        source = _binary_source(p, wanted, src, progress)
-    else:
-        source = _csv_source(p, wanted, progress)
+    source = _binary_source(p, wanted, src, progress) if is_binary_record(p, src) else _csv_source(p, wanted, progress)
     times = _TimeCheck(source, src)
     peaks = np.zeros(len(wanted))
     pending: list[tuple[Array, Array]] = []
