@@ -401,18 +401,17 @@ def identify(
 
 def _suspect_mode(ident: Identification) -> str:
     """A sentence naming a used mode that fits rigid motion far worse than the others (an elastic mode?), or ''."""
+    from rigidid.core.selection import elastic_suspect
+
     residual = np.asarray(ident.diagnostics.rigid_fit_residual, dtype=float)
-    if residual.size < 2:
-        return ""
-    k = int(np.argmax(residual))
-    others = float(np.median(np.delete(residual, k)))
-    if not (residual[k] > 0.05 and residual[k] > 20.0 * others):
+    k = elastic_suspect(residual)
+    if k is None:
         return ""
     return (
         f"; the mode at {ident.frequency_hz[k]:.4g} Hz fits rigid-body motion with a residual of "
-        f"{residual[k]:.2f} against {others:.2g} for the others: it may be an elastic mode taken for a "
-        "rigid one, which makes this answer wrong too; estimate one more mode (--n-modes 7) and choose "
-        "the six rigid-body modes (--modes), or end --band below it"
+        f"{residual[k]:.2f} against {float(np.median(np.delete(residual, k))):.2g} for the others: it may be an "
+        "elastic mode taken for a rigid one, which makes this answer wrong too; estimate one more mode "
+        "(--n-modes 7) and choose the six rigid-body modes (--modes), or end --band below it"
     )
 
 
@@ -944,6 +943,98 @@ def estimate_modes(
     ids = tuple(s.id for s in lay.sensors)
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
     return table, result
+
+
+def estimate_rigid_modes(
+    layout: LayoutFile | PathLike,
+    records: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    method: str | None = None,
+    band: tuple[float, float] | None = None,
+    max_order: int | None = None,
+    decimate: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """Six modes from the records, or seven when one of the six looks elastic.
+
+    :func:`estimate_modes` with six modes; when one of them fits rigid-body
+    motion far worse than the others (:func:`rigidid.core.selection.elastic_suspect`:
+    an elastic mode in the band, taken for a rigid one), the records are
+    estimated again for seven modes, and those are returned when the six that
+    fit rigid-body motion best leave the suspect out and look rigid;
+    :func:`identify` then chooses those six (its automatic selection). Either
+    way an :class:`~rigidid.errors.ElasticModeWarning` says what was found and
+    done.
+
+    Parameters
+    ----------
+    layout, records, method, band, max_order, decimate, progress
+        As for :func:`estimate_modes`.
+
+    Returns
+    -------
+    modes : ModeTable
+        Six modes, or seven (one elastic).
+    estimate : ModalEstimate
+        The estimate they came from.
+
+    Notes
+    -----
+    Needs more than six sensors (with six, every shape fits rigid-body motion
+    exactly and nothing is checked). The output-error refinement that follows
+    models rigid-body motion only, so records that carry an elastic mode are
+    usually not fitted well by it, and the structured answer is kept.
+    """
+    import warnings
+
+    from rigidid.core.geometry import layout_frame, sensor_matrix
+    from rigidid.core.selection import elastic_suspect, separate_elastic
+    from rigidid.errors import ElasticModeWarning, IdentificationError
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    options: dict[str, Any] = {
+        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
+    }  # fmt: skip
+    table, estimate = estimate_modes(lay, records, n_modes=6, **options)
+    _, positions, directions = files.layout_arrays(lay)
+    if positions.shape[0] <= 6:
+        return table, estimate
+    t = sensor_matrix(layout_frame(positions).to_local(positions), directions)
+    residual = rigid_fit_residuals(t, table.shapes)
+    k = elastic_suspect(residual)
+    if k is None:
+        return table, estimate
+    found = (
+        f"the mode at {table.frequency_hz[k]:.4g} Hz fits rigid-body motion with a residual of {residual[k]:.2f} "
+        f"against {float(np.median(np.delete(residual, k))):.2g} for the others: an elastic mode taken for a rigid one?"
+    )
+    try:
+        table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
+    except IdentificationError:
+        warnings.warn(
+            f"{found} The records give no seventh stable mode to replace it; name the six rigid-body modes "
+            "(--modes) or end --band below it",
+            ElasticModeWarning,
+            stacklevel=2,
+        )
+        return table, estimate
+    keep = separate_elastic(t, table7.shapes)
+    if keep is None:
+        warnings.warn(
+            f"{found} Seven modes estimated do not separate six rigid-body modes from it; name the six "
+            "(--modes) or end --band below it",
+            ElasticModeWarning,
+            stacklevel=2,
+        )
+        return table, estimate
+    left_out = int(np.setdiff1d(np.arange(7), keep)[0])
+    warnings.warn(
+        f"{found} Seven modes were estimated and the six that fit rigid-body motion best are used, leaving out "
+        f"the mode at {table7.frequency_hz[left_out]:.4g} Hz",
+        ElasticModeWarning,
+        stacklevel=2,
+    )
+    return table7, estimate7
 
 
 def _streamed_content(streamed: Sequence[Any], dt: float) -> tuple[float, float] | None:

@@ -436,7 +436,9 @@ def _estimate(
     option: str = "--modal-method",
     source: str | None = None,
     paths: list[Path] | None = None,
+    rigid_six: bool = False,
 ) -> tuple[ModeTable, ModalEstimate]:
+    """Modes from the records; with `rigid_six`, seven when one of six looks elastic (identify picks six)."""
     from rigidid import api
     from rigidid.core.timedomain import METHODS
 
@@ -446,6 +448,11 @@ def _estimate(
     from rigidid.progress import terminal_progress
 
     with _naming(source), terminal_progress() as progress:
+        if rigid_six and n_modes == 6:
+            return api.estimate_rigid_modes(
+                data.layout, paths or data.records, method=method, band=band, max_order=max_order,
+                decimate=decimate, progress=progress,
+            )  # fmt: skip
         return api.estimate_modes(
             data.layout, paths or data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
             decimate=decimate, progress=progress,
@@ -512,9 +519,9 @@ def _identify(
                 f"the limit here is {shortest // 16}",
                 source="--resample",
             )
-    modes, estimate = _estimate(data, **modal, source=src) if records else (data.modes, None)
-    assert modes is not None
     chosen = _parse_modes(modes_used)
+    modes, estimate = _estimate(data, **modal, source=src, rigid_six=chosen is None) if records else (data.modes, None)
+    assert modes is not None
     from rigidid.progress import terminal_progress
 
     with _naming(src), terminal_progress() as progress:
@@ -538,7 +545,7 @@ def _identify(
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
         options = {key: modal[key] for key in ("method", "band", "max_order") if modal[key] is not None}
         result = api.with_record_spread(
-            result, data.records, segments=resample, n_modes=modal["n_modes"], estimate_options=options
+            result, data.records, segments=resample, n_modes=len(modes.labels), estimate_options=options
         )
     return result, estimate
 
@@ -703,7 +710,7 @@ def modes(
         option = "--modal-method" if method is None else "--method"
         table, estimate = _estimate(
             data, modal_method, n_modes, band, max_order, decimate, option=option, source=_source(layout, records),
-            paths=list(records or []) if streamed else None,
+            paths=list(records or []) if streamed else None, rigid_six=True,
         )  # fmt: skip
         text = modes_csv_text(table)
         with OutputSet() as outs:  # every output or none

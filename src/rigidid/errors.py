@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "DampingUnitWarning",
+    "ElasticModeWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -102,6 +103,10 @@ class DampingUnitWarning(RigididWarning):
 
 class NonSensorColumnWarning(RigididWarning):
     """A record has columns that are not sensors (force, trigger...): they are left out."""
+
+
+class ElasticModeWarning(RigididWarning):
+    """A mode estimated from the records looks elastic (its shape fits rigid-body motion far worse than the others')."""
 
 
 class RefinementWarning(RigididWarning):

@@ -14,7 +14,21 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.linalg import solve_rows
 from rigidid.errors import IdentificationError
 
-__all__ = ["project_rigid", "project_rigid_batch", "rigid_fit_residuals", "select_rigid_modes"]
+__all__ = [
+    "SUSPECT_RATIO",
+    "SUSPECT_RESIDUAL",
+    "elastic_suspect",
+    "project_rigid",
+    "project_rigid_batch",
+    "rigid_fit_residuals",
+    "select_rigid_modes",
+    "separate_elastic",
+]
+
+#: A mode is suspected elastic when its rigid-fit residual is above this ...
+SUSPECT_RESIDUAL = 0.05
+#: ... and this many times the median of the other modes' residuals.
+SUSPECT_RATIO = 20.0
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -149,3 +163,79 @@ def select_rigid_modes(transformation: ArrayLike, shapes: ArrayLike, count: int 
         raise IdentificationError(f"need at least {count} modes, got {psi.shape[1]}")
     residual = rigid_fit_residuals(t, psi)
     return np.sort(np.argsort(residual, kind="stable")[:count])
+
+
+def elastic_suspect(residuals: ArrayLike) -> int | None:
+    """The one mode whose shape fits rigid-body motion far worse than the others', or None.
+
+    Parameters
+    ----------
+    residuals : array_like, shape (n,)
+        Rigid-fit residuals of the modes (:func:`rigid_fit_residuals`), ``n >= 2``;
+        only meaningful with more than six sensors.
+
+    Returns
+    -------
+    int or None
+        Index of the worst mode when its residual exceeds :data:`SUSPECT_RESIDUAL`
+        and :data:`SUSPECT_RATIO` times the median of the others' (an elastic mode
+        taken for a rigid one, most likely); otherwise None.
+
+    Notes
+    -----
+    Rigid-body modes measured with a few percent noise fit rigid motion to a
+    residual of about the noise level; an elastic mode's shape is unrelated to
+    rigid motion and fits to 0.1-1. The ratio test keeps a test whose every
+    mode is noisy (all residuals alike) from being flagged.
+
+    Examples
+    --------
+    >>> elastic_suspect([0.002, 0.003, 0.25, 0.002, 0.001, 0.004])
+    2
+    >>> elastic_suspect([0.06, 0.07, 0.08, 0.05, 0.06, 0.07]) is None
+    True
+    """
+    r = np.asarray(residuals, dtype=float).ravel()
+    if r.size < 2:
+        return None
+    k = int(np.argmax(r))
+    others = float(np.median(np.delete(r, k)))
+    if r[k] > SUSPECT_RESIDUAL and r[k] > SUSPECT_RATIO * others:
+        return k
+    return None
+
+
+def separate_elastic(transformation: ArrayLike, shapes: ArrayLike) -> NDArray[np.intp] | None:
+    """The six rigid-body modes among seven, when the seventh is clearly elastic; else None.
+
+    Parameters
+    ----------
+    transformation : array_like, shape (p, 6)
+        Sensor transformation, ``p > 6``.
+    shapes : array_like of complex, shape (p, 7)
+        Seven estimated mode shapes.
+
+    Returns
+    -------
+    ndarray of int, shape (6,) or None
+        Indices of the six modes that fit rigid-body motion best
+        (:func:`select_rigid_modes`), when the one left out fits it worse than
+        :data:`SUSPECT_RESIDUAL` and none of the six stands out
+        (:func:`elastic_suspect`); None when the seven do not separate so.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.vstack([np.eye(6), np.ones((2, 6))])
+    >>> rigid = t @ np.eye(6)
+    >>> elastic = np.array([[0.0], [0.0], [0.0], [0.0], [0.0], [0.0], [1.0], [-1.0]])
+    >>> separate_elastic(t, np.hstack([rigid[:, :2], elastic, rigid[:, 2:]]))
+    array([0, 1, 3, 4, 5, 6])
+    """
+    t = np.asarray(transformation, dtype=float)
+    residual = rigid_fit_residuals(t, shapes)
+    keep = select_rigid_modes(t, shapes)
+    left_out = np.setdiff1d(np.arange(residual.size), keep)
+    if residual[left_out].min() <= SUSPECT_RESIDUAL or elastic_suspect(residual[keep]) is not None:
+        return None
+    return keep
