@@ -26,9 +26,12 @@ from dataclasses import replace
 import numpy as np
 
 from records_scenario import BODY, CG, IMPACTS, INERTIA, layout
+from rigidid.core.geometry import layout_frame, sensor_matrix
 from rigidid.core.identify import identify
+from rigidid.core.selection import elastic_suspect, rigid_fit_residuals, separate_elastic
 from rigidid.core.simulate import Mount, system_matrices
 from rigidid.core.timedomain import estimate_modes, impulse_records
+from rigidid.core.timedomain.nuisance import subtract_modes
 from rigidid.core.timedomain.refine import good_fit, refine_body
 from rigidid.errors import RigididError
 
@@ -67,6 +70,31 @@ def add_elastic(recs, f_hz: float, rate: float, seed: int):  # type: ignore[no-u
         extra[n0:] = np.outer(wave, shape) * (0.2 * np.sqrt(np.mean(r**2)) / np.sqrt(np.mean(wave**2)))
         out.append(r + extra)
     return out
+
+
+def rigid_six(recs, dt: float, pos, dirs):  # type: ignore[no-untyped-def]
+    """The modes and records as `rigidid identify --records` takes them: six modes, or, when one looks elastic
+    (api.estimate_rigid_modes), seven estimated and the six rigid ones kept, the seventh subtracted from the
+    records the refit sees (api.with_refinement). Returns (six-mode estimate, records for the refit)."""
+    est = estimate_modes(recs, dt)
+    if pos.shape[0] <= 6:
+        return est, recs
+    t = sensor_matrix(layout_frame(pos).to_local(pos), dirs)
+    if elastic_suspect(rigid_fit_residuals(t, est.shapes)) is None:
+        return est, recs
+    try:
+        seven = estimate_modes(recs, dt, n_modes=7)
+    except RigididError:
+        return est, recs
+    keep = separate_elastic(t, seven.shapes)
+    if keep is None:
+        return est, recs
+    unused = np.ones(7, dtype=bool)
+    unused[keep] = False
+    cleaned = subtract_modes(recs, dt, [i.start for i in seven.impacts], seven.poles, unused)
+    six = replace(seven, poles=seven.poles[keep], shapes=seven.shapes[:, keep], frequency_hz=seven.frequency_hz[keep],
+                  damping_ratio=seven.damping_ratio[keep])  # fmt: skip
+    return six, cleaned
 
 
 BASE = {"sensors": 8, "impacts": 2, "rate": 512.0, "duration": 8.0, "noise": 0.01, "zeta": None, "ky": 1.0,
@@ -114,7 +142,7 @@ def cell(spec: dict, seeds: int):  # type: ignore[no-untyped-def]
         dt = 1.0 / s["rate"]
         t0 = time.perf_counter()
         try:
-            est = estimate_modes(recs, dt)
+            est, recs = rigid_six(recs, dt, pos, dirs)
             ident = identify(pos, dirs, est.poles, est.shapes, mass=body.mass)
         except RigididError as exc:
             fails.append(str(exc))

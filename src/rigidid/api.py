@@ -1570,6 +1570,13 @@ def with_refinement(
         ``record_bound`` (Cramér-Rao intervals) set; or `result` unchanged,
         with a :class:`~rigidid.errors.RefinementWarning`, when the fit fails
         or its normalised cost says it is not at the global minimum.
+
+    Notes
+    -----
+    The refit models the six rigid-body modes only: modes of `estimate` that
+    `result` did not use (an elastic mode left out, see :func:`estimate_rigid_modes`)
+    are subtracted from the records first
+    (:func:`rigidid.core.timedomain.nuisance.subtract_modes`).
     """
     import warnings
 
@@ -1579,9 +1586,17 @@ def with_refinement(
     ident = result.identification
     if progress is not None:
         progress("refit", 0, 1)
+    arrays = [data for data, _ in records]
+    unused = [k + 1 not in result.modes_used for k in range(estimate.poles.size)]
+    if any(unused):  # modes estimated but not used (elastic): out of the records the rigid-body model is fitted to
+        from rigidid.core.timedomain.nuisance import subtract_modes
+
+        arrays = subtract_modes(
+            arrays, records[0][1], [impact.start for impact in estimate.impacts], estimate.poles, unused
+        )
     try:
         refinement = refine_body(
-            [data for data, _ in records],
+            arrays,
             records[0][1],
             result.positions,
             result.directions,
