@@ -110,6 +110,8 @@ def test_cli_identify_and_modes_leave_the_elastic_mode_out(tmp_path: Path) -> No
     assert "elastic mode" in out.stderr and "leaving out the mode at 18 Hz" in out.stderr
     result = json.loads((tmp_path / "r.json").read_text())
     assert len(result["modes_used"]) == 6
+    assert any("leaving out the mode at 18 Hz" in w for w in result["diagnostics"]["warnings"])
+    assert out.stderr.count("leaving out the mode") == 1
     # the elastic mode is subtracted from the records before the refit, which is then accepted
     assert "RefinementWarning" not in out.stderr and "kept the answer from the modes" not in out.stderr
     assert result["uncertainty_records_crb"]["normalised_cost"] < 1.3

@@ -1497,6 +1497,16 @@ def with_mounts(
     return out
 
 
+def with_warnings(result: IdentifyResult, messages: Sequence[str]) -> IdentifyResult:
+    """`result` with `messages` added to its diagnostics' warnings (those not there yet)."""
+    diag = result.identification.diagnostics
+    new = tuple(m for m in messages if m not in diag.warnings)
+    if not new:
+        return result
+    ident = replace(result.identification, diagnostics=replace(diag, warnings=(*diag.warnings, *new)))
+    return replace(result, identification=ident)
+
+
 def with_record_spread(
     result: IdentifyResult,
     records: Sequence[tuple[NDArray[np.float64], float]],

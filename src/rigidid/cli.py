@@ -226,6 +226,18 @@ def _print_warnings(caught: list[warnings.WarningMessage]) -> None:
 
 
 @contextmanager
+def _noted(into: list[str], *categories: type[Warning]) -> Iterator[None]:
+    """Pass on every warning raised inside; the texts of those of `categories` also go into `into`."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for w in caught:
+        if issubclass(w.category, categories) and str(w.message) not in into:
+            into.append(str(w.message))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+@contextmanager
 def _reported() -> Iterator[None]:
     """Turn rigidid's errors into one line on stderr, after the warnings that came before them."""
     with warnings.catch_warnings(record=True) as caught:
@@ -520,7 +532,13 @@ def _identify(
                 source="--resample",
             )
     chosen = _parse_modes(modes_used)
-    modes, estimate = _estimate(data, **modal, source=src, rigid_six=chosen is None) if records else (data.modes, None)
+    from rigidid.errors import ElasticModeWarning, RefinementWarning
+
+    notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
+    with _noted(notes, ElasticModeWarning):
+        modes, estimate = (
+            _estimate(data, **modal, source=src, rigid_six=chosen is None) if records else (data.modes, None)
+        )
     assert modes is not None
     from rigidid.progress import terminal_progress
 
@@ -538,8 +556,9 @@ def _identify(
             mounts=mounts,
         )
     if refine and estimate is not None and method == "structured":
-        with _naming(src), terminal_progress() as progress:
+        with _naming(src), terminal_progress() as progress, _noted(notes, RefinementWarning):
             result = api.with_refinement(result, data.records, estimate, progress=progress)
+    result = api.with_warnings(result, notes)
     if resample:
         if not records:
             raise InputError("data-driven intervals need impact records (--records)", source="--resample")
