@@ -156,3 +156,8 @@ intervals.noise_correlation."""
 # 0.0043, CG up to 0.0020 of the span observed.
 RIGIDFRF_EXACT_REL = 1e-8
 RIGIDFRF_NOISY = {"mass": 0.013, "cg_span": 0.006}
+
+SCALED_MODES_CSV = {"mass": 0.005, "cg_span": 0.005, "inertia": 0.02}
+"""identify on a modes.csv with scaling modal_a written by `modes --frf` (four-mounts, 1 % FRF
+noise, seed 1; tests/core/test_frfmodes.py): observed mass 0.012 %, CG 0.03 % of the 0.6 m span,
+inertia diagonal 0.1 %; bounds set by issue 12 (mass 0.5 %, CG 0.5 % of span, inertia 2 %)."""

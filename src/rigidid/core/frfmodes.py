@@ -49,6 +49,7 @@ __all__ = [
     "FrfModes",
     "ScaledBody",
     "body_from_scaled_modes",
+    "body_from_scaled_shapes",
     "fit_frf_modes",
     "plscf_poles",
     "refine_poles",
@@ -646,6 +647,64 @@ def body_from_scaled_modes(
     u, _ = _rigid_modes(res, t, tf)
     if np.any(np.linalg.norm(u, axis=0) == 0.0):
         raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
+    return _body_from_modes(lam, u, origin, span)
+
+
+def body_from_scaled_shapes(
+    poles: ArrayLike,
+    shapes: ArrayLike,
+    positions: ArrayLike,
+    directions: ArrayLike,
+) -> ScaledBody:
+    """Mass, CG, inertia, stiffness and damping from six unity-modal-A shapes at the sensors.
+
+    What ``modes.csv`` with ``scaling`` ``modal_a`` (written by ``rigidid modes
+    --frf``) carries: :func:`body_from_scaled_modes` without the FRFs.
+
+    Parameters
+    ----------
+    poles : array_like of complex, shape (6,)
+        The rigid-body poles (rad/s, ``Im > 0``).
+    shapes : array_like of complex, shape (p, 6)
+        Their shapes at the sensors scaled to unity modal A (``T u_k``, in
+        ``sqrt(1 / (mass s))`` times length units: :attr:`FrfModes.shapes`).
+    positions, directions : array_like, shape (p, 3)
+        Sensors (length, unit axes), rank 6.
+
+    Returns
+    -------
+    ScaledBody
+
+    Raises
+    ------
+    InputError
+        Not six poles and six shapes of the sensors' length.
+    IdentificationError
+        The sensors do not see six rigid-body motions, a shape is zero, or the
+        mass is not positive.
+
+    Notes
+    -----
+    ``u_k = T^+ shape_k`` (least squares on rigid-body motion, eq. (30) in
+    spirit), then as :func:`body_from_scaled_modes`. The scale of the shapes
+    carries the mass: any other scaling (e.g. largest value 1) gives a
+    meaningless mass.
+    """
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    phi = np.asarray(shapes, dtype=complex)
+    pos = np.asarray(positions, dtype=float)
+    dirs = np.asarray(directions, dtype=float)
+    if lam.size != 6 or phi.shape != (pos.shape[0], 6):
+        raise InputError("poles and shapes must be those of the six rigid-body modes, shapes (p, 6)")
+    origin, span, t = scaled_frame(pos, dirs)
+    u = np.linalg.lstsq(t, phi, rcond=None)[0]
+    if np.any(np.linalg.norm(u, axis=0) == 0.0):
+        raise IdentificationError("a scaled rigid-body shape is zero")
+    return _body_from_modes(lam, u, origin, span)
+
+
+def _body_from_modes(lam: CArray, u: CArray, origin: Array, span: float) -> ScaledBody:
+    """M, K, C and the body from six unity-modal-A modes ``u`` (6, 6) in the scaled frame (origin, span)."""
     m_inv = np.sum(2.0 * (lam[None, None, :] * u[:, None, :] * u[None, :, :]).real, axis=2)
     k_inv = -np.sum(2.0 * (u[:, None, :] * u[None, :, :] / lam[None, None, :]).real, axis=2)
     mcm = -np.sum(2.0 * (lam[None, None, :] ** 2 * u[:, None, :] * u[None, :, :]).real, axis=2)
