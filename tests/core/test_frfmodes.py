@@ -78,6 +78,20 @@ def test_noisy_frfs_round_trip() -> None:
     span = float(np.ptp(pos, axis=0).max())
     assert np.linalg.norm(scaled.center_of_gravity - body.center_of_gravity) / span < 0.01
     assert len(fitted.diagram) >= 8 and any(entry.stable.any() for entry in fitted.diagram)
+    # the shapes written carry their non-rigid part (the noise), the rigid part is T u exactly
+    from rigidid.core.frfmodes import body_from_scaled_shapes, rigid_shapes
+    from rigidid.core.identify import identify
+    from rigidid.core.noise import estimate_noise
+
+    projected = rigid_shapes(fitted.residues, pos, dirs, rpos, np.eye(3))[0]
+    assert estimate_noise(pos, dirs, projected).shape < 1e-12
+    assert estimate_noise(pos, dirs, fitted.shapes).shape > 1e-4
+    from_shapes = body_from_scaled_shapes(fitted.poles, fitted.shapes, pos, dirs)
+    assert from_shapes.mass == pytest.approx(scaled.mass, rel=1e-10)
+    np.testing.assert_allclose(from_shapes.inertia_tensor, scaled.inertia_tensor, rtol=1e-9, atol=1e-12)
+    a = identify(pos, dirs, fitted.poles, fitted.shapes, mass=body.mass, warn=False)
+    b = identify(pos, dirs, fitted.poles, projected, mass=body.mass, warn=False)
+    np.testing.assert_allclose(a.inertia_per_mass, b.inertia_per_mass, rtol=1e-6, atol=1e-9)
 
 
 def test_lsfd_with_residual_terms_and_bad_poles() -> None:

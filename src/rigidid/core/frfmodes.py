@@ -56,6 +56,7 @@ __all__ = [
     "residues_lsfd",
     "rigid_band",
     "rigid_shapes",
+    "with_nonrigid_residual",
 ]
 
 Array = NDArray[np.float64]
@@ -79,7 +80,10 @@ class FrfModes:
         Mode shapes at the sensors: the left factor of the rank-one fit of each
         residue, unity-modal-A scaled (``R_k ~ shape_k participation_k^T``)
         when `scaled` is true for that mode, else scaled so the largest value
-        is ``1 + 0j``.
+        is ``1 + 0j``. Scaled shapes are the rigid-body projection ``T u_k``
+        plus the left factor's part that no rigid-body motion explains
+        (:func:`with_nonrigid_residual`): eq. (18) and the mass see only
+        ``T u_k``, the noise estimate of an uncertainty sees the rest.
     participation : ndarray of complex, shape (q, n)
         The right factor (the shape at the references, along the force).
     scaled : ndarray of bool, shape (n,)
@@ -703,6 +707,47 @@ def body_from_scaled_shapes(
     return _body_from_modes(lam, u, origin, span)
 
 
+def with_nonrigid_residual(scaled: ArrayLike, raw: ArrayLike, positions: ArrayLike, directions: ArrayLike) -> CArray:
+    """Rigid-body shapes projected and scaled by the force, with the raw shapes' non-rigid part added back.
+
+    Parameters
+    ----------
+    scaled : array_like of complex, shape (p, n)
+        ``T u_k``: shapes on rigid-body motion, unity-modal-A scaled
+        (:func:`rigid_shapes`).
+    raw : array_like of complex, shape (p, n)
+        The same modes as fitted, before the projection (e.g. the left factor
+        of each residue), any scale.
+    positions, directions : array_like, shape (p, 3)
+        Sensors, rank 6.
+
+    Returns
+    -------
+    ndarray of complex, shape (p, n)
+        ``T u_k + c_k (I - P) raw_k``, ``P`` the projector on rigid-body motion
+        and ``c_k`` the complex factor that best maps ``P raw_k`` onto ``T u_k``.
+
+    Notes
+    -----
+    ``T^+`` of the result is ``u_k`` exactly, so everything computed from the
+    rigid-body part (eq. (18), the scaled-mode mass) is unchanged; but the
+    part no rigid-body motion explains, which the projection discards, is the
+    measure of the shape noise that an uncertainty estimate needs
+    (:func:`rigidid.core.noise.estimate_noise` reads it from the rigid-fit
+    residual). Without it a modes file fitted to FRFs looks noise-free.
+    """
+    base = np.asarray(scaled, dtype=complex)
+    phi = np.asarray(raw, dtype=complex)
+    _, _, t = scaled_frame(np.asarray(positions, dtype=float), np.asarray(directions, dtype=float))
+    rigid = t @ np.linalg.lstsq(t, phi, rcond=None)[0]
+    out = base.copy()
+    for k in range(base.shape[1]):
+        norm = complex(np.vdot(rigid[:, k], rigid[:, k]))
+        c = complex(np.vdot(rigid[:, k], base[:, k]) / norm) if abs(norm) > 0.0 else 0.0
+        out[:, k] = base[:, k] + c * (phi[:, k] - rigid[:, k])
+    return out
+
+
 def _body_from_modes(lam: CArray, u: CArray, origin: Array, span: float) -> ScaledBody:
     """M, K, C and the body from six unity-modal-A modes ``u`` (6, 6) in the scaled frame (origin, span)."""
     m_inv = np.sum(2.0 * (lam[None, None, :] * u[:, None, :] * u[None, :, :]).real, axis=2)
@@ -854,7 +899,8 @@ def fit_frf_modes(
         else:
             tf = sensor_matrix((rpos - origin) / span, rdirs)
             u = _rigid_modes(residues[:6], t, tf)[0]
-            shapes[:, :6] = t @ u
+            # the projection discards the shapes' non-rigid part, the measure of their noise: keep it
+            shapes[:, :6] = with_nonrigid_residual(t @ u, shapes[:, :6], pos, dirs)
             part[:, :6] = tf @ u
             scaled[:6] = True
     return FrfModes(
