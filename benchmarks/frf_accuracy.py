@@ -222,7 +222,7 @@ def fitted_on_mounts(seed: int, candidate: str) -> list[float]:
 
     _, _, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - pos.mean(axis=0)) / scaled_frame(pos, dirs)[1], np.eye(3))
-    u = refine_rigid_modes(f, h, lam, _rigid_modes(res, t, tf)[0], t, tf, band=band)
+    u = refine_rigid_modes(f, h, lam, _rigid_modes(res, t, tf)[0], t, tf, band=band)[0]
     shapes = t @ u
     ident = identify(pos, dirs, lam, shapes, mass=body.mass, warn=False)
     structured = body_from_scaled_shapes(lam, shapes, pos, dirs)

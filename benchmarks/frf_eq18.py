@@ -23,6 +23,7 @@ the worst inertia diagonal term. Printed per trial, then worst / median.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -43,7 +44,7 @@ def raw_shapes(residues: np.ndarray) -> np.ndarray:
     return out
 
 
-def trial(seed: int, draws: int) -> dict[str, float]:
+def trial(seed: int, draws: int, base: object = None) -> dict[str, float]:
     from rigidid.core.frfmodes import body_from_scaled_modes, fit_frf_modes
     from rigidid.core.identify import identify
     from rigidid.core.noise import estimate_noise
@@ -62,7 +63,7 @@ def trial(seed: int, draws: int) -> dict[str, float]:
         ident = identify(pos, dirs, lam, shapes, mass=body.mass, warn=False)
         d_est = np.diag(ident.inertia_per_mass) * body.mass
         err = d_est / d_true - 1.0
-        levels = estimate_noise(pos, dirs, shapes)
+        levels = estimate_noise(pos, dirs, shapes) if base is None else estimate_noise(pos, dirs, shapes, base=base)
         unc = propagate(pos, dirs, lam, shapes, mass=body.mass, noise=levels, draws=draws, seed=seed)
         std = np.diag(unc.inertia.std) / d_true
         worst = int(np.argmax(np.abs(err)))
@@ -78,7 +79,7 @@ def trial(seed: int, draws: int) -> dict[str, float]:
     origin, span, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - origin) / span, np.eye(3))
     u0 = _rigid_modes(fitted.residues[:6], t, tf)[0]
-    u1 = refine_rigid_modes(f, h, lam, u0, t, tf, band=fitted.residue_band)
+    u1 = refine_rigid_modes(f, h, lam, u0, t, tf, band=fitted.residue_band)[0]
     ident = identify(pos, dirs, lam, t @ u1, mass=body.mass, warn=False)
     out["structured: J err"] = float(np.max(np.abs(np.diag(ident.inertia_per_mass) * body.mass / d_true - 1.0)))
     sb = body_from_scaled_modes(lam, fitted.residues[:6], pos, dirs, rpos, np.eye(3))
@@ -161,11 +162,23 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--draws", type=int, default=200)
     parser.add_argument("--bound", action="store_true", help="Also the Cramer-Rao bound with the poles known.")
+    parser.add_argument(
+        "--pole-noise",
+        nargs=2,
+        type=float,
+        metavar=("FREQUENCY", "DAMPING"),
+        help="Relative frequency and damping noise of the Monte Carlo (default: identify's, 0.001 and 0.05).",
+    )
     args = parser.parse_args()
     rows = []
     for seed in range(args.trials):
         t0 = time.perf_counter()
-        r = trial(seed, args.draws)
+        base = None
+        if args.pole_noise:
+            from rigidid.core.noise import DEFAULT_NOISE
+
+            base = dataclasses.replace(DEFAULT_NOISE, frequency=args.pole_noise[0], damping=args.pole_noise[1])
+        r = trial(seed, args.draws, base)
         if args.bound:
             r.update(bound(seed))
         rows.append(r)

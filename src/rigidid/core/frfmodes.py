@@ -695,7 +695,7 @@ def body_from_frfs(
     origin, span, t = scaled_frame(pos, np.asarray(directions, dtype=float))
     tf = sensor_matrix((np.asarray(reference_positions, dtype=float) - origin) / span, np.asarray(reference_directions))
     res = residues_lsfd(frequencies, frf, lam, band=band)[0]
-    u = refine_rigid_modes(frequencies, frf, lam, _rigid_modes(res, t, tf)[0], t, tf, band=band)
+    u = refine_rigid_modes(frequencies, frf, lam, _rigid_modes(res, t, tf)[0], t, tf, band=band)[0]
     if np.any(np.linalg.norm(u, axis=0) == 0.0):
         raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
     return _body_from_modes(lam, u, origin, span)
@@ -764,7 +764,7 @@ def refine_rigid_modes(
     *,
     band: tuple[float, float] | None = None,
     iterations: int = 8,
-) -> CArray:
+) -> tuple[CArray, Array]:
     """Unity-modal-A rigid-body modes fitted to the FRFs themselves, the poles fixed.
 
     Parameters
@@ -788,12 +788,17 @@ def refine_rigid_modes(
 
     Returns
     -------
-    ndarray of complex, shape (6, n)
+    modes : ndarray of complex, shape (6, n)
         The modes minimising the misfit of
         ``H = sum_k [T u_k u_k^T T_f^T g_k + conj(.) h_k] + U (w / w_top)^2``
         (``g_k = -w^2 / (i w - l_k)``, ``h_k`` with ``conj(l_k)``, the upper residual
         ``U`` free per pair), weighted to relative errors (by the first model's
         magnitude); the starting modes when the misfit does not drop.
+    noise : ndarray, shape (n,)
+        Per mode, the standard deviation of ``T u_k`` per sensor value that white
+        noise would need to give the same scatter of ``u_k`` through a rigid-body fit:
+        ``sqrt(trace(T C_k T^T) / 6)``, ``C_k`` the covariance of ``u_k`` (real and
+        imaginary parts) from ``s^2 (J^T J)^-1`` of the fit (NaN if undetermined).
 
     Notes
     -----
@@ -840,16 +845,19 @@ def refine_rigid_modes(
         r = stacked(hb - model(u))
         return float(r @ r)
 
-    u = u0.copy()
-    best = cost(u)
-    for _ in range(iterations):
+    def jacobian(u: CArray) -> Array:
         cols = []
         for k in range(n):
             for a in range(6):
                 b = tm @ (np.outer(np.eye(6)[a], u[:, k]) + np.outer(u[:, k], np.eye(6)[a])) @ tfm.T
                 cols.append(stacked(b[:, :, None] * g[k] + np.conj(b)[:, :, None] * gc[k]))
                 cols.append(stacked(1j * b[:, :, None] * g[k] - 1j * np.conj(b)[:, :, None] * gc[k]))
-        jac = np.stack(cols, axis=1)
+        return np.stack(cols, axis=1)
+
+    u = u0.copy()
+    best = cost(u)
+    for _ in range(iterations):
+        jac = jacobian(u)
         step = np.linalg.lstsq(jac, stacked(hb - model(u)), rcond=None)[0]
         du = (step[0::2] + 1j * step[1::2]).reshape(n, 6).T
         trial = u + du
@@ -860,10 +868,27 @@ def refine_rigid_modes(
         u, best = trial, new
         if done:
             break
-    return u
+    # the modes' covariance s^2 (J^T J)^-1, s^2 from the weighted misfit (relative noise per real value)
+    jac = jacobian(u)
+    n_rows, n_par = jac.shape
+    n_free = n_rows - n_par - 2 * hb.shape[0] * hb.shape[1]  # the upper residual, two reals per pair
+    noise = np.full(n, np.nan)
+    if n_free > 0:
+        info = jac.T @ jac
+        try:
+            cov = (best / n_free) * np.linalg.solve(info, np.eye(n_par))
+        except np.linalg.LinAlgError:
+            return u, noise
+        for k in range(n):
+            block = cov[12 * k : 12 * k + 12, 12 * k : 12 * k + 12]
+            var = np.trace(tm @ block[0::2, 0::2] @ tm.T) + np.trace(tm @ block[1::2, 1::2] @ tm.T)
+            noise[k] = float(np.sqrt(max(var, 0.0) / 6.0))
+    return u, noise
 
 
-def with_nonrigid_residual(scaled: ArrayLike, raw: ArrayLike, positions: ArrayLike, directions: ArrayLike) -> CArray:
+def with_nonrigid_residual(
+    scaled: ArrayLike, raw: ArrayLike, positions: ArrayLike, directions: ArrayLike, noise: ArrayLike | None = None
+) -> CArray:
     """Rigid-body shapes projected and scaled by the force, with the raw shapes' non-rigid part added back.
 
     Parameters
@@ -877,11 +902,18 @@ def with_nonrigid_residual(scaled: ArrayLike, raw: ArrayLike, positions: ArrayLi
     positions, directions : array_like, shape (p, 3)
         Sensors, rank 6.
 
+    noise : array_like, shape (n,), optional
+        Per mode, the noise per sensor value of ``T u_k`` (as
+        :func:`refine_rigid_modes` gives it): the non-rigid part is then rescaled
+        to the norm ``sqrt(p - 6) noise_k`` that such noise leaves after a rigid-body
+        fit, so that a noise estimate from the residual reads that level.
+
     Returns
     -------
     ndarray of complex, shape (p, n)
         ``T u_k + c_k (I - P) raw_k``, ``P`` the projector on rigid-body motion
-        and ``c_k`` the complex factor that best maps ``P raw_k`` onto ``T u_k``.
+        and ``c_k`` the complex factor that best maps ``P raw_k`` onto ``T u_k``
+        (or the factor that gives the norm of `noise`).
 
     Notes
     -----
@@ -897,10 +929,15 @@ def with_nonrigid_residual(scaled: ArrayLike, raw: ArrayLike, positions: ArrayLi
     _, _, t = scaled_frame(np.asarray(positions, dtype=float), np.asarray(directions, dtype=float))
     rigid = t @ np.linalg.lstsq(t, phi, rcond=None)[0]
     out = base.copy()
+    sigma = None if noise is None else np.asarray(noise, dtype=float).reshape(-1)
     for k in range(base.shape[1]):
         norm = complex(np.vdot(rigid[:, k], rigid[:, k]))
         c = complex(np.vdot(rigid[:, k], base[:, k]) / norm) if abs(norm) > 0.0 else 0.0
-        out[:, k] = base[:, k] + c * (phi[:, k] - rigid[:, k])
+        rest = phi[:, k] - rigid[:, k]
+        size = float(np.linalg.norm(rest))
+        if sigma is not None and np.isfinite(sigma[k]) and size > 0.0:
+            c = c / abs(c) * np.sqrt(max(base.shape[0] - 6, 0)) * sigma[k] / size if c != 0.0 else 0.0
+        out[:, k] = base[:, k] + c * rest
     return out
 
 
@@ -1061,6 +1098,7 @@ def fit_frf_modes(
         else:
             tf = sensor_matrix((rpos - origin) / span, rdirs)
             u = _rigid_modes(residues[:6], t, tf)[0]
+            rigid_noise = None
             if structured:
                 others = h
                 if n > 6:  # the other modes of the band as their residues give them
@@ -1068,9 +1106,9 @@ def fit_frf_modes(
                     g_all = _design(w_all, lam[6:], False, False)[0]  # (f, 2 (n - 6))
                     coef = np.stack([residues[6:].real, residues[6:].imag], axis=1).reshape(2 * (n - 6), p, q)
                     others = h - np.einsum("fc,cpq->pqf", g_all, coef)
-                u = refine_rigid_modes(freq, others, lam[:6], u, t, tf, band=res_band)
+                u, rigid_noise = refine_rigid_modes(freq, others, lam[:6], u, t, tf, band=res_band)
             # the projection discards the shapes' non-rigid part, the measure of their noise: keep it
-            shapes[:, :6] = with_nonrigid_residual(t @ u, shapes[:, :6], pos, dirs)
+            shapes[:, :6] = with_nonrigid_residual(t @ u, shapes[:, :6], pos, dirs, rigid_noise)
             part[:, :6] = tf @ u
             scaled[:6] = True
     return FrfModes(
