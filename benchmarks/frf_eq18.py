@@ -12,9 +12,16 @@ to eq. (18) (core.identify.identify, the true mass given) with
     (core.noise.estimate_noise) cannot see their noise;
   * ``raw``: the rank-one left factor of each residue, not projected (its rigid-fit residual
     measures the shape noise);
-  * ``written``: what modes.csv now carries (FrfModes.shapes), the projected (scaled) shapes plus
-    the part of the raw shapes that is not rigid-body motion (core.frfmodes.with_nonrigid_residual):
-    eq. (18) and the scaled-mode mass as ``projected``, the shape noise visible to identify();
+  * ``written``: what modes.csv now carries (FrfModes.shapes): the six modes fitted to the FRFs
+    with the rigid-body structure imposed, poles fixed (core.frfmodes.refine_rigid_modes; alone:
+    ``structured``), plus a non-rigid part (core.frfmodes.with_nonrigid_residual) sized by that
+    fit's covariance, so that identify()'s noise estimate reads the noise of these shapes;
+  * ``--bound``: the Cramer-Rao bound of eq. (18)'s inertia from these FRFs with the poles known;
+  * ``--pole-noise F D``: the Monte Carlo's frequency and damping noise (identify's defaults,
+    0.1 % and 5 %, are far above a modal fit of FRFs: pole error 1e-4 here).
+Measured (20 trials, 200 draws, 2026-11-23): projected J err 1.4 % median / 14 % worst with a std
+of 0.05 % (error / std 43 median, 381 worst: not honest); written J err 0.41 % / 2.5 %, std 1.1 % /
+4.4 %, error / std 0.39 / 1.5; bound 0.45 % / 2.0 %.
 and identify()'s Monte Carlo standard error (core.uncertainty.propagate, the noise levels
 identify --uncertainty would use) is compared with the actual error: ``z`` = error / std of
 the worst inertia diagonal term. Printed per trial, then worst / median.
