@@ -160,7 +160,8 @@ RIGIDFRF_NOISY = {"mass": 0.013, "cg_span": 0.006}
 SCALED_MODES_CSV = {"mass": 0.005, "cg_span": 0.005, "inertia": 0.02}
 """identify on a modes.csv with scaling modal_a written by `modes --frf` (four-mounts, 1 % FRF
 noise, seed 1; tests/core/test_frfmodes.py): observed mass 0.002 %, CG 0.02 % of the 0.6 m span,
-inertia diagonal 0.03 % (the rigid-body structure imposed in the fit; 0.012 %, 0.03 %, 0.1 % without); bounds set by issue 12 (mass 0.5 %, CG 0.5 % of span, inertia 2 %)."""
+inertia diagonal 0.03 % (the rigid-body structure imposed in the fit; 0.012 %, 0.03 %, 0.1 %
+without); bounds set by issue 12 (mass 0.5 %, CG 0.5 % of span, inertia 2 %)."""
 
 RIGIDFRF_AUTO_LOW_NOISE = 1e-4
 """mass_line(supports="auto") near the supports of the soft-table test (1.6-4 x the highest
