@@ -162,3 +162,20 @@ ELASTIC_MODE_CG_SPAN = 0.0025
 left out by the seventh-mode estimate (four-mounts, 8 sensors, 2 impacts, 8 s at 512 Hz, 1 % noise;
 observed 0.0002-0.0008 over seeds 0-2 with the mode at 18 Hz and at 34 Hz). With the elastic mode
 taken for a rigid one the error was 0.8-1.1 of the span."""
+
+SCALED_MODES_CSV = {"mass": 0.005, "cg_span": 0.005, "inertia": 0.02}
+"""identify on a modes.csv with scaling modal_a written by `modes --frf` (four-mounts, 1 % FRF
+noise, seed 1; tests/core/test_frfmodes.py): observed mass 0.002 %, CG 0.02 % of the 0.6 m span,
+inertia diagonal 0.03 % (the rigid-body structure imposed in the fit; 0.012 %, 0.03 %, 0.1 %
+without); bounds set by issue 12 (mass 0.5 %, CG 0.5 % of span, inertia 2 %)."""
+
+RIGIDFRF_AUTO_LOW_NOISE = 1e-4
+"""mass_line(supports="auto") near the supports of the soft-table test (1.6-4 x the highest
+support frequency, 200 lines, 0.1 % FRF noise; tests/core/test_rigidfrf.py): the exact fit is
+chosen and its mass error was 3.0e-5 (the first-order fit's 1.0 %)."""
+
+FRF_EQ18_STRUCTURED = 0.01
+"""Eq. (18) with the mass given on modes fitted to FRFs (the issue's test, seed 2 of
+benchmarks/frf_eq18.py): with the rigid-body structure imposed in the modal fit
+(frfmodes.refine_rigid_modes) the worst inertia-diagonal error was 0.29 %, projecting the free
+residues gave 6.2 %; the bound sits between them, so the test also fails if the refit is off."""

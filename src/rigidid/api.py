@@ -31,6 +31,7 @@ from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
 from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
+    from rigidid.core.frfmodes import ScaledBody
     from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, ReferenceReport, SensorPlan
@@ -109,6 +110,11 @@ class IdentifyResult:
         Cramér-Rao intervals of the output-error refinement on the records
         (:func:`with_refinement`); set when the refinement replaced the
         structured answer.
+    scaled : ScaledBody or None
+        When the six modes used are scaled to unity modal A (``modes.csv``
+        column ``scaling`` ``modal_a``, written by ``rigidid modes --frf``):
+        the mass, CG, inertia, stiffness and damping in absolute units from the
+        scaled modes (:func:`rigidid.core.frfmodes.body_from_scaled_shapes`).
     """
 
     identification: Identification
@@ -128,6 +134,7 @@ class IdentifyResult:
     mounts: Mounts | None = None
     torque_roll_axis: TorqueRollAxis | None = None
     mount_model: MountModelFit | None = None
+    scaled: ScaledBody | None = None
 
 
 @dataclass(frozen=True)
@@ -396,7 +403,24 @@ def identify(
         uncertainty=intervals,
         layout_name=lay.name,
         mount_model=fit,
+        scaled=_scaled_body(used, poles, positions, directions),
     )
+
+
+def _scaled_body(
+    used: ModeTable, poles: NDArray[np.complex128], positions: NDArray[np.float64], directions: NDArray[np.float64]
+) -> ScaledBody | None:
+    """The body from six modes scaled to unity modal A by the force (``scaling`` all ``modal_a``), else None."""
+    if used.scaling is None or len(used.scaling) != 6 or any(s != "modal_a" for s in used.scaling):
+        return None
+    from rigidid.core.frfmodes import body_from_scaled_shapes
+    from rigidid.errors import IdentificationError, IllConditionedWarning, Notice, emit
+
+    try:
+        return body_from_scaled_shapes(poles, used.shapes, positions, directions)
+    except IdentificationError as exc:
+        emit([Notice(IllConditionedWarning, f"the modal_a scaled modes give no mass: {exc}")])
+        return None
 
 
 def _suspect_mode(ident: Identification) -> str:

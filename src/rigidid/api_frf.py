@@ -226,11 +226,11 @@ def identify_massline(
         )
     scaled = None
     if poles is not None:
-        from rigidid.core.frfmodes import body_from_scaled_modes, residues_lsfd, rigid_band
+        from rigidid.core.frfmodes import body_from_frfs, rigid_band
 
         lam = np.asarray(poles)[np.argsort(np.abs(poles))]
         fit_band = band if band is not None else rigid_band(freqs, h)[0]
-        scaled = body_from_scaled_modes(lam, residues_lsfd(freqs, h, lam, band=fit_band)[0], pos, dirs, rpos, rdirs)
+        scaled = body_from_frfs(freqs, h, lam, pos, dirs, rpos, rdirs, band=fit_band)
     return MassLineResult(
         result,
         {"length": lay.units.length, "mass": lay.units.mass},

@@ -20,7 +20,7 @@ from rigidid import __version__
 if TYPE_CHECKING:
     from rigidid.api import IdentifyResult, PlanResult
     from rigidid.api_frf import MassLineResult
-    from rigidid.core.frfmodes import FrfModes
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.layout_check import LayoutReport
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import PredictedFigures, Prediction, ReferenceReport, SensorPlan
@@ -41,6 +41,7 @@ __all__ = [
     "record_bound_to_dict",
     "record_spread_to_dict",
     "result_to_dict",
+    "scaled_modes_to_dict",
     "sensor_plan_to_dict",
     "uncertainty_to_dict",
 ]
@@ -162,12 +163,36 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
             "angle_to_torque_deg": tra.angle_to_torque_deg,
             "angle_to_principal_deg": _vec(tra.angle_to_principal_deg),
         }
+    if result.scaled is not None:
+        out.update(scaled_modes_to_dict(result.scaled, ident.mass))
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
     if result.record_spread is not None:
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
     if result.record_bound is not None:
         out["uncertainty_records_crb"] = record_bound_to_dict(result.record_bound)
+    return out
+
+
+def scaled_modes_to_dict(scaled: ScaledBody, mass_given: float | None) -> dict[str, Any]:
+    """``mass_measured``, ``mass_given``, ``mass_difference(_relative)`` and ``scaled_modes`` (FORMATS.md).
+
+    The keys of the ``--method residues`` JSON, added to the result JSON when the six
+    modes used are scaled by the force (``modes.csv`` ``scaling`` ``modal_a``).
+    """
+    out: dict[str, Any] = {
+        "mass_measured": float(scaled.mass),
+        "mass_given": None if mass_given is None else float(mass_given),
+        "mass_difference": None if mass_given is None else float(scaled.mass - mass_given),
+        "mass_difference_relative": None if mass_given is None else float(scaled.mass / mass_given - 1.0),
+        "scaled_modes": {
+            "mass": float(scaled.mass),
+            "center_of_gravity": _vec(scaled.center_of_gravity),
+            "inertia_tensor": _rows(scaled.inertia_tensor),
+            "stiffness_matrix": _rows(scaled.stiffness_matrix),
+            "damping_matrix": _rows(scaled.damping_matrix),
+        },
+    }
     return out
 
 

@@ -336,6 +336,16 @@ class RecordBoundResult(BaseModel):
     center_of_gravity: Interval
 
 
+class ScaledModesResult(_Strict):
+    """The body from six rigid-body modes scaled by the force (unity modal A): absolute units, at the CG."""
+
+    mass: float
+    center_of_gravity: Vector3
+    inertia_tensor: Matrix3
+    stiffness_matrix: Matrix6 = Field(description="mass/s^2 (rotations in radians), DOF x, y, z, rx, ry, rz")
+    damping_matrix: Matrix6 = Field(description="mass/s")
+
+
 class ResultFile(_Strict):
     """The result JSON of ``rigidid identify`` (FORMATS.md); matrices are lists of rows, DOF x, y, z, rx, ry, rz."""
 
@@ -385,6 +395,17 @@ class ResultFile(_Strict):
     )
     torque_roll_axis: TorqueRollAxisResult | None = Field(
         default=None, description="with --torque-axis: the rotation under a pure torque"
+    )
+    mass_measured: float | None = Field(
+        default=None, description="with six modal_a scaled modes (modes --frf): the mass from the scaled modes"
+    )
+    mass_given: float | None = Field(default=None, description="with mass_measured: the mass given, else null")
+    mass_difference: float | None = Field(default=None, description="mass_measured - mass_given, else null")
+    mass_difference_relative: float | None = Field(
+        default=None, description="mass_measured / mass_given - 1, else null"
+    )
+    scaled_modes: ScaledModesResult | None = Field(
+        default=None, description="with six modal_a scaled modes: the body from them in absolute units"
     )
 
 

@@ -87,6 +87,7 @@ def result_tables(result: IdentifyResult, force_unit: str | None = None) -> Grou
 
     return Group(
         *_mass_tables(result),
+        *_scaled_tables(result),
         *_support_tables(result, force_unit),
         *_mount_tables(result, force_unit),
         _energy_table(result),
@@ -124,6 +125,28 @@ def _mass_tables(result: IdentifyResult) -> list[Table]:
     for k in range(3):
         principal.add_row(_fmt(float(moments[k])), *(f"{float(v):+.4f}" for v in ident.principal_axes[:, k]))
     return [head, inertia, principal]
+
+
+def _scaled_tables(result: IdentifyResult) -> list[Table]:
+    """The body from the modes scaled by the force (modes.csv ``modal_a``): mass measured, CG, inertia."""
+    from rich.table import Table
+
+    sb = result.scaled
+    if sb is None:
+        return []
+    length, mass = result.units["length"], result.units["mass"]
+    table = Table(title="Scaled modes (modal_a: the force scales them)", title_justify="left", show_header=False)
+    table.add_row("mass measured", f"{_fmt(sb.mass)} {mass}")
+    given = result.identification.mass
+    if given is not None:
+        diff = sb.mass - given
+        table.add_row("mass given", f"{_fmt(given)} {mass}")
+        table.add_row("difference", f"{_fmt(diff)} {mass} ({100.0 * diff / given:+.2f} %)")
+    table.add_row(f"CG ({length})", _vector(sb.center_of_gravity))
+    inertia = _matrix_table(
+        f"Inertia tensor about the CG from the scaled modes ({mass} {length}^2)", sb.inertia_tensor, ("x", "y", "z")
+    )
+    return [table, inertia]
 
 
 def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]:

@@ -19,6 +19,7 @@ from rigidid.io.files import load_modes
 
 from ..bodies import random_body, random_layout
 from ..conftest import DATA, SAMPLES
+from ..tolerances import FRF_EQ18_STRUCTURED, SCALED_MODES_CSV
 
 FOUR = SAMPLES / "four-mounts"
 REFS = DATA / "frf" / "references.json"
@@ -77,6 +78,44 @@ def test_noisy_frfs_round_trip() -> None:
     span = float(np.ptp(pos, axis=0).max())
     assert np.linalg.norm(scaled.center_of_gravity - body.center_of_gravity) / span < 0.01
     assert len(fitted.diagram) >= 8 and any(entry.stable.any() for entry in fitted.diagram)
+    # the shapes written carry their non-rigid part (the noise), the rigid part is T u exactly
+    from rigidid.core.frfmodes import body_from_scaled_shapes, rigid_shapes
+    from rigidid.core.identify import identify
+    from rigidid.core.noise import estimate_noise
+
+    assert estimate_noise(pos, dirs, rigid_shapes(fitted.residues, pos, dirs, rpos, np.eye(3))[0]).shape < 1e-12
+    assert estimate_noise(pos, dirs, fitted.shapes).shape > 1e-4
+    t = sensor_matrix(pos - pos.mean(axis=0), dirs)
+    projected = t @ np.linalg.lstsq(t, fitted.shapes, rcond=None)[0]
+    from_shapes = body_from_scaled_shapes(fitted.poles, fitted.shapes, pos, dirs)
+    assert from_shapes.mass == pytest.approx(
+        body_from_scaled_shapes(fitted.poles, projected, pos, dirs).mass, rel=1e-10
+    )
+    assert abs(from_shapes.mass / body.mass - 1.0) < 0.02
+    a = identify(pos, dirs, fitted.poles, fitted.shapes, mass=body.mass, warn=False)
+    b = identify(pos, dirs, fitted.poles, projected, mass=body.mass, warn=False)
+    np.testing.assert_allclose(a.inertia_per_mass, b.inertia_per_mass, rtol=1e-6, atol=1e-9)
+
+
+def test_structured_rigid_modes_bring_eq18_close_to_its_bound():
+    """The issue's test (benchmarks/frf_eq18.py, seed 2): eq. (18) with the mass given on the modes fitted to FRFs."""
+    from rigidid.core.frf import random_elastic_modes
+    from rigidid.core.identify import identify
+
+    rng = np.random.default_rng(2)
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    errors = []
+    for structured in (True, False):
+        fitted = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6, structured=structured)
+        ident = identify(pos, dirs, fitted.poles, fitted.shapes, mass=body.mass, warn=False)
+        errors.append(np.max(np.abs(np.diag(ident.inertia_per_mass) * body.mass / np.diag(body.inertia_tensor) - 1)))
+    assert errors[0] < FRF_EQ18_STRUCTURED < errors[1]
 
 
 def test_lsfd_with_residual_terms_and_bad_poles() -> None:
@@ -110,7 +149,17 @@ def test_modes_from_frfs_on_the_command_line_feed_identify(tmp_path: Path) -> No
     done = run("identify", FOUR / "layout.json", fit, "--mass", "40", "--json", "-")
     assert done.returncode == 0, done.stderr
     truth = json.loads((FOUR / "body.json").read_text())["center_of_gravity"]
-    assert np.linalg.norm(np.array(json.loads(done.stdout)["center_of_gravity"]) - truth) < 0.01
+    result = json.loads(done.stdout)
+    assert np.linalg.norm(np.array(result["center_of_gravity"]) - truth) < 0.01
+    # the modal_a scaling measures the mass (simulate --frf -> modes --frf -> identify modes.csv)
+    assert abs(result["mass_measured"] / 40.0 - 1.0) < SCALED_MODES_CSV["mass"]
+    assert result["mass_given"] == 40.0 and result["mass_difference"] == pytest.approx(result["mass_measured"] - 40.0)
+    sm = result["scaled_modes"]
+    sensors = json.loads((FOUR / "layout.json").read_text())["sensors"]
+    span = float(np.ptp([s["position"] for s in sensors], axis=0).max())
+    assert np.linalg.norm(np.array(sm["center_of_gravity"]) - truth) / span < SCALED_MODES_CSV["cg_span"]
+    j_true = np.diag(json.loads((FOUR / "body.json").read_text())["inertia_tensor"])
+    assert np.max(np.abs(np.diag(sm["inertia_tensor"]) / j_true - 1.0)) < SCALED_MODES_CSV["inertia"]
 
 
 def test_modes_from_frfs_bad_inputs_are_one_line_exit_2(tmp_path: Path) -> None:
@@ -132,3 +181,70 @@ def test_modes_from_frfs_bad_inputs_are_one_line_exit_2(tmp_path: Path) -> None:
     done = run("modes", FOUR / "layout.json", "--frf", uff, "--references", REFS)
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
     assert "cross" in done.stderr.lower()
+
+
+def _exact_modal_a(body, pos, dirs):  # type: ignore[no-untyped-def]
+    """Poles and unity-modal-A shapes at the sensors from the body's M, K, C (residue = shape shape^T)."""
+    m, k, c = system_matrices(body)
+    a = np.block([[np.zeros((6, 6)), np.eye(6)], [-np.linalg.solve(m, k), -np.linalg.solve(m, c)]])
+    lam, vec = np.linalg.eig(a)
+    keep = [i for i in np.argsort(np.abs(lam)) if lam[i].imag > 0][:6]
+    t = sensor_matrix(pos - body.center_of_gravity, dirs)
+    shapes = np.zeros((pos.shape[0], 6), dtype=complex)
+    for j, i in enumerate(keep):
+        psi = vec[:6, i]
+        shapes[:, j] = t @ (psi / np.sqrt(psi @ (2.0 * lam[i] * m + c) @ psi))
+    return lam[keep], shapes
+
+
+def test_a_modal_a_modes_file_of_exact_scaled_modes_gives_the_body_exactly(tmp_path: Path) -> None:
+    """identify on modes.csv with scaling modal_a: mass, CG, inertia, K, C from the scaled modes (10 digits)."""
+    from rigidid import api
+    from rigidid.api import body_from_file
+    from rigidid.io.files import ModeTable, layout_arrays, load_body, load_layout, modes_csv_text
+    from rigidid.jsonout import result_to_dict
+    from rigidid.models import ResultFile
+
+    body = body_from_file(load_body(FOUR / "body.json"))
+    ids, pos, dirs = layout_arrays(load_layout(FOUR / "layout.json"))
+    lam, shapes = _exact_modal_a(body, pos, dirs)
+    table = ModeTable.numbered(np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam), ids, shapes)
+    path = tmp_path / "modes.csv"
+    path.write_text(modes_csv_text(table, scaling=["modal_a"] * 6))
+    result = api.identify(FOUR / "layout.json", path, mass=41.0)
+    sb = result.scaled
+    assert sb is not None
+    _, k, c = system_matrices(body)
+    assert sb.mass == pytest.approx(body.mass, rel=1e-8)
+    np.testing.assert_allclose(sb.center_of_gravity, body.center_of_gravity, atol=1e-8)
+    np.testing.assert_allclose(sb.inertia_tensor, body.inertia_tensor, atol=1e-7 * np.abs(body.inertia_tensor).max())
+    np.testing.assert_allclose(sb.stiffness_matrix, k, atol=1e-7 * np.abs(k).max())
+    np.testing.assert_allclose(sb.damping_matrix, c, atol=1e-7 * np.abs(c).max())
+    out = result_to_dict(result)
+    ResultFile.model_validate(out)
+    assert out["mass_given"] == 41.0 and out["mass_difference"] == pytest.approx(sb.mass - 41.0)
+    assert out["mass_difference_relative"] == pytest.approx(sb.mass / 41.0 - 1.0)
+    assert out["scaled_modes"]["mass"] == out["mass_measured"] == sb.mass
+    # one mode unit_max (or no scaling column): as before, no scaled-mode keys, the same answer
+    path.write_text(modes_csv_text(table, scaling=["modal_a"] * 5 + ["unit_max"]))
+    mixed = api.identify(FOUR / "layout.json", path, mass=41.0)
+    assert mixed.scaled is None and "mass_measured" not in result_to_dict(mixed)
+    np.testing.assert_array_equal(mixed.identification.center_of_gravity, result.identification.center_of_gravity)
+    path.write_text(modes_csv_text(table).replace("modal_a", "unit_max"))
+    assert api.identify(FOUR / "layout.json", path).scaled is None
+
+
+def test_a_bad_scaling_word_is_refused_naming_the_row(tmp_path: Path) -> None:
+    from rigidid.io.files import ModeTable, modes_csv_text
+
+    table = ModeTable.numbered(np.array([1.0]), np.array([0.01]), ["a", "b"], np.array([[1.0 + 0j], [0.5 + 0j]]))
+    path = tmp_path / "modes.csv"
+    path.write_text(modes_csv_text(table, scaling=["modal_b"]))
+    with pytest.raises(InputError, match="row 2: scaling"):
+        load_modes(path, ["a", "b"])
+    lines = modes_csv_text(table, scaling=["modal_a"]).splitlines()
+    path.write_text("\n".join([*lines[:2], lines[2].replace("modal_a", "unit_max")]) + "\n")
+    with pytest.raises(InputError, match="row 3: scaling: scaling differs"):
+        load_modes(path, ["a", "b"])
+    path.write_text("\n".join(lines) + "\n")
+    assert load_modes(path, ["a", "b"]).scaling == ("modal_a",)

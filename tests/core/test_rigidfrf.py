@@ -12,7 +12,7 @@ from rigidid.core.rigidfrf import mass_matrix_from_parameters, rigid_frf_fit
 from rigidid.core.simulate import Body, Mount, system_matrices
 from rigidid.errors import InputError
 from tests.bodies import random_body, random_layout
-from tests.tolerances import MASSLINE_EXACT_REL, RIGIDFRF_EXACT_REL, RIGIDFRF_NOISY
+from tests.tolerances import MASSLINE_EXACT_REL, RIGIDFRF_AUTO_LOW_NOISE, RIGIDFRF_EXACT_REL, RIGIDFRF_NOISY
 
 
 def _soft_table_test():
@@ -108,3 +108,32 @@ def test_free_free_mass_line_is_still_exact_and_bad_arguments_are_refused():
         mass_line(f, h, pos, dirs, rpos, np.eye(3), band=(200.0, 400.0), supports="second")
     with pytest.raises(InputError, match="shape"):
         rigid_frf_fit(f, np.zeros((6, 3, 5)), np.zeros((6, 3)))
+
+
+def test_auto_supports_compares_the_misfits_in_noise_units():
+    """Near the supports the first-order correction misfits by several noise units: auto takes the exact fit;
+    with 1 % noise the same misfit hides in the noise and the first-order fit is kept, saying so."""
+    body, pos, dirs, rpos, rdirs = _soft_table_test()
+    m, k, _ = system_matrices(body)
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real)) / (2 * np.pi)
+    f = np.linspace(1.6 * top, 4.0 * top, 200)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, noise=0.001, rng=np.random.default_rng(3))
+    r = mass_line(f, h, pos, dirs, rpos, rdirs, band=(f[0], f[-1]))
+    assert r.supports == "exact" and "times the noise" in r.supports_reason
+    assert abs(r.mass / body.mass - 1.0) < RIGIDFRF_AUTO_LOW_NOISE
+    first = mass_line(f, h, pos, dirs, rpos, rdirs, band=(f[0], f[-1]), supports="first_order")
+    assert abs(first.mass / body.mass - 1.0) > 10 * RIGIDFRF_AUTO_LOW_NOISE
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, noise=0.01, rng=np.random.default_rng(3))
+    r = mass_line(f, h, pos, dirs, rpos, rdirs, band=(f[0], f[-1]))
+    assert r.supports == "first_order" and "fits the band to the noise" in r.supports_reason
+
+
+def test_the_noise_misfit_sees_white_noise_and_not_a_smooth_lack_of_fit():
+    from rigidid.core.massline import _noise_residual
+
+    rng = np.random.default_rng(0)
+    target = np.ones((2 * 500, 6))
+    white = 0.01 * rng.standard_normal((1000, 6))
+    assert _noise_residual(white, target, 0) == pytest.approx(0.01, rel=0.05)
+    smooth = 0.01 * np.tile(np.sin(np.linspace(0.0, 3.0, 500)), 2)[:, None] * np.ones((1, 6))
+    assert _noise_residual(smooth, target, 0) < 1e-4

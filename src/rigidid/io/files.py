@@ -13,7 +13,7 @@ import math
 import os
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar
 
@@ -42,7 +42,8 @@ MODES_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "sensor", "real", "ima
 _REQUIRED = MODES_COLUMNS[:5]
 MODES_OPTIONAL = ("scaling",)
 """Optional ``modes.csv`` columns: ``scaling`` (``modal_a`` for shapes scaled by the force, written by
-``rigidid modes --frf``; ``unit_max`` otherwise) is read and ignored by the identification."""
+``rigidid modes --frf``; ``unit_max`` otherwise) is read into ``ModeTable.scaling``; six ``modal_a`` modes
+give ``identify`` the measured mass (``scaled_modes``)."""
 
 M = TypeVar("M", bound=BaseModel)
 # a plain decimal number: no underscores ("1_0"), no hex, no words but nan/inf (refused by the model)
@@ -70,6 +71,8 @@ class ModeTable:
     damping_ratio: NDArray[np.float64]
     sensor_ids: tuple[str, ...]
     shapes: NDArray[np.complex128]
+    scaling: tuple[str, ...] | None = None
+    """Per mode, the optional ``scaling`` column of ``modes.csv`` (``modal_a``, ``unit_max``), or None."""
 
     @classmethod
     def numbered(
@@ -91,6 +94,7 @@ class ModeTable:
             self.damping_ratio[index],
             self.sensor_ids,
             self.shapes[:, index],
+            None if self.scaling is None else tuple(self.scaling[i] for i in index),
         )
 
 
@@ -359,6 +363,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
     if len(set(columns)) != len(columns):
         raise InputError("a column appears twice", source=src, location="row 1")
     rows: list[ModeValue] = []
+    scalings: dict[int, str] = {}
     for line, row in enumerate(reader, start=2):
         if not row or all(not cell.strip() for cell in row):
             continue
@@ -366,7 +371,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         if len(row) != len(columns):
             raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
         record: dict[str, Any] = {c: _modes_cell(c, v, dialect) for c, v in zip(columns, row, strict=True)}
-        record.pop("scaling", None)
+        scale = record.pop("scaling", None)
         for name in ("mode", "frequency_hz", "damping_ratio", "real", "imag"):
             cell = record.get(name)
             if cell is None:
@@ -390,7 +395,19 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
             raise InputError(message, source=src, location=f"{where}: {loc}") from None
         value = complex(parsed.real, parsed.imag)
         rows.append(ModeValue(where, parsed.mode, parsed.frequency_hz, parsed.damping_ratio, parsed.sensor, value))
-    return mode_table_from_rows(rows, sensor_ids, src)
+        if scale is not None:
+            if scale not in ("modal_a", "unit_max"):
+                raise InputError(
+                    f"scaling must be modal_a or unit_max, got {scale[:40]!r}", source=src, location=f"{where}: scaling"
+                )
+            if scalings.setdefault(parsed.mode, scale) != scale:
+                raise InputError(
+                    f"scaling differs between rows of mode {parsed.mode}", source=src, location=f"{where}: scaling"
+                )
+    table = mode_table_from_rows(rows, sensor_ids, src)
+    if "scaling" not in columns:
+        return table
+    return replace(table, scaling=tuple(scalings[label] for label in table.labels))
 
 
 class ModeValue(NamedTuple):
