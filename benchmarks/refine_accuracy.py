@@ -72,16 +72,17 @@ def main() -> None:
     jd = np.diag(INERTIA)
     print(f"four-mounts ({args.body} damping), 8 sensors, 2 impacts, {args.duration:g} s at {args.rate:g} Hz, "
           f"{args.seeds} seeds")  # fmt: skip
-    head = "| noise | route | CG % span median (worst) | inertia diag % median (worst) | good fits | coverage 95 %"
-    print(head + " | s/fit |")
-    print("|---|---|---|---|---|---|---|")
+    head = "| noise | route | CG % span median (worst) | inertia diag % median (worst) | good fits | converged"
+    print(head + " | coverage 95 % | s/fit |")
+    print("|---|---|---|---|---|---|---|---|")
     for noise in args.noise:
         rows: dict[str, list[tuple[float, float]]] = {"1 structured": [], "3 output error": [], "CRB at truth": []}
-        covered, total, good, times = 0, 0, 0, []
+        covered, total, good, converged, times = 0, 0, 0, 0, []
         for seed in range(args.seeds):
             _, ident, ref, truth, dt = one(noise, seed, args.duration, args.rate, pos, dirs, body)
             times.append(dt)
             good += good_fit(ref)
+            converged += bool(getattr(ref, "converged", False))
             for name, g, j in (("1 structured", ident.center_of_gravity, ident.inertia_per_mass),
                                ("3 output error", ref.center_of_gravity, ref.inertia_per_mass)):  # fmt: skip
                 j_err = 100 * np.max(np.abs(np.diag(j) * MASS / jd - 1))
@@ -93,7 +94,8 @@ def main() -> None:
                 print(f"  seed {seed}: CG % span structured {rows['1 structured'][-1][0]:.4f} refined "
                       f"{rows['3 output error'][-1][0]:.4f} bound {rows['CRB at truth'][-1][0]:.4f}; inertia % "
                       f"{rows['1 structured'][-1][1]:.3f} / {rows['3 output error'][-1][1]:.3f} / "
-                      f"{rows['CRB at truth'][-1][1]:.3f}; cost {ref.normalised_cost:.3f}, {ref.evaluations} evals",
+                      f"{rows['CRB at truth'][-1][1]:.3f}; cost {ref.normalised_cost:.3f}, {ref.evaluations} evals, "
+                      f"converged {getattr(ref, 'converged', '-')}",
                       flush=True)  # fmt: skip
             z_cg = np.abs(ref.center_of_gravity - CG) / ref.std["center_of_gravity"]
             z_j = np.abs(np.diag(ref.inertia_per_mass) * MASS - jd) / (np.diag(ref.std["inertia_per_mass"]) * MASS)
@@ -101,9 +103,10 @@ def main() -> None:
             total += 6
         for name, vals in rows.items():
             a = np.array(vals)
-            extra = " | |"
+            extra = " | | |"
             if name.startswith("3"):
-                extra = f"{good}/{args.seeds} | {covered / total:.3f} | {np.median(times):.1f}"
+                n = args.seeds
+                extra = f"{good}/{n} | {converged}/{n} | {covered / total:.3f} | {np.median(times):.1f}"
             print(f"| {100 * noise:g} % | {name} | {np.median(a[:, 0]):.4f} ({a[:, 0].max():.4f}) "
                   f"| {np.median(a[:, 1]):.3f} ({a[:, 1].max():.3f}) | {extra} |")  # fmt: skip
 
