@@ -56,6 +56,7 @@ _Z95 = 1.959963984540054
 _GOOD_COST = 2.0  # normalised cost 2 cost / n_residuals above this: a bad fit (about 1 at a good one)
 _DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual variances
 _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
+_STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
 _GEODESIC_ALPHA = 0.75  # largest 2 |acceleration| / |step| accepted
 
@@ -362,7 +363,7 @@ def _levenberg_marquardt(
     Stops, converged, when the Gauss-Newton decrement ``g^T (J^T J)^+ g`` (``g = J^T r``)
     over the residual variance ``|r|^2 / (n - n_theta)`` falls below :data:`_DECREMENT`:
     the remaining Gauss-Newton step, in standard-error units, is below about 0.2 of one
-    standard error; or when the decrement is below 1 and the last step lowered the cost by
+    standard error; or when the decrement is below 4 and the last step lowered the cost by
     less than :data:`_STALL` variances: a minimum on the boundary of the positive
     (semi-)definite J, K, C, where the Gauss-Newton step points out of the parameterisation's
     reach (a weakly damped direction whose estimate would be negative). Stops unconverged
@@ -388,7 +389,7 @@ def _levenberg_marquardt(
         gn = -(vt.T / np.where(sv > 1e-12 * sv[0], sv, np.inf)) @ (u.T @ g)
         variance = max(cost / dof, 1e-300)
         decrement = -float(g @ gn) / variance
-        if decrement <= _DECREMENT or (drop <= _STALL * variance and decrement <= 1.0):
+        if decrement <= _DECREMENT or (drop <= _STALL * variance and decrement <= _STALL_DECREMENT):
             converged = True
             break
         d = np.maximum(np.diag(jtj), 1e-12 * max(float(np.max(np.diag(jtj))), 1e-300))
