@@ -14,19 +14,21 @@ import warnings
 
 import numpy as np
 
+from rigidid.api import body_from_file
 from rigidid.core.identify import identify
-from rigidid.core.simulate import system_matrices
 from rigidid.core.timedomain import estimate_modes, impulse_records
 from rigidid.core.timedomain.refine import N_PARAMETERS, good_fit, refine_body
+from rigidid.io.files import layout_arrays, load_body, load_layout
 
 from ..tolerances import REFINE_CONVERGED_COST, REFINE_CONVERGED_STD
-from .test_refine import IMPACTS, _truth_per_mass, rig  # noqa: F401  (the fixture)
+from .test_refine import IMPACTS, SAMPLE, _truth_per_mass
 
 RATE = 256.0
 
 
-def test_five_percent_noise_fit_converges_to_the_truth_started_fit(rig) -> None:  # type: ignore[no-untyped-def]
-    body, pos, dirs = rig
+def test_five_percent_noise_fit_converges_to_the_truth_started_fit() -> None:
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
     records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=4.0, pretrigger=0.4,
                               noise=0.05, seed=2)  # fmt: skip
     est = estimate_modes(records, 1.0 / RATE)
