@@ -472,7 +472,7 @@ def refine_body(
     inertia_per_mass: ArrayLike,
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
-    max_evaluations: int = 150,
+    max_evaluations: int = 240,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
