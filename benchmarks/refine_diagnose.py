@@ -1,7 +1,8 @@
 """Diagnose the record refit's convergence (issue 11): start at the truth and at the structured
 answer, print the cost trace, the final normalised cost, evaluations and errors.
 
-Run: ``python benchmarks/refine_diagnose.py [--seeds 0 1 2] [--noise 0.05] [--budget 60]``
+Run: ``python benchmarks/refine_diagnose.py [--seeds 0 1 2] [--noise 0.05] [--budget 240] [--impacts 1]
+[--golub-pereyra]``
 """
 
 from __future__ import annotations
@@ -32,10 +33,12 @@ def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     p.add_argument("--noise", type=float, default=0.05)
-    p.add_argument("--budget", type=int, default=150)
+    p.add_argument("--budget", type=int, default=240)
     p.add_argument("--duration", type=float, default=8.0)
     p.add_argument("--impacts", type=int, default=2)
+    p.add_argument("--golub-pereyra", action="store_true", help="the full variable-projection Jacobian")
     a = p.parse_args()
+    rf._GOLUB_PEREYRA = a.golub_pereyra
     warnings.simplefilter("ignore")
     rf._evaluate = _traced
     pos, dirs = layout(8)

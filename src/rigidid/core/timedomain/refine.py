@@ -57,6 +57,7 @@ _GOOD_COST = 2.0  # normalised cost 2 cost / n_residuals above this: a bad fit (
 _DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual variances
 _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
 _STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
+_GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
 _GEODESIC_ALPHA = 0.75  # largest 2 |acceleration| / |step| accepted
 
@@ -431,6 +432,22 @@ def _levenberg_marquardt(
     return theta, nfev, r, jm, converged
 
 
+def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray, dphiw: CArray, dlam: CArray) -> Array:
+    """The term of the full (Golub-Pereyra) variable-projection Jacobian that Kaufman's drops.
+
+    ``(A^+)^T dA_j^T r = A (A^T A)^-1 dA_j^T r`` for every parameter j, shape (n p, 51);
+    ``dA_j^T r`` from ``dU_jnck = e^{lambda_k t_n} (dphi_jck + phi_ck t_n dlambda_jk)``.
+    """
+    e1 = res.T @ ex  # (p, 6): sum_n r_nc e^{lambda_k t_n}
+    e2 = res.T @ (ex * t[:, None])
+    s = np.einsum("ck,jck->jk", e1, dphiw) + dlam * np.einsum("ck,ck->k", phiw, e2)[None, :]
+    z = np.zeros((N_PARAMETERS, design.shape[1]))
+    z[:, :6], z[:, 6:12] = s.real, -s.imag
+    coef = np.linalg.lstsq(design.T @ design, z.T, rcond=None)[0]  # (A^T A)^-1 z^T
+    out: Array = design @ coef
+    return out
+
+
 def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
     w = 1.0 / data.sigma
@@ -453,6 +470,8 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             m2 = np.einsum("nk,jck->njc", ex * t[:, None], g2)
             dm = (m1 + m2).real.transpose(0, 2, 1).reshape(n * p, N_PARAMETERS)  # d model / d theta
             jp = -project(dm)[1]
+            if _GOLUB_PEREYRA:
+                jp = jp - _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
             jac_parts.append(jp)
     r_all = np.concatenate(res_parts)
     j_all = np.vstack(jac_parts) if jac else np.zeros((0, N_PARAMETERS))
