@@ -145,6 +145,7 @@ def cell(spec: dict, seeds: int):  # type: ignore[no-untyped-def]
             np.sum(truth.std["center_of_gravity"] ** 2) / span**2,
             np.mean((np.diag(truth.std["inertia_per_mass"]) * body.mass / jd) ** 2),
             float(ok),
+            float(ok and ref is not None and bool(getattr(ref, "converged", False))),
         ]  # fmt: skip
         errs.append(row)
     return errs, fails, times
@@ -156,7 +157,7 @@ def main() -> None:
     parser.add_argument("--cells", nargs="*", default=list(CELLS))
     args = parser.parse_args()
     warnings.simplefilter("ignore")
-    print("| cell | bodies | refined fits | CG RMS % span: refined / structured / CRB | ratio "
+    print("| cell | bodies | refined fits (converged) | CG RMS % span: refined / structured / CRB | ratio "
           "| inertia RMS %: refined / structured / CRB | ratio | s/test | why not |")  # fmt: skip
     print("|---|---|---|---|---|---|---|---|---|")
     for name in args.cells:
@@ -167,11 +168,13 @@ def main() -> None:
             continue
         a = np.sqrt(np.mean(np.array(errs)[:, :6], axis=0)) * 100
         good = int(np.sum(np.array(errs)[:, 6]))
+        conv = int(np.sum(np.array(errs)[:, 7]))
         r_cg, r_j = a[0] / a[4], a[1] / a[5]
         note = why
         if max(r_cg, r_j) > 1.3:
             note += (" " if note else "") + f"above 1.3x the bound with {args.seeds} seeds (RMS of few draws)"
-        print(f"| {name} | {len(errs)}/{args.seeds} | {good}/{len(errs)} | {a[0]:.4f} / {a[2]:.4f} / {a[4]:.4f} "
+        print(f"| {name} | {len(errs)}/{args.seeds} | {good}/{len(errs)} ({conv}) "
+              f"| {a[0]:.4f} / {a[2]:.4f} / {a[4]:.4f} "
               f"| {r_cg:.2f} | {a[1]:.3f} / {a[3]:.3f} / {a[5]:.3f} | {r_j:.2f} | {np.median(times):.1f} | {note} |",
               flush=True)  # fmt: skip
 
