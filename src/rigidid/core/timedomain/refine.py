@@ -94,7 +94,9 @@ class Refinement:
         Residual evaluations of the optimiser.
     converged : bool
         Whether the optimiser met its convergence test (Gauss-Newton decrement below
-        0.05 residual variances) rather than stopping at its evaluation budget.
+        0.05 residual variances, or the cost stalled at the boundary of positive
+        definite J, K, C with the decrement below 4) rather than stopping at its
+        evaluation budget; False when the start was only evaluated.
     """
 
     center_of_gravity: Array
