@@ -157,7 +157,7 @@ def test_levenberg_marquardt_reaches_the_minimum_from_far() -> None:
         jm = np.column_stack([e, -p[0] * t * e, c, -p[2] * t * np.sin(p[3] * t)])
         return fun(p), jm
 
-    theta, nfev, r, _ = _levenberg_marquardt(fun, both, np.array([1.0, 0.5, 1.0, 2.9]), 100)
+    theta, nfev, r, _, _ = _levenberg_marquardt(fun, both, np.array([1.0, 0.5, 1.0, 2.9]), 100)
     np.testing.assert_allclose(theta, [2.0, 1.3, 0.5, 3.0], atol=1e-6)
     assert float(r @ r) < 1e-12
     assert nfev <= 100

@@ -54,6 +54,12 @@ _TRIL6 = np.tril_indices(6)
 _MIN_PRETRIGGER = 32  # samples of pre-trigger needed to take the noise level from it
 _Z95 = 1.959963984540054
 _GOOD_COST = 2.0  # normalised cost 2 cost / n_residuals above this: a bad fit (about 1 at a good one)
+_DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual variances
+_STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
+_STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
+_GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
+_GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
+_GEODESIC_ALPHA = 0.75  # largest 2 |acceleration| / |step| accepted
 
 
 @dataclass(frozen=True)
@@ -86,6 +92,11 @@ class Refinement:
         Number of residuals fitted.
     evaluations : int
         Residual evaluations of the optimiser.
+    converged : bool
+        Whether the optimiser met its convergence test (Gauss-Newton decrement below
+        0.05 residual variances, or the cost stalled at the boundary of positive
+        definite J, K, C with the decrement below 4) rather than stopping at its
+        evaluation budget; False when the start was only evaluated.
     """
 
     center_of_gravity: Array
@@ -98,6 +109,7 @@ class Refinement:
     noise_from: str
     residuals: int
     evaluations: int
+    converged: bool = False
 
     @property
     def frequency_hz(self) -> Array:
@@ -135,10 +147,18 @@ class _Frame:
 
 
 def _chol(a: Array) -> Array:
+    """Lower Cholesky factor of the symmetric `a`, its eigenvalues made at least 1e-3 of the largest.
+
+    A negative eigenvalue (a structured estimate of C is often slightly indefinite: a weakly
+    damped direction estimated below zero) is reflected to its magnitude rather than set
+    near zero: a factor with a near-zero diagonal sits at the fold of ``L L^T``, where the
+    cost's derivative along that direction vanishes and the fit stalled (``benchmarks/
+    refine_diagnose.py``: 4 of 6 seeds at 5 % noise).
+    """
     a = 0.5 * (a + a.T)
     w, v = np.linalg.eigh(a)
-    floor = 1e-6 * max(float(np.max(np.abs(w))), 1e-300)
-    result: Array = np.linalg.cholesky((v * np.maximum(w, floor)) @ v.T)
+    floor = 1e-3 * max(float(np.max(np.abs(w))), 1e-300)
+    result: Array = np.linalg.cholesky((v * np.maximum(np.abs(w), floor)) @ v.T)
     return result
 
 
@@ -329,47 +349,105 @@ def _projector(design: Array) -> Any:
 
 def _levenberg_marquardt(
     fun: Any, jacobian: Any, theta0: Array, max_evaluations: int
-) -> tuple[Array, int, Array, Array]:
-    """Minimise ``|r(theta)|^2`` by Levenberg-Marquardt on the normal equations.
+) -> tuple[Array, int, Array, Array, bool]:
+    """Minimise ``|r(theta)|^2`` by Levenberg-Marquardt with geodesic acceleration.
 
     `fun(theta)` gives the residual, `jacobian(theta)` the residual and its Jacobian (computed
-    only at accepted points). The damping is Marquardt's (scaled by the diagonal of ``J^T J``),
-    the step from a 51x51 solve: much cheaper than a trust-region SVD of the tall Jacobian. A
-    rejected step multiplies the damping by 4, an accepted one divides it by 10. Stops when a
-    step lowers the cost by less than 1e-8 of it (relative) or 1e-3 (absolute: in noise-weighted
-    units, a move far below one standard error), or after `max_evaluations` residual evaluations.
+    only at accepted points: the expensive call; `fun` costs about a fifteenth of it here).
+    Each iteration solves the 51x51 damped normal equations ``(J^T J + mu D) v = -J^T r``
+    (Marquardt's scaling ``D = diag(J^T J)``), then adds half the geodesic acceleration
+    ``a``, ``(J^T J + mu D) a = -J^T r''_v``, with the second directional derivative
+    ``r''_v`` from a central difference along ``v`` (two residual evaluations), and tries
+    ``v + a / 2``. A step whose acceleration is large against it (``2 |a| / |v| > 0.75`` in
+    the ``D`` norm) is refused untried. The damping follows Nielsen's rule: times
+    ``max(1/3, 1 - (2 rho - 1)^3)`` after a step that lowers the cost (``rho`` the actual
+    over the predicted decrease), times 2, 4, 8... after each refused one.
+
+    Stops, converged, when the Gauss-Newton decrement ``g^T (J^T J)^+ g`` (``g = J^T r``)
+    over the residual variance ``|r|^2 / (n - n_theta)`` falls below :data:`_DECREMENT`:
+    the remaining Gauss-Newton step, in standard-error units, is below about 0.2 of one
+    standard error; or when the decrement is below 4 and the last step lowered the cost by
+    less than :data:`_STALL` variances: a minimum on the boundary of the positive
+    (semi-)definite J, K, C, where the Gauss-Newton step points out of the parameterisation's
+    reach (a weakly damped direction whose estimate would be negative). Stops unconverged
+    after `max_evaluations` residual evaluations (may overrun by two) or when the damping
+    exceeds 1e10 (no step lowers the cost).
+
+    Returns
+    -------
+    theta, evaluations, residual, jacobian, converged
     """
     theta = theta0
     r, jm = jacobian(theta)
     cost = float(r @ r)
     nfev = 1
-    mu = 1e-4
+    mu, nu = 1e-3, 2.0
+    dof = max(r.size - theta.size, 1)
+    converged = False
+    drop = math.inf  # decrease of the cost by the last accepted step
     while nfev < max_evaluations and mu < 1e10:
         jtj = jm.T @ jm
         g = jm.T @ r
+        u, sv, vt = np.linalg.svd(jtj)  # the pseudo-inverse intervals.parameter_covariance uses
+        gn = -(vt.T / np.where(sv > 1e-12 * sv[0], sv, np.inf)) @ (u.T @ g)
+        variance = max(cost / dof, 1e-300)
+        decrement = -float(g @ gn) / variance
+        if decrement <= _DECREMENT or (drop <= _STALL * variance and decrement <= _STALL_DECREMENT):
+            converged = True
+            break
         d = np.maximum(np.diag(jtj), 1e-12 * max(float(np.max(np.diag(jtj))), 1e-300))
         try:
-            step = np.linalg.solve(jtj + mu * np.diag(d), -g)
+            lhs = np.linalg.cholesky(jtj + mu * np.diag(d))
         except np.linalg.LinAlgError:
-            mu *= 10.0
+            mu, nu = mu * nu, 2.0 * nu
             continue
-        trial = theta + step
+
+        def solve(b: Array, lower: Array = lhs) -> Array:
+            return np.asarray(np.linalg.solve(lower.T, np.linalg.solve(lower, b)))
+
+        step = solve(-g)
         try:
-            r_new = fun(trial)
-            cost_new = float(r_new @ r_new)
+            h = _GEODESIC_H
+            rvv = (fun(theta + h * step) - 2.0 * r + fun(theta - h * step)) / h**2
+            acc = solve(-(jm.T @ rvv))
         except np.linalg.LinAlgError:
-            cost_new = math.inf
-        nfev += 1
+            acc = np.zeros_like(step)
+        nfev += 2
+        ratio = 2.0 * math.sqrt(float(acc @ (d * acc)) / max(float(step @ (d * step)), 1e-300))
+        predicted = -float(2.0 * g @ step + step @ jtj @ step)
+        cost_new = math.inf
+        trial = theta + step + 0.5 * acc
+        if ratio <= _GEODESIC_ALPHA:
+            try:
+                r_new = fun(trial)
+                cost_new = float(r_new @ r_new)
+            except np.linalg.LinAlgError:
+                pass
+            nfev += 1
         if cost_new < cost:
-            done = cost - cost_new <= max(1e-8 * cost, 1e-3)
-            theta, cost = trial, cost_new
+            rho = min((cost - cost_new) / predicted, 1.0) if predicted > 0.0 else 0.0
+            theta, cost, drop = trial, cost_new, cost - cost_new
             r, jm = jacobian(theta)
-            mu = max(mu / 10.0, 1e-9)
-            if done:
-                break
+            mu, nu = max(mu * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12), 2.0
         else:
-            mu *= 4.0
-    return theta, nfev, r, jm
+            mu, nu = mu * nu, 2.0 * nu
+    return theta, nfev, r, jm, converged
+
+
+def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray, dphiw: CArray, dlam: CArray) -> Array:
+    """The term of the full (Golub-Pereyra) variable-projection Jacobian that Kaufman's drops.
+
+    ``(A^+)^T dA_j^T r = A (A^T A)^-1 dA_j^T r`` for every parameter j, shape (n p, 51);
+    ``dA_j^T r`` from ``dU_jnck = e^{lambda_k t_n} (dphi_jck + phi_ck t_n dlambda_jk)``.
+    """
+    e1 = res.T @ ex  # (p, 6): sum_n r_nc e^{lambda_k t_n}
+    e2 = res.T @ (ex * t[:, None])
+    s = np.einsum("ck,jck->jk", e1, dphiw) + dlam * np.einsum("ck,ck->k", phiw, e2)[None, :]
+    z = np.zeros((N_PARAMETERS, design.shape[1]))
+    z[:, :6], z[:, 6:12] = s.real, -s.imag
+    coef = np.linalg.lstsq(design.T @ design, z.T, rcond=None)[0]  # (A^T A)^-1 z^T
+    out: Array = design @ coef
+    return out
 
 
 def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
@@ -394,6 +472,8 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             m2 = np.einsum("nk,jck->njc", ex * t[:, None], g2)
             dm = (m1 + m2).real.transpose(0, 2, 1).reshape(n * p, N_PARAMETERS)  # d model / d theta
             jp = -project(dm)[1]
+            if _GOLUB_PEREYRA:
+                jp = jp - _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
             jac_parts.append(jp)
     r_all = np.concatenate(res_parts)
     j_all = np.vstack(jac_parts) if jac else np.zeros((0, N_PARAMETERS))
@@ -413,7 +493,7 @@ def refine_body(
     inertia_per_mass: ArrayLike,
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
-    max_evaluations: int = 60,
+    max_evaluations: int = 240,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -436,7 +516,8 @@ def refine_body(
         The start: the structured identification from the estimated modes
         (layout units, per mass, at the CG).
     max_evaluations : int
-        Largest number of residual evaluations; 0 evaluates the start only
+        Largest number of residual evaluations (three per iteration of the
+        optimiser, plus one Jacobian per accepted step); 0 evaluates the start only
         (its Cramér-Rao bound, e.g. at the truth of a simulation).
 
     Returns
@@ -506,9 +587,9 @@ def refine_body(
         return _evaluate(theta, data, pos_l, dirs, omega, False)[0]
 
     if max_evaluations > 0:
-        theta, nfev, r, jm = _levenberg_marquardt(fun, both, theta0, max_evaluations)
+        theta, nfev, r, jm, converged = _levenberg_marquardt(fun, both, theta0, max_evaluations)
     else:
-        theta, nfev = theta0, 0
+        theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)
     n_res = r.size
     dof = max(n_res - N_PARAMETERS - len(data.decays) * (12 + pos.shape[0]), 1)
@@ -529,6 +610,7 @@ def refine_body(
         noise_from=data.noise_from,
         residuals=n_res,
         evaluations=nfev,
+        converged=converged,
     )
 
 
