@@ -32,6 +32,7 @@ def test_refined_result_carries_its_cramer_rao_intervals(records: list[Path]) ->
     crb = data["uncertainty_records_crb"]
     assert crb["noise_from"] == "pretrigger"
     assert 0.5 < crb["normalised_cost"] < 2.0
+    assert crb["converged"] is True and 0 < crb["evaluations"] < 240
     body = json.loads((FOUR / "body.json").read_text())
     assert crb["center_of_gravity"]["estimate"] == data["center_of_gravity"]
     std = np.array(crb["center_of_gravity"]["std"])

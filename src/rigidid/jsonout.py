@@ -362,7 +362,8 @@ def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
 
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
-    ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from`` and per quantity
+    ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
+    ``converged`` and per quantity
     ``{"estimate", "std", "ci95"}``."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
@@ -370,6 +371,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         "noise_from": bound.noise_from,
         "residuals": bound.residuals,
         "variance_from": bound.variance_from,
+        "evaluations": bound.evaluations,
+        "converged": bound.converged,
     }
     return {**head, **_body_intervals(bound)}
 

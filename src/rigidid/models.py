@@ -333,6 +333,12 @@ class RecordBoundResult(BaseModel):
         description="how the std were estimated: sandwich = robust covariance from the fit's residual per impact "
         "and channel, the decimation filter's correlation and the remaining Gauss-Newton step",
     )
+    evaluations: int | None = Field(default=None, description="residual evaluations of the refit's optimiser")
+    converged: bool | None = Field(
+        default=None,
+        description="whether the refit met its convergence test (Gauss-Newton decrement below 0.05 residual "
+        "variances, or stalled at the J, K, C > 0 boundary) rather than stopping at its evaluation budget",
+    )
     center_of_gravity: Interval
 
 

@@ -699,6 +699,11 @@ class RecordBound:
         covariance of :func:`rigidid.core.timedomain.intervals.parameter_covariance`
         (the fit's residual per impact and channel, the decimation filter's
         correlation, the remaining Gauss-Newton step).
+    evaluations : int or None
+        Residual evaluations of the optimiser (:class:`Refinement`).
+    converged : bool or None
+        Whether the optimiser met its convergence test (:class:`Refinement`);
+        when False the intervals include the remaining Gauss-Newton step.
     """
 
     center_of_gravity: Any
@@ -710,6 +715,8 @@ class RecordBound:
     noise_from: str
     residuals: int
     variance_from: str = "sandwich"
+    evaluations: int | None = None
+    converged: bool | None = None
 
 
 def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
@@ -762,4 +769,6 @@ def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
         noise_from=refinement.noise_from,
         residuals=refinement.residuals,
         variance_from=VARIANCE_FROM,
+        evaluations=refinement.evaluations,
+        converged=refinement.converged,
     )
