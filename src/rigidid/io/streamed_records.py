@@ -325,11 +325,9 @@ class _Welch:
             starts.append(self.next - self.buffer_at)
             self.next += self.SEG // 2
         if starts:
-            index = np.asarray(starts)[:, None] + np.arange(self.SEG)
-            for i in range(self.power.shape[0]):
-                segments = self.buffer[index, i]
-                segments = (segments - segments.mean(axis=1, keepdims=True)) * self.window
-                self.power[i] += np.sum(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0)
+            from rigidid.core.timedomain.preprocess import segment_power
+
+            self.power += segment_power(self.buffer, np.asarray(starts), self.window).T
             self.segments += len(starts)
         drop = self.next - self.buffer_at
         self.buffer = self.buffer[drop:].copy()

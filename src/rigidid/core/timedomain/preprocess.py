@@ -40,6 +40,7 @@ __all__ = [
     "find_impact",
     "fir_taps",
     "free_decay",
+    "segment_power",
 ]
 
 Array = NDArray[np.float64]
@@ -245,16 +246,64 @@ def content_spectrum(records: Sequence[Array], dt: float) -> tuple[Array, Array]
     total = np.zeros(seg // 2 + 1)
     freqs: Array = np.asarray(np.fft.rfftfreq(seg, dt), dtype=float)
     for part in parts:
-        starts = list(range(0, part.shape[0] - seg + 1, seg // 2))
-        for i in range(part.shape[1]):
-            column = part[:, i]
-            var = float(np.var(column))
-            if var <= 0.0:
-                continue
-            segments = np.lib.stride_tricks.sliding_window_view(column, seg)[starts]
-            segments = (segments - segments.mean(axis=1, keepdims=True)) * window
-            total += np.mean(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0) / var
+        starts = np.arange(0, part.shape[0] - seg + 1, seg // 2)
+        var = _row_blocked_variance(part)
+        keep = np.flatnonzero(var > 0.0)
+        if keep.size == 0:
+            continue
+        power = segment_power(part if keep.size == part.shape[1] else part[:, keep], starts, window)
+        total += (power / starts.size / var[keep]).sum(axis=1)
     return freqs, total
+
+
+def segment_power(part: Array, starts: NDArray[np.intp], window: Array) -> Array:
+    """Summed power spectra of windowed, mean-removed segments of every column.
+
+    Parameters
+    ----------
+    part : ndarray, shape (n, p)
+        Samples by channels.
+    starts : ndarray of int
+        First row of each segment (each ``start + len(window) <= n``).
+    window : ndarray, shape (seg,)
+        The window (Hann in :func:`content_spectrum`).
+
+    Returns
+    -------
+    ndarray, shape (seg // 2 + 1, p)
+        ``sum_s |rfft((x_s - mean(x_s)) window)|^2`` per channel.
+
+    Notes
+    -----
+    All channels at once, a few segments at a time (about 4 MB of
+    temporaries per batch, rows read contiguously).
+    """
+    seg = window.shape[0]
+    power = np.zeros((seg // 2 + 1, part.shape[1]))
+    batch = max(1, (1 << 19) // (seg * max(part.shape[1], 1)))
+    for lo in range(0, starts.size, batch):
+        segments = part[starts[lo : lo + batch, None] + np.arange(seg)]  # (segments, seg, channels)
+        segments -= segments.mean(axis=1, keepdims=True)
+        segments *= window[:, None]
+        spectra = np.fft.rfft(segments, axis=1)
+        power += np.sum(spectra.real**2 + spectra.imag**2, axis=0)
+    return power
+
+
+def _row_blocked_variance(part: Array) -> Array:
+    """Per-column variance (two passes: mean, then squared deviations) over blocks of rows."""
+    n, p = part.shape
+    step = max(1, _ENERGY_BLOCK // max(p, 1))
+    total = np.zeros(p)
+    for start in range(0, n, step):
+        total += part[start : start + step].sum(axis=0)
+    mean = total / n
+    squares = np.zeros(p)
+    for start in range(0, n, step):
+        centred = part[start : start + step] - mean
+        squares += np.einsum("ij,ij->j", centred, centred)
+    result: Array = squares / n
+    return result
 
 
 def content_from_spectrum(
@@ -383,9 +432,31 @@ def decimate(record: Array, factor: int) -> Array:
     phases = taps.reshape(2 * FIR_HALF_LENGTH + 1, factor)
     cube = record[: blocks * factor].reshape(blocks, factor, record.shape[1])
     out = np.zeros((stop - first, record.shape[1]))
-    for a in range(-FIR_HALF_LENGTH, FIR_HALF_LENGTH + 1):
-        out += phases[a + FIR_HALF_LENGTH] @ cube[first + a : stop + a]
+    _polyphase(phases, cube, first, out)
     return out
+
+
+_POLYPHASE_BLOCK = 1 << 18
+"""Input values per row block of :func:`_polyphase` (2 MB: the block stays in cache for the 21 phases)."""
+
+
+def _polyphase(phases: Array, cube: Array, first: int, out: Array) -> None:
+    """``out[k] += sum_a phases[a + H] @ cube[first + k + a]``, in row blocks that stay in cache.
+
+    The same products and sums in the same order as one pass per phase over
+    the whole record (bit for bit), about twice as fast: each block of
+    output rows is finished while its input is in cache.
+    """
+    half = FIR_HALF_LENGTH
+    n, q, p = out.shape[0], cube.shape[1], cube.shape[2]
+    step = max(8, _POLYPHASE_BLOCK // max(1, q * p))
+    scratch = np.empty((min(step, n), p))
+    for lo in range(0, n, step):
+        hi = min(n, lo + step)
+        rows, tmp = out[lo:hi], scratch[: hi - lo]
+        for a in range(-half, half + 1):
+            np.matmul(phases[a + half], cube[first + lo + a : first + hi + a], out=tmp)
+            rows += tmp
 
 
 class Decimator:
@@ -442,9 +513,7 @@ class Decimator:
         out = np.zeros((max(0, last + 1 - self._next), self.channels))
         if out.shape[0]:
             cube = buffer[: blocks * q].reshape(blocks, q, self.channels)
-            lo = self._next - self._base
-            for a in range(-half, half + 1):
-                out += self._phases[a + half] @ cube[lo + a : lo + a + out.shape[0]]
+            _polyphase(self._phases, cube, self._next - self._base, out)
             self._next += out.shape[0]
         keep = self._next - half - self._base  # first block still needed
         self._buffer = buffer[keep * q :].copy()
