@@ -152,27 +152,40 @@ def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None
 
 
 def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.binary_records import npy_blocks, read_binary
+    from rigidid.io.binary_records import named_blocks, npy_blocks, read_binary
 
     if path.suffix.lower() == ".npy" and path.is_file():
         found = npy_blocks(path, _BLOCK)
         if found is not None:
             return _npy_source(path, wanted, src, progress, *found)
-    raw = read_binary(path)
-    order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
-    n = raw.data.shape[0]
-    step = raw.dt if raw.time is None else None
+    named = named_blocks(path, _BLOCK)  # .npz and .h5 of the data/channels layout: row blocks
+    if named is not None:
+        names, n, step, field = named.names, named.rows, named.dt, named.field
+        parts = named.blocks
+        try:
+            order = column_order(names, len(names), wanted, src, field)
+        except InputError:
+            parts.close()
+            raise
+    else:
+        raw = read_binary(path)
+        order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
+        n = raw.data.shape[0]
+        step = raw.dt if raw.time is None else None
+
+        def whole() -> Iterator[tuple[Array | None, Array]]:
+            for start in range(0, n, _BLOCK):
+                yield (None if raw.time is None else raw.time[start : start + _BLOCK]), raw.data[start : start + _BLOCK]
+
+        parts = whole()
     task = f"reading {path.name}"
 
     def blocks() -> Iterator[tuple[Array, Array]]:
-        for start in range(0, n, _BLOCK):
-            stop = min(n, start + _BLOCK)
-            values = raw.data[start:stop]
+        start = 0
+        for time_part, values in parts:
+            stop = start + values.shape[0]
             values = values if order == list(range(values.shape[1])) else values[:, order]
-            if raw.time is not None:
-                t = raw.time[start:stop]
-            else:
-                t = np.arange(start, stop, dtype=float) * float(step or 0.0)
+            t = time_part if time_part is not None else np.arange(start, stop, dtype=float) * float(step or 0.0)
             finite = np.isfinite(values).all(axis=1) & np.isfinite(t)
             if not finite.all():
                 k = int(np.flatnonzero(~finite)[0])
@@ -183,6 +196,7 @@ def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCa
             if progress is not None:
                 progress(task, float(stop), float(n))
             yield t, values
+            start = stop
 
     return _Source(blocks(), n, lambda _n: lambda k: (k if k >= 0 else _n + k) + 1, list, step)
 
