@@ -19,7 +19,15 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.timedomain.ar import ar_fits, ar_modes, f_test_order
 from rigidid.core.timedomain.era import era_basis, era_modes
 from rigidid.core.timedomain.gram import lagged_gram
-from rigidid.core.timedomain.preprocess import Impact, band_limit, content_range, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import (
+    Impact,
+    band_limit,
+    channel_energy,
+    column_peaks,
+    content_range,
+    decimation_for,
+    find_impact,
+)
 from rigidid.core.timedomain.preprocess import decimate as decimate_record
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
@@ -104,7 +112,8 @@ class ModalEstimate:
     impacts: tuple[Impact, ...]
 
 
-def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
+def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[Array]]:
+    """The records as float arrays, checked, and their column peaks (``max |x|`` per channel)."""
     try:
         step = float(dt)
     except (TypeError, ValueError):
@@ -112,6 +121,7 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
     if not (math.isfinite(step) and step > 0.0):
         raise InputError(f"the sample interval must be positive, got {dt}")
     arrays: list[Array] = []
+    peaks: list[Array] = []
     for i, rec in enumerate(records):
         a = np.asarray(rec, dtype=float)
         if a.ndim != 2 or a.shape[0] < 2 or a.shape[1] < 1:
@@ -120,18 +130,16 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
             raise InputError(
                 f"{a.shape[1]} channels, the first record has {arrays[0].shape[1]}", location=f"record {i + 1}"
             )
-        if not _all_finite(a):
+        peak = column_peaks(a)  # NaN and infinities reach the peaks: no boolean copy of the record
+        if not np.isfinite(peak).all():
             raise InputError("a value is NaN or infinite", location=f"record {i + 1}")
         arrays.append(a)
+        peaks.append(peak)
     if not arrays:
         raise InputError("no records")
-    return arrays
+    return arrays, peaks
 
 
-def _all_finite(a: Array) -> bool:
-    """Whether every value is finite, checked in row blocks (no boolean copy of the record)."""
-    step = max(1, (1 << 16) // max(a.shape[1], 1))
-    return all(np.isfinite(a[lo : lo + step]).all() for lo in range(0, a.shape[0], step))
 
 
 def _scales_and_covariance(decays: list[Array]) -> tuple[Array, Array]:
@@ -308,7 +316,7 @@ def estimate_modes(
     is not found. The representative values of a mode come from one order of
     the sweep (see :func:`~rigidid.core.timedomain.stabilisation.cluster_stable`).
     """
-    decays_in = _check_records(records, dt)
+    decays_in, peaks = _check_records(records, dt)
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (isinstance(n_modes, int) and n_modes >= 1):
@@ -331,6 +339,8 @@ def estimate_modes(
     decays: list[Array] = []
     for k, rec in enumerate(decays_in):
         energy = energies[k] if energies is not None and k < len(energies) else None
+        if energy is None and trim:
+            energy = channel_energy(rec, peaks[k])
         impact = find_impact(rec, dt, pulse_width=pulse_width, energy=energy) if trim else Impact(0, 0, 0)
         if trim and settle > 0:
             impact = Impact(impact.onset, impact.peak, min(impact.start + int(settle), rec.shape[0] - 1))
