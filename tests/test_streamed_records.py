@@ -265,3 +265,29 @@ def test_named_binary_records_are_read_in_row_blocks(
     np.testing.assert_allclose(
         read_record_streamed(folder / "per_sensor.npz", ids).data, from_blocks.data, rtol=0, atol=1e-12
     )
+
+
+def test_missing_modes_after_the_second_stage_read_again_without_it(
+    engine: tuple[Path, list[str], list[Path]], cascade_blocks: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The smaller factors the estimation retries need the records before the second stage: read again."""
+    import rigidid.core.timedomain as timedomain
+    from rigidid.errors import IdentificationError
+
+    _, _, paths = engine
+    real = timedomain.estimate_modes
+    calls: list[dict[str, object]] = []
+
+    def first_fails(records: list[np.ndarray], dt: float, **options: object) -> object:
+        calls.append({"rows": records[0].shape[0], **options})
+        if len(calls) == 1:
+            raise IdentificationError("found 5 stable modes, 6 needed")
+        return real(records, dt, **options)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(timedomain, "estimate_modes", first_fails)
+    _, estimate = api.estimate_modes(ENGINE / "layout.json", paths)
+    assert len(calls) == 2
+    assert calls[0]["settle"] == FIR_HALF_LENGTH and calls[0]["decimate"] == 1
+    assert calls[1]["settle"] == 0 and calls[1]["decimate"] is None
+    assert int(calls[1]["rows"]) > int(calls[0]["rows"])  # type: ignore[call-overload]
+    assert estimate.frequency_hz.shape == (6,)
