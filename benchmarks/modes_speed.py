@@ -42,7 +42,10 @@ is told the band and fits the record from row 0), and that floor plus the two st
 rigidid cannot be spared, done plainly in numpy (impact as the first sample above 1 % of
 the peak of the summed squares; a Welch spectrum of 2^18 rows after it, no overlap): the
 like-for-like ratio. ``estimate_modes`` also sweeps 24
-model orders and stabilises them, which neither reference does.
+model orders and stabilises them, which neither reference does. Both are printed twice:
+with the BLAS threads the environment gives, and with ``OPENBLAS_NUM_THREADS=1`` for
+floor and rigidid alike (on a shared 2-core machine threaded BLAS makes the many small
+products of the sweep erratic).
 
 Run: ``python benchmarks/modes_speed.py --floor 32x1000000,8x1000000,8x10000000 --keep /tmp/cases``
 """
@@ -382,32 +385,15 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
             print(f"rigidid .npy against the .npy floor: {npy_ratio:.2f}x "
                   f"(target 1.5x); rigidid CSV against the CSV floor: {walls['rigidid modes CSV'] / floor_wall:.2f}x; "
                   f"rigidid CSV {walls['rigidid modes CSV']:.2f} s, {peaks[(channels, samples)]:.0f} MB")  # fmt: skip
-            alone = [
-                json.loads(subprocess.run(
-                    [sys.executable, "-c", ESTIMATION_CODE, str(npy), str(k)], capture_output=True, text=True,
-                    check=True,
-                ).stdout)
-                for k in range(repeat)
-            ]  # fmt: skip
-            est = {key: float(np.median([a[key] for a in alone])) for key in alone[0]}
-            fair = est["floor"] + est["plain_automatic"]
-            print(f"estimation alone on the record loaded from .npy (no reading; after a warm call, best of 3 calls "
-                  f"in each of {repeat} processes, median; BLAS threads as the environment sets them):")  # fmt: skip
-            print(f"  floor (FIR to the 40 Hz factor, 12 principal directions, Gram, ERA at 12 states) "
-                  f"{est['floor']:.3f} s")  # fmt: skip
-            print(f"  rigidid estimate_modes (impact found, content spectrum, factor chosen, 24 orders swept, "
-                  f"stabilised) {est['ours']:.3f} s = {est['ours'] / est['floor']:.2f}x the floor")  # fmt: skip
-            print(f"    of which impact search {est['impact']:.3f} s and content spectrum {est['content']:.3f} s, "
-                  f"steps the floor is spared (it is told the band and fits from row 0)")  # fmt: skip
-            plain = est["plain_automatic"]
-            print(f"  the same two steps done plainly (energy argmax, Welch of 2^18 rows) {plain:.3f} s; "
-                  f"floor + them {fair:.3f} s: rigidid at {est['ours'] / fair:.2f}x (like for like)")  # fmt: skip
+            for threads in (None, "1"):
+                _estimation_alone(npy, repeat, threads)
             freqs = " ".join(f"{f:.4f}" for f in np.unique(modes[0][:, 0]))
             print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; frequencies: {freqs} Hz; "
                   f"CSV, .npy and .npz modes equal to 1e-9: {same}")  # fmt: skip
         load = os.getloadavg()
-        print(f"\nload average at end: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f} (above the CPU count: the machine "
-              "was shared, compare the ratios of one run, not the seconds of two)")  # fmt: skip
+        busy = " (near or above the CPU count: a shared machine, compare ratios within one run)" if max(load) > (
+            0.5 * (os.cpu_count() or 1)) else ""
+        print(f"\nload average at end: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}{busy}")  # fmt: skip
         for (c, n), peak in peaks.items():
             print(f"rigidid modes CSV peak, {c} channels x {n} rows: {peak:.0f} MB")
         by_channels: dict[int, list[tuple[int, float]]] = {}
@@ -418,6 +404,34 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
                 (n0, p0), (n1, p1) = rows[0], rows[-1]
                 print(f"memory flatness, {c} channels: {n1 / n0:g}x the rows -> {p1 / p0:.2f}x the peak "
                       f"(target about 1.15x)")  # fmt: skip
+
+
+def _estimation_alone(npy: Path, repeat: int, threads: str | None) -> None:
+    """Print the estimation alone against the floor (see the module documentation); `threads`: OPENBLAS_NUM_THREADS."""
+    import os
+
+    env = {**os.environ, **({"OPENBLAS_NUM_THREADS": threads} if threads else {})}
+    alone = [
+        json.loads(subprocess.run(
+            [sys.executable, "-c", ESTIMATION_CODE, str(npy), str(k)], capture_output=True, text=True, check=True,
+            env=env,
+        ).stdout)
+        for k in range(repeat)
+    ]  # fmt: skip
+    est = {key: float(np.median([a[key] for a in alone])) for key in alone[0]}
+    fair = est["floor"] + est["plain_automatic"]
+    blas = f"OPENBLAS_NUM_THREADS={threads} for both" if threads else "BLAS threads as the environment sets them"
+    print(f"estimation alone on the record loaded from .npy (no reading; after a warm call, best of 3 calls "
+          f"in each of {repeat} processes, median; {blas}):")  # fmt: skip
+    print(f"  floor (FIR to the 40 Hz factor, 12 principal directions, Gram, ERA at 12 states) "
+          f"{est['floor']:.3f} s")  # fmt: skip
+    print(f"  rigidid estimate_modes (impact found, content spectrum, factor chosen, 24 orders swept, "
+          f"stabilised) {est['ours']:.3f} s = {est['ours'] / est['floor']:.2f}x the floor")  # fmt: skip
+    print(f"    of which impact search {est['impact']:.3f} s and content spectrum {est['content']:.3f} s, "
+          f"steps the floor is spared (it is told the band and fits from row 0)")  # fmt: skip
+    plain = est["plain_automatic"]
+    print(f"  the same two steps done plainly (energy argmax, Welch of 2^18 rows) {plain:.3f} s; "
+          f"floor + them {fair:.3f} s: rigidid at {est['ours'] / fair:.2f}x (like for like)")  # fmt: skip
 
 
 def main() -> None:
