@@ -46,3 +46,29 @@ def test_no_refine_keeps_the_answer_from_the_modes(records: list[Path]) -> None:
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert "uncertainty_records_crb" not in data
+
+
+def test_without_the_refit_records_are_streamed_not_loaded_whole(
+    records: list[Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """identify --records --no-refine estimates through the streamed reader (issue 14): the same answer."""
+    from typer.testing import CliRunner
+
+    from rigidid import api
+    from rigidid.cli import app
+
+    layout = api.load_layout(FOUR / "layout.json")
+    loaded = api.load_records(records, layout)
+    modes, _ = api.estimate_modes(layout, loaded)
+    expected = api.identify(layout, modes)
+
+    def refuse(*_: object, **__: object) -> None:
+        raise AssertionError("records loaded whole")
+
+    monkeypatch.setattr(api, "load_records", refuse)
+    out = CliRunner().invoke(app, ["identify", str(FOUR / "layout.json"), "--records", *map(str, records),
+                                   "--no-refine", "--json", "-"])  # fmt: skip
+    assert out.exit_code == 0, out.output
+    data = json.loads(out.stdout)
+    cg = expected.identification.center_of_gravity
+    np.testing.assert_allclose(data["center_of_gravity"], cg, rtol=1e-9, atol=1e-12)

@@ -185,3 +185,109 @@ def test_a_universal_file_beside_a_layout_is_named_not_parsed_as_csv(tmp_path: P
     for reader in (read_record, read_record_streamed):
         with pytest.raises(InputError, match="universal file is not a record beside a layout"):
             reader(uff, ["1", "2"])
+
+
+@pytest.fixture
+def cascade_blocks(monkeypatch: pytest.MonkeyPatch, small_blocks: None) -> None:
+    """Let the content spectrum complete (and the second stage start) within a record of 32768 rows."""
+    monkeypatch.setattr(streamed_records._Welch, "SPAN", 8192)
+    monkeypatch.setattr("rigidid.core.timedomain.estimate._MIN_DECIMATED_SAMPLES", 200)
+
+
+def test_second_stage_is_decimation_of_the_pre_decimated_record(
+    engine: tuple[Path, list[str], list[Path]], cascade_blocks: None
+) -> None:
+    _, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    cascaded = read_record_streamed(paths[0], ids, cascade=True)
+    q0, q2 = cascaded.stages
+    assert q0 > 1 and q2 > 1 and cascaded.factor == q0 * q2
+    assert q0 == read_record_streamed(paths[0], ids).factor  # the same pre-factor as without the second stage
+    expected = decimate(decimate(data, q0), q2)
+    np.testing.assert_allclose(cascaded.data, expected, rtol=0.0, atol=STREAMED_DECIMATION)
+    assert cascaded.offset == FIR_HALF_LENGTH * q0 + FIR_HALF_LENGTH * q0 * q2
+    assert cascaded.dt == pytest.approx(dt * q0 * q2, rel=1e-12)
+    # the second stage is the factor the estimation chooses on the pre-decimated record
+    assert cascaded.spectrum is not None
+    from rigidid.core.timedomain.preprocess import content_from_spectrum
+
+    f_high = content_from_spectrum(*cascaded.spectrum, 0.5 / dt)[1]
+    assert q2 == streamed_records.second_factor(f_high, dt, q0)
+    # a record read with the first record's stages fixed is the same
+    fixed = read_record_streamed(paths[0], ids, factor=q0, second=q2)
+    np.testing.assert_allclose(fixed.data, cascaded.data, rtol=0.0, atol=STREAMED_DECIMATION)
+
+
+def test_modes_through_the_second_stage_match_the_whole_record(
+    engine: tuple[Path, list[str], list[Path]], cascade_blocks: None
+) -> None:
+    _, ids, paths = engine
+    layout = api.load_layout(ENGINE / "layout.json")
+    _, whole = api.estimate_modes(layout, api.load_records(paths, layout))
+    records, content = streamed_records.read_records_streamed(paths, ids, cascade=True)
+    assert content is not None and all(r.stages == records[0].stages for r in records)
+    assert records[0].stages[1] > 1
+    _, streamed = api.estimate_modes(layout, paths)
+    assert streamed.decimation == records[0].factor
+    np.testing.assert_allclose(streamed.frequency_hz, whole.frequency_hz, rtol=STREAMED_VS_WHOLE_FREQUENCY)
+    for impact, path in zip(streamed.impacts, paths, strict=True):
+        data, dt = read_record(path, ids)
+        raw = api.estimate_modes(layout, [(data, dt)])[1].impacts[0]
+        assert abs(impact.onset - raw.onset) <= 2 * streamed.decimation
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".h5"])
+def test_named_binary_records_are_read_in_row_blocks(
+    engine: tuple[Path, list[str], list[Path]], small_blocks: None, suffix: str
+) -> None:
+    """.npz and .h5 of the data/channels layout stream in blocks to the same record; other layouts load whole."""
+    if suffix == ".h5":
+        pytest.importorskip("h5py")
+    from rigidid.io.binary_records import named_blocks
+
+    folder, ids, paths = engine
+    data, dt = read_record(paths[0], ids)
+    target = folder / f"named{suffix}"
+    order = list(reversed(range(len(ids))))  # columns in another order than the layout's
+    shuffled = np.ascontiguousarray(data[:, order])  # (a Fortran-ordered .npz member is read whole)
+    write_binary(target, np.arange(data.shape[0]) * dt, shuffled, [ids[i] for i in order])
+    blocks = named_blocks(target, 1000)
+    assert blocks is not None and blocks.rows == data.shape[0] and blocks.names == [ids[i] for i in order]
+    parts = list(blocks.blocks)
+    assert max(values.shape[0] for _, values in parts) == 1000
+    np.testing.assert_array_equal(np.concatenate([values for _, values in parts]), data[:, order])
+    from_blocks = read_record_streamed(target, ids)
+    np.testing.assert_allclose(from_blocks.data, read_record_streamed(paths[0], ids).data, rtol=0, atol=1e-12)
+    # one array per sensor (no 'data'): not this layout, read whole, the same record
+    columns = {s: data[:, i] for i, s in enumerate(ids)}
+    np.savez(folder / "per_sensor.npz", time=np.arange(data.shape[0]) * dt, **columns)
+    assert named_blocks(folder / "per_sensor.npz", 1000) is None
+    np.testing.assert_allclose(
+        read_record_streamed(folder / "per_sensor.npz", ids).data, from_blocks.data, rtol=0, atol=1e-12
+    )
+
+
+def test_missing_modes_after_the_second_stage_read_again_without_it(
+    engine: tuple[Path, list[str], list[Path]], cascade_blocks: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The smaller factors the estimation retries need the records before the second stage: read again."""
+    import rigidid.core.timedomain as timedomain
+    from rigidid.errors import IdentificationError
+
+    _, _, paths = engine
+    real = timedomain.estimate_modes
+    calls: list[dict[str, object]] = []
+
+    def first_fails(records: list[np.ndarray], dt: float, **options: object) -> object:
+        calls.append({"rows": records[0].shape[0], **options})
+        if len(calls) == 1:
+            raise IdentificationError("found 5 stable modes, 6 needed")
+        return real(records, dt, **options)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(timedomain, "estimate_modes", first_fails)
+    _, estimate = api.estimate_modes(ENGINE / "layout.json", paths)
+    assert len(calls) == 2
+    assert calls[0]["settle"] == FIR_HALF_LENGTH and calls[0]["decimate"] == 1
+    assert calls[1]["settle"] == 0 and calls[1]["decimate"] is None
+    assert int(calls[1]["rows"]) > int(calls[0]["rows"])  # type: ignore[call-overload]
+    assert estimate.frequency_hz.shape == (6,)

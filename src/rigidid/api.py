@@ -1006,8 +1006,8 @@ def estimate_rigid_modes(
     -----
     Needs more than six sensors (with six, every shape fits rigid-body motion
     exactly and nothing is checked). The output-error refinement that follows
-    models rigid-body motion only, so records that carry an elastic mode are
-    usually not fitted well by it, and the structured answer is kept.
+    models rigid-body motion only: :func:`with_refinement` subtracts the unused
+    mode from the records first.
     """
     import warnings
 
@@ -1061,17 +1061,6 @@ def estimate_rigid_modes(
     return table7, estimate7
 
 
-def _streamed_content(streamed: Sequence[Any], dt: float) -> tuple[float, float] | None:
-    """The content range from the spectra the reader measured on the raw heads (None: let the estimation)."""
-    from rigidid.core.timedomain.preprocess import content_from_spectrum
-
-    spectra = [r.spectrum for r in streamed]
-    if any(s is None for s in spectra) or len({s[1].shape for s in spectra}) != 1:
-        return None
-    total = np.sum([s[1] for s in spectra], axis=0)
-    return content_from_spectrum(spectra[0][0], total, 0.5 / dt)
-
-
 def _estimate_streamed(
     lay: LayoutFile,
     paths: Sequence[PathLike],
@@ -1081,6 +1070,7 @@ def _estimate_streamed(
     max_order: int | None,
     decimate: int | None,
     progress: ProgressCallback | None,
+    cascade: bool = True,
 ) -> tuple[ModeTable, ModalEstimate]:
     """:func:`estimate_modes` on record files read in blocks and decimated as they arrive.
 
@@ -1090,31 +1080,39 @@ def _estimate_streamed(
     """
     from rigidid.core.timedomain import DEFAULT_METHOD, Impact
     from rigidid.core.timedomain import estimate_modes as estimate
-    from rigidid.io.streamed_records import read_record_streamed
+    from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
+    from rigidid.errors import IdentificationError
+    from rigidid.io.streamed_records import read_records_streamed
 
     ids = [s.id for s in lay.sensors]
     f_limit = float(band[1]) if band is not None else None
-    streamed = [read_record_streamed(paths[0], ids, factor=decimate, f_limit=f_limit, progress=progress)]
+    # second decimation stage while reading (memory of the decimated record only), unless the user fixed the
+    # factor; read_records_streamed reads again without it when all records' content asks another factor
+    cascade = cascade and decimate is None
+    streamed, content = read_records_streamed(paths, ids, decimate, f_limit, progress, cascade=cascade)
     factor = streamed[0].factor
-    streamed += [read_record_streamed(p, ids, factor=factor, progress=progress) for p in paths[1:]]
     dts = [r.dt for r in streamed]
-    if max(dts) - min(dts) > 1e-9 * max(dts):
-        raise InputError(
-            f"records have different sample intervals ({min(dts) / factor:.6g} to {max(dts) / factor:.6g} s)",
-            source="records",
+    cascaded = streamed[0].stages[1] > 1
+    try:
+        result = estimate(
+            [r.data for r in streamed],
+            dts[0],
+            method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
+            n_modes=n_modes,
+            band=band,
+            max_order=max_order,
+            decimate=None if decimate is None and not cascaded else 1,
+            progress=progress,
+            energies=[r.energy for r in streamed],
+            content=content,
+            settle=FIR_HALF_LENGTH if cascaded else 0,
         )
-    result = estimate(
-        [r.data for r in streamed],
-        dts[0],
-        method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
-        n_modes=n_modes,
-        band=band,
-        max_order=max_order,
-        decimate=None if decimate is None else 1,
-        progress=progress,
-        energies=[r.energy for r in streamed],
-        content=_streamed_content(streamed, dts[0] / factor),
-    )
+    except IdentificationError:
+        if not cascaded:
+            raise
+        # the smaller factors the estimation retries need the record before the second stage
+        del streamed
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False)
     if factor > 1:
         impacts = tuple(
             Impact(*(r.offset + k * factor for k in (i.onset, i.peak, i.start)))

@@ -520,7 +520,17 @@ def _identify(
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
     src = _source(layout, inputs)
-    data = _test_data(layout, inputs or [], records, units, geometry)
+    # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
+    # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
+    raw_needed = keep is not None or resample > 0 or (refine and method == "structured")
+    streamed = records and bool(inputs) and not raw_needed and layout.suffix.lower() not in UFF_SUFFIXES
+    if streamed and geometry is None:
+        from rigidid import api
+
+        data = api.TestData(api.load_layout(layout))
+    else:
+        streamed = False
+        data = _test_data(layout, inputs or [], records, units, geometry)
     if keep is not None:
         keep["records"] = data.records
     if resample and data.records:  # before any estimation: blame the option, not the records
@@ -531,13 +541,16 @@ def _identify(
                 f"the limit here is {shortest // 16}",
                 source="--resample",
             )
+    paths = list(inputs or []) if streamed else None
     chosen = _parse_modes(modes_used)
     from rigidid.errors import ElasticModeWarning, RefinementWarning
 
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     with _noted(notes, ElasticModeWarning):
         modes, estimate = (
-            _estimate(data, **modal, source=src, rigid_six=chosen is None) if records else (data.modes, None)
+            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None)
+            if records
+            else (data.modes, None)
         )
     assert modes is not None
     from rigidid.progress import terminal_progress

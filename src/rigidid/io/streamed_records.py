@@ -57,6 +57,8 @@ __all__ = [
     "PULSE_WIDTH",
     "StreamedRecord",
     "read_record_streamed",
+    "read_records_streamed",
+    "second_factor",
 ]
 
 Array = NDArray[np.float64]
@@ -90,7 +92,7 @@ class StreamedRecord:
     dt : float
         Sample interval of `data` (s): `factor` times the file's.
     factor : int
-        Pre-decimation factor (1: the record as read).
+        Total decimation factor while reading (1: the record as read).
     offset : int
         Raw row (from 0) of ``data[0]``; row ``k`` of `data` is raw row
         ``offset + k factor``.
@@ -104,6 +106,10 @@ class StreamedRecord:
         while reading, at the file's sample rate: what the estimation computes
         on a whole record. None for a record of at most :data:`HEAD_ROWS`
         rows (read whole, the estimation measures it).
+    stages : (int, int)
+        The pre-factor and the second stage's factor (1: none; see the
+        `cascade` option of :func:`read_record_streamed`); `factor` is their
+        product.
     """
 
     data: Array
@@ -113,6 +119,7 @@ class StreamedRecord:
     rows: int
     energy: Array
     spectrum: tuple[Array, Array] | None = None
+    stages: tuple[int, int] = (1, 1)
 
 
 class _Source:
@@ -145,27 +152,40 @@ def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None
 
 
 def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.binary_records import npy_blocks, read_binary
+    from rigidid.io.binary_records import named_blocks, npy_blocks, read_binary
 
     if path.suffix.lower() == ".npy" and path.is_file():
         found = npy_blocks(path, _BLOCK)
         if found is not None:
             return _npy_source(path, wanted, src, progress, *found)
-    raw = read_binary(path)
-    order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
-    n = raw.data.shape[0]
-    step = raw.dt if raw.time is None else None
+    named = named_blocks(path, _BLOCK)  # .npz and .h5 of the data/channels layout: row blocks
+    if named is not None:
+        names, n, step, field = named.names, named.rows, named.dt, named.field
+        parts = named.blocks
+        try:
+            order = column_order(names, len(names), wanted, src, field)
+        except InputError:
+            parts.close()
+            raise
+    else:
+        raw = read_binary(path)
+        order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
+        n = raw.data.shape[0]
+        step = raw.dt if raw.time is None else None
+
+        def whole() -> Iterator[tuple[Array | None, Array]]:
+            for start in range(0, n, _BLOCK):
+                yield (None if raw.time is None else raw.time[start : start + _BLOCK]), raw.data[start : start + _BLOCK]
+
+        parts = whole()
     task = f"reading {path.name}"
 
     def blocks() -> Iterator[tuple[Array, Array]]:
-        for start in range(0, n, _BLOCK):
-            stop = min(n, start + _BLOCK)
-            values = raw.data[start:stop]
+        start = 0
+        for time_part, values in parts:
+            stop = start + values.shape[0]
             values = values if order == list(range(values.shape[1])) else values[:, order]
-            if raw.time is not None:
-                t = raw.time[start:stop]
-            else:
-                t = np.arange(start, stop, dtype=float) * float(step or 0.0)
+            t = time_part if time_part is not None else np.arange(start, stop, dtype=float) * float(step or 0.0)
             finite = np.isfinite(values).all(axis=1) & np.isfinite(t)
             if not finite.all():
                 k = int(np.flatnonzero(~finite)[0])
@@ -176,6 +196,7 @@ def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCa
             if progress is not None:
                 progress(task, float(stop), float(n))
             yield t, values
+            start = stop
 
     return _Source(blocks(), n, lambda _n: lambda k: (k if k >= 0 else _n + k) + 1, list, step)
 
@@ -318,15 +339,17 @@ class _Welch:
             starts.append(self.next - self.buffer_at)
             self.next += self.SEG // 2
         if starts:
-            index = np.asarray(starts)[:, None] + np.arange(self.SEG)
-            for i in range(self.power.shape[0]):
-                segments = self.buffer[index, i]
-                segments = (segments - segments.mean(axis=1, keepdims=True)) * self.window
-                self.power[i] += np.sum(np.abs(np.fft.rfft(segments, axis=1)) ** 2, axis=0)
+            from rigidid.core.timedomain.preprocess import segment_power
+
+            self.power += segment_power(self.buffer, np.asarray(starts), self.window).T
             self.segments += len(starts)
         drop = self.next - self.buffer_at
         self.buffer = self.buffer[drop:].copy()
         self.buffer_at = self.next
+
+    def complete(self, rows: int) -> bool:
+        """Whether the spectrum is final once `rows` raw rows have been fed."""
+        return rows >= self.start + self.SPAN
 
     def spectrum(self) -> tuple[Array, Array] | None:
         """Frequencies and the summed normalised spectrum (None: decay shorter than a segment)."""
@@ -368,6 +391,36 @@ def _pre_factor(dt: float, spectrum: tuple[Array, Array], f_limit: float | None)
     return divisor if 2 * divisor >= cap else cap
 
 
+def second_factor(f_high: float, dt: float, factor: int, f_limit: float | None = None) -> int:
+    """The factor the estimation decimates a record pre-decimated by `factor` by (its first choice).
+
+    Parameters
+    ----------
+    f_high : float
+        Highest frequency standing out of the noise (Hz, ``content_range``).
+    dt : float
+        The file's sample interval (s).
+    factor : int
+        Pre-decimation factor.
+    f_limit : float, optional
+        Upper edge of the user's band (Hz).
+
+    Returns
+    -------
+    int
+        ``decimation_for(min(f_high, f_limit), dt * factor)`` with the
+        estimation's margin: what
+        :func:`~rigidid.core.timedomain.estimate.decimation_factors` tries
+        first on a long record.
+    """
+    from rigidid.core.timedomain.estimate import _DECIMATION_MARGIN
+    from rigidid.core.timedomain.preprocess import decimation_for
+
+    if f_limit is not None:
+        f_high = min(f_high, f_limit)
+    return decimation_for(f_high, dt * factor, margin=_DECIMATION_MARGIN)
+
+
 def read_record_streamed(
     path: str | os.PathLike[str],
     sensor_ids: Sequence[str],
@@ -375,6 +428,8 @@ def read_record_streamed(
     factor: int | None = None,
     f_limit: float | None = None,
     progress: ProgressCallback | None = None,
+    cascade: bool = False,
+    second: int | None = None,
 ) -> StreamedRecord:
     """Read one impact record block by block, checking it and decimating it as it arrives.
 
@@ -392,6 +447,16 @@ def read_record_streamed(
         caps the content the pre-factor must keep.
     progress : ProgressCallback, optional
         ``("reading <file name>", bytes or rows done, total)``.
+    cascade : bool
+        Decimate in a second stage while reading too, by the factor the
+        estimation would choose (:func:`second_factor`), as soon as the
+        content spectrum is complete (``2^18`` rows of decay): only the
+        record at the estimation's rate is then held. Applied only when the
+        record is long enough (at least twice the rows the estimation
+        requires) and `factor` is not given; ``stages`` says whether it was.
+    second : int, optional
+        A second-stage factor fixed by the caller (the first record's, for
+        the others), applied from the first row.
 
     Returns
     -------
@@ -431,23 +496,48 @@ def read_record_streamed(
                 factor = _pre_factor(found[0], found[1], f_limit)
     if factor is None:
         factor = 1
+    auto = cascade and second is None and factor > 1
     stream = Decimator(factor, len(wanted))
-    capacity = source.rows // factor + 2 * FIR_HALF_LENGTH + 16
+    stage2 = Decimator(second, len(wanted)) if second is not None and second > 1 and factor > 1 else None
+    total = factor * (stage2.factor if stage2 is not None else 1)
+    capacity = source.rows // total + 2 * FIR_HALF_LENGTH + 16
     out = np.empty((capacity, len(wanted)))
     filled = 0
 
-    def feed(t: Array, values: Array) -> None:
+    def emit(done: Array) -> None:
         nonlocal out, capacity, filled
+        if filled + done.shape[0] > capacity:  # the row count of a CSV was estimated from its size
+            capacity = max(filled + done.shape[0], int(capacity * 1.25))
+            grown = np.empty((capacity, len(wanted)))
+            grown[:filled] = out[:filled]
+            out = grown
+        out[filled : filled + done.shape[0]] = done
+        filled += done.shape[0]
+
+    def feed(t: Array, values: Array) -> None:
+        nonlocal out, capacity, filled, stage2, auto, total
         if welch is not None:
             welch.add(values, times.rows)
         times.add(t)
         np.maximum(peaks, np.max(np.abs(values), axis=0), out=peaks)
         done = stream.push(values)
-        if filled + done.shape[0] > capacity:
-            capacity = max(filled + done.shape[0], int(capacity * 1.25))
-            out = np.resize(out, (capacity, len(wanted)))
-        out[filled : filled + done.shape[0]] = done
-        filled += done.shape[0]
+        emit(done if stage2 is None else stage2.push(done))
+        if auto and welch is not None and welch.complete(times.rows):
+            auto = False  # the content is known: start the second stage on what is held
+            spectrum = welch.spectrum()
+            if spectrum is None:
+                return
+            from rigidid.core.timedomain.estimate import _MIN_DECIMATED_SAMPLES
+            from rigidid.core.timedomain.preprocess import content_from_spectrum
+
+            q2 = second_factor(content_from_spectrum(*spectrum, 0.5 / welch.dt)[1], welch.dt, factor, f_limit)
+            if q2 > 1 and (source.rows - welch.start) // factor >= 2 * q2 * _MIN_DECIMATED_SAMPLES:
+                stage2 = Decimator(q2, len(wanted))
+                held = stage2.push(out[:filled])
+                total = factor * q2
+                capacity = max(source.rows // total + 2 * FIR_HALF_LENGTH + 16, held.shape[0])
+                out, filled = np.empty((capacity, len(wanted))), 0
+                emit(held)
 
     for t, values in pending:
         feed(t, values)
@@ -465,11 +555,87 @@ def read_record_streamed(
             raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
     try:
         stream.finish()
+        if stage2 is not None:
+            stage2.finish()
     except InputError as exc:
         raise InputError(exc.message, source=src) from None
     data = out[:filled]
     offset = FIR_HALF_LENGTH * factor if factor > 1 else 0
+    if stage2 is not None:
+        offset += FIR_HALF_LENGTH * total
     energy = channel_energy(data)
-    _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * factor), src, energy)
+    _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * total), src, energy)
     spectrum = welch.spectrum() if welch is not None else None
-    return StreamedRecord(data, dt * factor, factor, offset, n, energy, spectrum)
+    return StreamedRecord(data, dt * total, total, offset, n, energy, spectrum, (factor, total // factor))
+
+
+def _content(streamed: Sequence[StreamedRecord], dt: float) -> tuple[float, float] | None:
+    """The content range from the spectra measured on the raw records (None: let the estimation measure it)."""
+    from rigidid.core.timedomain.preprocess import content_from_spectrum
+
+    spectra = [r.spectrum for r in streamed]
+    if any(s is None for s in spectra) or len({s[1].shape for s in spectra if s is not None}) != 1:
+        return None
+    total = np.sum([s[1] for s in spectra if s is not None], axis=0)
+    return content_from_spectrum(spectra[0][0], total, 0.5 / dt) if spectra[0] is not None else None
+
+
+def read_records_streamed(
+    paths: Sequence[str | os.PathLike[str]],
+    sensor_ids: Sequence[str],
+    factor: int | None = None,
+    f_limit: float | None = None,
+    progress: ProgressCallback | None = None,
+    *,
+    cascade: bool = False,
+) -> tuple[list[StreamedRecord], tuple[float, float] | None]:
+    """The records of one estimation, read with :func:`read_record_streamed` at one rate.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        One record per impact.
+    sensor_ids : sequence of str
+        The layout's sensor ids.
+    factor : int, optional
+        The user's decimation factor (no second stage then).
+    f_limit : float, optional
+        Upper edge of the user's band (Hz).
+    progress : ProgressCallback, optional
+        Reading progress.
+    cascade : bool
+        Let the first record choose a second stage (``cascade`` of
+        :func:`read_record_streamed`); the others take it. When the content
+        of all records together asks the estimation for another factor than
+        the first record's alone, they are read again without it.
+
+    Returns
+    -------
+    records : list of StreamedRecord
+        At one total factor.
+    content : (float, float) or None
+        ``content_range`` of the records' free decays from the spectra measured
+        while reading (None: some record too short for it).
+
+    Raises
+    ------
+    InputError
+        As :func:`read_record_streamed`; records of different sample intervals.
+    """
+    first = read_record_streamed(paths[0], sensor_ids, factor=factor, f_limit=f_limit, progress=progress,
+                                 cascade=cascade and factor is None)  # fmt: skip
+    q0, q2 = first.stages
+    streamed = [first]
+    streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
+    total = streamed[0].factor
+    dts = [r.dt for r in streamed]
+    if max(dts) - min(dts) > 1e-9 * max(dts):
+        raise InputError(
+            f"records have different sample intervals ({min(dts) / total:.6g} to {max(dts) / total:.6g} s)",
+            source="records",
+        )
+    content = _content(streamed, dts[0] / total)
+    if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
+        del streamed, first
+        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False)
+    return streamed, content

@@ -19,7 +19,15 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.timedomain.ar import ar_fits, ar_modes, f_test_order
 from rigidid.core.timedomain.era import era_basis, era_modes
 from rigidid.core.timedomain.gram import lagged_gram
-from rigidid.core.timedomain.preprocess import Impact, band_limit, content_range, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import (
+    Impact,
+    band_limit,
+    channel_energy,
+    column_peaks,
+    content_range,
+    decimation_for,
+    find_impact,
+)
 from rigidid.core.timedomain.preprocess import decimate as decimate_record
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
@@ -104,7 +112,8 @@ class ModalEstimate:
     impacts: tuple[Impact, ...]
 
 
-def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
+def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[Array]]:
+    """The records as float arrays, checked, and their column peaks (``max |x|`` per channel)."""
     try:
         step = float(dt)
     except (TypeError, ValueError):
@@ -112,6 +121,7 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
     if not (math.isfinite(step) and step > 0.0):
         raise InputError(f"the sample interval must be positive, got {dt}")
     arrays: list[Array] = []
+    peaks: list[Array] = []
     for i, rec in enumerate(records):
         a = np.asarray(rec, dtype=float)
         if a.ndim != 2 or a.shape[0] < 2 or a.shape[1] < 1:
@@ -120,39 +130,48 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> list[Array]:
             raise InputError(
                 f"{a.shape[1]} channels, the first record has {arrays[0].shape[1]}", location=f"record {i + 1}"
             )
-        if not np.all(np.isfinite(a)):
+        peak = column_peaks(a)  # NaN and infinities reach the peaks: no boolean copy of the record
+        if not np.isfinite(peak).all():
             raise InputError("a value is NaN or infinite", location=f"record {i + 1}")
         arrays.append(a)
+        peaks.append(peak)
     if not arrays:
         raise InputError("no records")
-    return arrays
+    return arrays, peaks
 
 
-def _channel_scales(decays: list[Array]) -> Array:
+
+
+def _scales_and_covariance(decays: list[Array]) -> tuple[Array, Array]:
+    """Per-channel RMS over all decays and their summed product ``sum_k d_k^T d_k`` (one matrix product each)."""
     m = decays[0].shape[1]
-    total = np.zeros(m)
+    cov = np.zeros((m, m))
     count = 0
     for d in decays:
-        for i in range(m):
-            column = d[:, i]
-            total[i] += float(column @ column)
+        cov += d.T @ d
         count += d.shape[0]
-    rms: Array = np.sqrt(total / max(count, 1))
+    rms: Array = np.sqrt(np.clip(np.diag(cov), 0.0, None) / max(count, 1))
     dead = np.flatnonzero(rms <= 0.0)
     if dead.size:
         raise InputError("the channel reads zero in every record", location=f"channel {dead[0] + 1}")
-    return rms
+    return rms, cov
 
 
-def _principal_basis(decays: list[Array], rank: int) -> Array:
-    """Orthonormal basis (m, rank) of the leading principal components of the decays."""
-    m = decays[0].shape[1]
-    cov = np.zeros((m, m))
-    for d in decays:
-        cov += d.T @ d
+def _principal_basis(cov: Array, rank: int) -> Array:
+    """Orthonormal basis (m, rank) of the leading principal components of a (scaled) product matrix."""
     _, vectors = np.linalg.eigh(cov)
     basis: Array = vectors[:, ::-1][:, :rank]
     return basis
+
+
+def _scaled_gram(fitted: list[Array], lags: int, scale: Array | None) -> tuple[Array, int]:
+    """``lagged_gram`` of ``fitted * scale`` (channel-wise; None: of `fitted`), computed on `fitted` as given."""
+    gram, columns = lagged_gram(fitted, lags)
+    if scale is not None:
+        weights = np.tile(scale, lags + 1)
+        gram *= weights[:, None]
+        gram *= weights[None, :]
+    return gram, columns
 
 
 def _normalise_shapes(shapes: CArray) -> CArray:
@@ -178,6 +197,7 @@ def estimate_modes(
     progress: ProgressCallback | None = None,
     energies: Sequence[Array] | None = None,
     content: tuple[float, float] | None = None,
+    settle: int = 0,
 ) -> ModalEstimate:
     """Natural frequencies, damping ratios and complex mode shapes from impact records.
 
@@ -243,6 +263,12 @@ def estimate_modes(
     content : (float, float), optional
         ``content_range`` of the free decays when the caller measured it (the
         streamed reader, on the records before it decimated them).
+    settle : int
+        Samples dropped after each impact's free-decay start: for records
+        decimated before they were trimmed (the streamed reader's second
+        stage), the anti-alias filter's reach (``FIR_HALF_LENGTH``), so the
+        decay holds no sample the filter spread the impact into, as when
+        the decay is decimated after trimming.
 
     Returns
     -------
@@ -290,7 +316,7 @@ def estimate_modes(
     is not found. The representative values of a mode come from one order of
     the sweep (see :func:`~rigidid.core.timedomain.stabilisation.cluster_stable`).
     """
-    decays_in = _check_records(records, dt)
+    decays_in, peaks = _check_records(records, dt)
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (isinstance(n_modes, int) and n_modes >= 1):
@@ -313,7 +339,11 @@ def estimate_modes(
     decays: list[Array] = []
     for k, rec in enumerate(decays_in):
         energy = energies[k] if energies is not None and k < len(energies) else None
+        if energy is None and trim:
+            energy = channel_energy(rec, peaks[k])
         impact = find_impact(rec, dt, pulse_width=pulse_width, energy=energy) if trim else Impact(0, 0, 0)
+        if trim and settle > 0:
+            impact = Impact(impact.onset, impact.peak, min(impact.start + int(settle), rec.shape[0] - 1))
         impacts.append(impact)
         decays.append(rec[impact.start :])
 
@@ -450,16 +480,19 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
         fit_band = (0.0, nyquist_fit)
 
     # (4) scaling and principal components
+    # no scaled copy of the decays: the scaling is folded into the projection, or into the Gram matrix
     m = decays[0].shape[1]
-    scales = _channel_scales(decays)
+    scales, cov = _scales_and_covariance(decays)
+    inverse = 1.0 / scales
     r = min(m, _RANK_PER_MODE * n_modes)
-    scaled = [d / scales for d in decays]
     if r < m:
-        basis = _principal_basis(scaled, r)
-        fitted = [x @ basis for x in scaled]
+        basis = _principal_basis(cov * np.outer(inverse, inverse), r)
+        fitted = [x @ (inverse[:, None] * basis) for x in decays]
+        unscale: Array | None = None
     else:
         basis = np.eye(m)
-        fitted = scaled
+        fitted = decays
+        unscale = inverse
     to_sensors = scales[:, None] * basis
 
     # (5)-(6) sweep
@@ -473,7 +506,7 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
             raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
         if min_samples <= 2 * p_max + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
-        gram, columns = lagged_gram(fitted, p_max)
+        gram, columns = _scaled_gram(fitted, p_max, unscale)
         orders = list(range(p_min, p_max + 1))
         fits = ar_fits(gram, r, orders)
         adequate = f_test_order([f.rss for f in fits], orders, columns, r)
@@ -489,7 +522,7 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
         rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, f_low)
         if min_samples <= 2 * rows + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
-        gram, _ = lagged_gram(fitted, rows)
+        gram, _ = _scaled_gram(fitted, rows, unscale)
         basis_era = era_basis(gram, r)
         for n in range(2, n_max + 1, 2):
             if options.progress is not None:
