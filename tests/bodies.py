@@ -112,3 +112,24 @@ def flat_layout_on_symmetric_mounts() -> tuple[Body, Array, Array]:
     positions = np.array([[x, y, z * 1e-7] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
     directions = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
     return body, positions, directions
+
+
+def corner_references(positions: Array) -> Array:
+    """Three hammer points at corners of the sensors' bounding box (x, y, z hits: ``np.eye(3)``)."""
+    lo, hi = positions.min(axis=0), positions.max(axis=0)
+    return np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+
+
+def frf_test_on_mounts(rng: np.random.Generator) -> tuple[Body, Array, Array, Array, Array, NDArray[np.complex128]]:
+    """Issue 12's FRF test: a random body on mounts, 8 sensors, 3 references, 0.25-400 Hz in 3200 lines,
+    one elastic mode at 300 Hz, 1 % noise on the accelerance. Returns body, positions, directions,
+    reference positions, frequencies and FRFs (p, q, f)."""
+    from rigidid.core.frf import accelerance, random_elastic_modes
+
+    body = random_body(rng)
+    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
+    rpos = corner_references(pos)
+    f = np.linspace(0.25, 400.0, 3200)
+    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    return body, pos, dirs, rpos, f, h

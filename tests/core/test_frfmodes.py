@@ -17,7 +17,7 @@ from rigidid.core.simulate import body_modes, system_matrices
 from rigidid.errors import InputError
 from rigidid.io.files import load_modes
 
-from ..bodies import random_body, random_layout
+from ..bodies import corner_references, frf_test_on_mounts, random_body, random_layout
 from ..conftest import DATA, SAMPLES
 from ..tolerances import FRF_EQ18_STRUCTURED, SCALED_MODES_CSV
 
@@ -29,8 +29,7 @@ def _test(seed: int, noise: float = 0.0, lines: int = 400):  # type: ignore[no-u
     rng = np.random.default_rng(seed)
     body = random_body(rng)
     pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rpos = corner_references(pos)
     top = float(np.abs(body_modes(body, pos, dirs).poles).max()) / (2.0 * np.pi)
     f = np.linspace(top / 50.0, 2.0 * top, lines)
     h = accelerance(body, pos, dirs, rpos, np.eye(3), f, noise=noise, rng=rng)
@@ -99,17 +98,10 @@ def test_noisy_frfs_round_trip() -> None:
 
 def test_structured_rigid_modes_bring_eq18_close_to_its_bound():
     """The issue's test (benchmarks/frf_eq18.py, seed 2): eq. (18) with the mass given on the modes fitted to FRFs."""
-    from rigidid.core.frf import random_elastic_modes
     from rigidid.core.identify import identify
 
     rng = np.random.default_rng(2)
-    body = random_body(rng)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, f, h = frf_test_on_mounts(rng)
     errors = []
     for structured in (True, False):
         fitted = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6, structured=structured)

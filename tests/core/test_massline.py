@@ -11,7 +11,7 @@ from rigidid.core.frf import accelerance, random_elastic_modes
 from rigidid.core.massline import auto_band, mass_line
 from rigidid.core.simulate import Mount
 from rigidid.errors import IdentificationError, InputError
-from tests.bodies import random_body, random_layout
+from tests.bodies import corner_references, frf_test_on_mounts, random_body, random_layout
 from tests.tolerances import MASSLINE_EXACT_REL, MASSLINE_FREE_FREE
 
 
@@ -21,8 +21,7 @@ def _free_free(seed: int):
     mounts = tuple(Mount(m.position, m.stiffness * 0.01, m.damping * 0.1) for m in body.mounts)
     body = dataclasses.replace(body, mounts=mounts)
     pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rpos = corner_references(pos)
     return rng, body, pos, dirs, rpos, np.eye(3)
 
 
@@ -88,13 +87,7 @@ def test_mass_from_residues_on_mounts_with_noise_and_an_elastic_mode(seed):
     from tests.tolerances import RESIDUES_ON_MOUNTS
 
     rng = np.random.default_rng(seed)
-    body = random_body(rng)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, f, h = frf_test_on_mounts(rng)
     poles = body_modes(body, pos, dirs).poles
     r = mass_from_residues(f, h, pos, dirs, rpos, np.eye(3), poles)
     assert r.band[0] == f[0] and 149.0 < r.band[1] < 151.0

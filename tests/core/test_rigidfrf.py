@@ -11,7 +11,7 @@ from rigidid.core.massline import mass_line
 from rigidid.core.rigidfrf import mass_matrix_from_parameters, rigid_frf_fit
 from rigidid.core.simulate import Body, Mount, system_matrices
 from rigidid.errors import InputError
-from tests.bodies import random_body, random_layout
+from tests.bodies import corner_references, random_body, random_layout
 from tests.tolerances import MASSLINE_EXACT_REL, RIGIDFRF_AUTO_LOW_NOISE, RIGIDFRF_EXACT_REL, RIGIDFRF_NOISY
 
 
@@ -61,8 +61,7 @@ def test_random_bodies_on_mounts_through_their_rigid_modes_are_exact(seed):
     rng = np.random.default_rng(seed)
     body = random_body(rng)
     pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rpos = corner_references(pos)
     m, k, _ = system_matrices(body)
     top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real)) / (2 * np.pi)
     f = np.linspace(0.2 * top, 2.0 * top, 60)  # across the rigid-body modes, with damping
@@ -96,8 +95,7 @@ def test_free_free_mass_line_is_still_exact_and_bad_arguments_are_refused():
     rng = np.random.default_rng(1)
     body = random_body(rng)
     pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
+    rpos = corner_references(pos)
     f = np.linspace(0.25, 400.0, 800)
     h = accelerance(body, pos, dirs, rpos, np.eye(3), f)
     for supports in ("exact", "first_order"):

@@ -590,10 +590,7 @@ def rigid_shapes(
     factor); the sign of ``u_k`` is arbitrary, as for any mode.
     """
     res = np.asarray(residues, dtype=complex)
-    pos = np.asarray(positions, dtype=float)
-    origin, span, t = scaled_frame(pos, np.asarray(directions, dtype=float))
-    rpos = np.asarray(reference_positions, dtype=float)
-    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    _, _, t, tf = _frames(positions, directions, reference_positions, reference_directions)
     u, misfit = _rigid_modes(res, t, tf)
     return t @ u, tf @ u, misfit
 
@@ -642,18 +639,11 @@ def body_from_scaled_modes(
     """
     lam = np.asarray(poles, dtype=complex).reshape(-1)
     res = np.asarray(residues, dtype=complex)
-    pos = np.asarray(positions, dtype=float)
-    dirs = np.asarray(directions, dtype=float)
-    rpos = np.asarray(reference_positions, dtype=float)
-    rdirs = np.asarray(reference_directions, dtype=float)
-    if lam.size != 6 or res.shape != (6, pos.shape[0], rpos.shape[0]):
+    p, q = np.shape(positions)[0], np.shape(reference_positions)[0]
+    if lam.size != 6 or res.shape != (6, p, q):
         raise InputError("poles and residues must be those of the six rigid-body modes, residues (6, p, q)")
-    origin, span, t = scaled_frame(pos, dirs)
-    tf = sensor_matrix((rpos - origin) / span, rdirs)
-    u, _ = _rigid_modes(res, t, tf)
-    if np.any(np.linalg.norm(u, axis=0) == 0.0):
-        raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
-    return _body_from_modes(lam, u, origin, span)
+    origin, span, t, tf = _frames(positions, directions, reference_positions, reference_directions)
+    return _excited_body(lam, _rigid_modes(res, t, tf)[0], origin, span)
 
 
 def body_from_frfs(
@@ -691,14 +681,10 @@ def body_from_frfs(
     lam = np.asarray(poles, dtype=complex).reshape(-1)
     if lam.size != 6:
         raise InputError("poles must be those of the six rigid-body modes")
-    pos = np.asarray(positions, dtype=float)
-    origin, span, t = scaled_frame(pos, np.asarray(directions, dtype=float))
-    tf = sensor_matrix((np.asarray(reference_positions, dtype=float) - origin) / span, np.asarray(reference_directions))
+    origin, span, t, tf = _frames(positions, directions, reference_positions, reference_directions)
     res = residues_lsfd(frequencies, frf, lam, band=band)[0]
     u = refine_rigid_modes(frequencies, frf, lam, _rigid_modes(res, t, tf)[0], t, tf, band=band)[0]
-    if np.any(np.linalg.norm(u, axis=0) == 0.0):
-        raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
-    return _body_from_modes(lam, u, origin, span)
+    return _excited_body(lam, u, origin, span)
 
 
 def body_from_scaled_shapes(
@@ -939,6 +925,23 @@ def with_nonrigid_residual(
             c = c / abs(c) * np.sqrt(max(base.shape[0] - 6, 0)) * sigma[k] / size if c != 0.0 else 0.0
         out[:, k] = base[:, k] + c * rest
     return out
+
+
+def _frames(
+    positions: ArrayLike, directions: ArrayLike, reference_positions: ArrayLike, reference_directions: ArrayLike
+) -> tuple[Array, float, Array, Array]:
+    """:func:`scaled_frame` of the sensors, and the references' sensor matrix ``T_f`` in that frame."""
+    origin, span, t = scaled_frame(np.asarray(positions, dtype=float), np.asarray(directions, dtype=float))
+    rpos = np.asarray(reference_positions, dtype=float)
+    tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
+    return origin, span, t, tf
+
+
+def _excited_body(lam: CArray, u: CArray, origin: Array, span: float) -> ScaledBody:
+    """:func:`_body_from_modes`, refused when a mode has no residue (not excited by the references)."""
+    if np.any(np.linalg.norm(u, axis=0) == 0.0):
+        raise IdentificationError("a rigid-body mode has no residue: the references do not excite it")
+    return _body_from_modes(lam, u, origin, span)
 
 
 def _body_from_modes(lam: CArray, u: CArray, origin: Array, span: float) -> ScaledBody:
