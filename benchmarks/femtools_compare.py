@@ -39,7 +39,6 @@ per call, median, wall clock on this machine.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
 from collections.abc import Callable
@@ -50,9 +49,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.bodies import random_body, random_layout
+from tests.bodies import frf_test_on_mounts
 
-from rigidid.core.frf import accelerance, random_elastic_modes
+from rigidid.core.frf import accelerance
 from rigidid.core.geometry import transfer_matrix
 from rigidid.core.massline import mass_line
 from rigidid.core.simulate import Body, Mount
@@ -63,20 +62,7 @@ Errors = tuple[float, float, float]
 def test_case(seed: int, soften: float, references: int) -> dict[str, Any]:
     """One simulated FRF test (the frf_accuracy.py scenario), with 3 or 6 references."""
     rng = np.random.default_rng(seed)
-    body = random_body(rng)
-    mounts = tuple(Mount(m.position, m.stiffness * soften, m.damping * np.sqrt(soften)) for m in body.mounts)
-    body = dataclasses.replace(body, mounts=mounts)
-    assert isinstance(body, Body)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    corners = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    rpos, rdirs = corners, np.eye(3)
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, references, mass=body.mass)  # 3: frf_accuracy.py's draws
-    if references == 6:
-        rpos = np.vstack([corners, corners])
-        rdirs = np.vstack([np.eye(3), np.eye(3)[[1, 2, 0]]])
-    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, rdirs, f, h = frf_test_on_mounts(rng, soften=soften, references=references)
     # the mount stiffness about the origin (femtools' reference point), for its mount_k
     k0 = np.zeros((6, 6))
     for m in body.mounts:
@@ -180,7 +166,6 @@ def run_scenario(name: str, soften: float, references: int, trials: int, rbpe: A
 
 def documented_example(rbpe: Any) -> None:
     """femtools' own example (docstring of rigid_body_properties), exact FRFs, through both."""
-    from rigidid.core.simulate import Mount
 
     mass, cg, jdiag = 12.5, np.array([0.1, -0.05, 0.2]), np.array([0.8, 1.1, 1.5])
     pos = np.repeat([[sx, sy, sz] for sx in (-0.5, 0.5) for sy in (-0.4, 0.4) for sz in (-0.3, 0.3)], 3, axis=0)

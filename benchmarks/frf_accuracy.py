@@ -34,7 +34,6 @@ over the trials are printed.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -43,27 +42,15 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.bodies import random_body, random_layout
+from tests.bodies import frf_test_on_mounts, random_body, random_layout
 
 from rigidid.core.frf import accelerance, random_elastic_modes
 from rigidid.core.massline import mass_line
-from rigidid.core.simulate import Body, Mount
 from rigidid.errors import IdentificationError
 
 
 def scenario(seed: int, soften: float) -> tuple[float, float, float, float]:
-    rng = np.random.default_rng(seed)
-    body = random_body(rng)
-    mounts = tuple(Mount(m.position, m.stiffness * soften, m.damping * np.sqrt(soften)) for m in body.mounts)
-    body = dataclasses.replace(body, mounts=mounts)
-    assert isinstance(body, Body)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    rdirs = np.eye(3)
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, rdirs, f, h = frf_test_on_mounts(np.random.default_rng(seed), soften=soften)
     t0 = time.perf_counter()
     r = mass_line(f, h, pos, dirs, rpos, rdirs)
     dt = time.perf_counter() - t0
@@ -122,13 +109,7 @@ def residues_on_mounts(seed: int, pole_noise: bool) -> tuple[float, float, float
     from rigidid.core.simulate import add_noise, body_modes
 
     rng = np.random.default_rng(seed)
-    body = random_body(rng)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, _, f, h = frf_test_on_mounts(rng)
     modes = body_modes(body, pos, dirs)
     if pole_noise:
         modes = add_noise(modes, frequency=0.001, damping=0.02, rng=rng)
@@ -143,14 +124,7 @@ def residues_on_mounts(seed: int, pole_noise: bool) -> tuple[float, float, float
 
 def _scenario_on_mounts(seed: int):  # type: ignore[no-untyped-def]
     """The issue's test: body on mounts as drawn, 8 sensors, 3 references, 1 % noise, elastic mode at 300 Hz."""
-    rng = np.random.default_rng(seed)
-    body = random_body(rng)
-    pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    lo, hi = pos.min(axis=0), pos.max(axis=0)
-    rpos = np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
-    f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
+    body, pos, dirs, rpos, _, f, h = frf_test_on_mounts(np.random.default_rng(seed))
     return body, pos, dirs, rpos, f, h
 
 

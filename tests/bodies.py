@@ -120,16 +120,27 @@ def corner_references(positions: Array) -> Array:
     return np.array([[hi[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]])
 
 
-def frf_test_on_mounts(rng: np.random.Generator) -> tuple[Body, Array, Array, Array, Array, NDArray[np.complex128]]:
-    """Issue 12's FRF test: a random body on mounts, 8 sensors, 3 references, 0.25-400 Hz in 3200 lines,
-    one elastic mode at 300 Hz, 1 % noise on the accelerance. Returns body, positions, directions,
-    reference positions, frequencies and FRFs (p, q, f)."""
+def frf_test_on_mounts(
+    rng: np.random.Generator, *, soften: float = 1.0, references: int = 3
+) -> tuple[Body, Array, Array, Array, Array, Array, NDArray[np.complex128]]:
+    """Issue 12's FRF test: a random body on mounts, 8 sensors, 0.25-400 Hz in 3200 lines, one elastic
+    mode at 300 Hz, 1 % noise on the accelerance. `soften` scales the mounts' stiffness (damping by its
+    square root: 0.01 puts the supports a tenth lower, free-free); `references` is 3 (x, y, z at three
+    corners, :func:`corner_references`) or 6 (the same corners hit again along y, z, x). Returns body,
+    positions, directions, reference positions and directions, frequencies and FRFs (p, q, f)."""
+    import dataclasses
+
     from rigidid.core.frf import accelerance, random_elastic_modes
 
     body = random_body(rng)
+    if soften != 1.0:
+        mounts = tuple(Mount(m.position, m.stiffness * soften, m.damping * np.sqrt(soften)) for m in body.mounts)
+        body = dataclasses.replace(body, mounts=mounts)
     pos, dirs = random_layout(rng, 8, centre=body.center_of_gravity)
-    rpos = corner_references(pos)
+    rpos, rdirs = corner_references(pos), np.eye(3)
     f = np.linspace(0.25, 400.0, 3200)
-    elastic = random_elastic_modes(rng, [300.0], 8, 3, mass=body.mass)
-    h = accelerance(body, pos, dirs, rpos, np.eye(3), f, elastic=elastic, noise=0.01, rng=rng)
-    return body, pos, dirs, rpos, f, h
+    elastic = random_elastic_modes(rng, [300.0], 8, references, mass=body.mass)
+    if references == 6:
+        rpos, rdirs = np.vstack([rpos, rpos]), np.vstack([rdirs, rdirs[[1, 2, 0]]])
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic, noise=0.01, rng=rng)
+    return body, pos, dirs, rpos, rdirs, f, h
