@@ -211,7 +211,7 @@ def rigid_frf_fit(
     if rank_m < 10 or sv[-1] < 1e-6 * sv[0]:
         raise IdentificationError(
             f"the {q} reference(s) over these lines do not determine the mass, CG and inertia with the mounts "
-            "fitted (at least 3 references at different points and in different directions, lines off the supports)"
+            "fitted (at least 2 references at different points and in different directions, lines off the supports)"
         )
     theta = sol / nm
     if not theta[0] > 0.0:
