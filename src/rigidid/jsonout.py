@@ -18,6 +18,8 @@ from numpy.typing import NDArray
 from rigidid import __version__
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from rigidid.api import IdentifyResult, PlanResult
     from rigidid.api_frf import MassLineResult
     from rigidid.core.frfmodes import FrfModes, ScaledBody
@@ -27,6 +29,7 @@ if TYPE_CHECKING:
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.timedomain.refine import RecordBound
+    from rigidid.core.timedomain.stabilisation import OrderPoles
     from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
 
 __all__ = [
@@ -524,6 +527,19 @@ def reference_report_to_dict(report: ReferenceReport) -> dict[str, Any]:
     }
 
 
+def _stabilisation(diagram: Sequence[OrderPoles]) -> list[dict[str, Any]]:
+    """The stabilisation diagram: per model order, its physical poles and which were stable."""
+    return [
+        {
+            "order": entry.order,
+            "frequency_hz": _vec(entry.frequency_hz),
+            "damping_ratio": _vec(entry.damping_ratio),
+            "stable": [bool(v) for v in entry.stable],
+        }
+        for entry in diagram
+    ]
+
+
 def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
     """JSON form of a modal estimation from records, with its stabilisation diagram.
 
@@ -554,15 +570,7 @@ def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
             }
             for k in range(len(estimate.frequency_hz))
         ],
-        "stabilisation": [
-            {
-                "order": entry.order,
-                "frequency_hz": _vec(entry.frequency_hz),
-                "damping_ratio": _vec(entry.damping_ratio),
-                "stable": [bool(v) for v in entry.stable],
-            }
-            for entry in estimate.diagram
-        ],
+        "stabilisation": _stabilisation(estimate.diagram),
     }
 
 
@@ -632,13 +640,5 @@ def frf_modes_to_dict(fitted: FrfModes) -> dict[str, Any]:
             }
             for k in range(fitted.poles.size)
         ],
-        "stabilisation": [
-            {
-                "order": entry.order,
-                "frequency_hz": _vec(entry.frequency_hz),
-                "damping_ratio": _vec(entry.damping_ratio),
-                "stable": [bool(v) for v in entry.stable],
-            }
-            for entry in fitted.diagram
-        ],
+        "stabilisation": _stabilisation(fitted.diagram),
     }
