@@ -27,7 +27,7 @@ import numpy as np
 
 from records_scenario import BODY, CG, IMPACTS, INERTIA, layout
 from refine_accuracy import bound_at_truth
-from rigidid.core.geometry import layout_frame, sensor_matrix
+from rigidid.core.geometry import local_sensor_matrix
 from rigidid.core.identify import identify
 from rigidid.core.selection import elastic_suspect, rigid_fit_residuals, separate_elastic
 from rigidid.core.simulate import Mount, system_matrices
@@ -80,7 +80,7 @@ def rigid_six(recs, dt: float, pos, dirs):  # type: ignore[no-untyped-def]
     est = estimate_modes(recs, dt)
     if pos.shape[0] <= 6:
         return est, recs
-    t = sensor_matrix(layout_frame(pos).to_local(pos), dirs)
+    t = local_sensor_matrix(pos, dirs)
     if elastic_suspect(rigid_fit_residuals(t, est.shapes)) is None:
         return est, recs
     try:

@@ -345,7 +345,7 @@ def identify(
     IdentificationError
         Data that determine no rigid body.
     """
-    from rigidid.core.geometry import layout_frame, sensor_matrix
+    from rigidid.core.geometry import local_sensor_matrix
 
     if uncertainty and uncertainty < 2:
         raise InputError(f"need at least 2 draws, got {uncertainty}", source="uncertainty")
@@ -355,8 +355,7 @@ def identify(
     ids, positions, directions = files.layout_arrays(lay)
     if table.sensor_ids != ids:
         raise InputError("the modes' sensors do not match the layout's sensors", source=source)
-    frame = layout_frame(positions)
-    t = sensor_matrix(frame.to_local(positions), directions)
+    t = local_sensor_matrix(positions, directions)
     if method == "mounts" and mounts is None:
         raise InputError("the mount model needs the mounts (a mounts.json or body.json)", source="mounts")
     if method == "mounts" and uncertainty:
@@ -1011,7 +1010,7 @@ def estimate_rigid_modes(
     """
     import warnings
 
-    from rigidid.core.geometry import layout_frame, sensor_matrix
+    from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import elastic_suspect, separate_elastic
     from rigidid.errors import ElasticModeWarning, IdentificationError
 
@@ -1023,7 +1022,7 @@ def estimate_rigid_modes(
     _, positions, directions = files.layout_arrays(lay)
     if positions.shape[0] <= 6:
         return table, estimate
-    t = sensor_matrix(layout_frame(positions).to_local(positions), directions)
+    t = local_sensor_matrix(positions, directions)
     residual = rigid_fit_residuals(t, table.shapes)
     k = elastic_suspect(residual)
     if k is None:

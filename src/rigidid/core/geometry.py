@@ -21,6 +21,7 @@ __all__ = [
     "frame_arrays",
     "layout_condition",
     "layout_frame",
+    "local_sensor_matrix",
     "normalise_directions",
     "numerical_rank",
     "sensor_matrix",
@@ -212,6 +213,26 @@ def layout_frame(positions: ArrayLike) -> LayoutFrame:
     return LayoutFrame(centre, float(scale))
 
 
+def local_sensor_matrix(positions: ArrayLike, directions: ArrayLike) -> Array:
+    """The sensor transformation ``T`` in the layout's dimensionless frame (:func:`layout_frame`).
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations (length).
+    directions : array_like, shape (p, 3)
+        Unit measuring axes.
+
+    Returns
+    -------
+    ndarray, shape (p, 6)
+        :func:`sensor_matrix` of the positions about the sensor centroid divided
+        by the RMS radius: independent of origin and units.
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    return sensor_matrix(layout_frame(pos).to_local(pos), directions)
+
+
 def numerical_rank(singular_values: ArrayLike, rows: int) -> NDArray[np.intp]:
     """Numerical rank of sensor transformations from their singular values.
 
@@ -257,8 +278,7 @@ def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float
         Numerical rank of that matrix (at most 6). The paper's step (3)
         requires rank 6.
     """
-    frame = layout_frame(positions)
-    t = sensor_matrix(frame.to_local(positions), directions)
+    t = local_sensor_matrix(positions, directions)
     s = np.linalg.svd(t, compute_uv=False)
     rank = int(numerical_rank(s, t.shape[0]))
     cond = float(s[0] / s[-1]) if rank == 6 and s.size == 6 else float("inf")

@@ -174,7 +174,7 @@ def estimate_noise(
         :func:`shape_noise_from_residuals` of the rigid-body fit when
         ``p > 6``; `base` unchanged otherwise.
     """
-    from rigidid.core.geometry import layout_frame, sensor_matrix
+    from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import project_rigid
 
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
@@ -184,8 +184,7 @@ def estimate_noise(
         raise InputError(f"shapes must be (sensors, modes) with {pos.shape[0]} sensors, got {psi.shape}")
     if pos.shape[0] <= 6:
         return base
-    frame = layout_frame(pos)
-    _, residual = project_rigid(sensor_matrix(frame.to_local(pos), dirs), psi)
+    _, residual = project_rigid(local_sensor_matrix(pos, dirs), psi)
     return NoiseLevels(
         frequency=base.frequency,
         damping=base.damping,

@@ -26,7 +26,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core import estimator
 from rigidid.core.estimator import DAMPING_WEIGHT
-from rigidid.core.geometry import layout_condition, layout_frame, normalise_directions, numerical_rank, sensor_matrix
+from rigidid.core.geometry import (
+    layout_condition,
+    local_sensor_matrix,
+    normalise_directions,
+    numerical_rank,
+    sensor_matrix,
+)
 from rigidid.core.layout_check import AXIS_COS, Finding, LayoutReport, check_layout
 from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels, StandardNormals, apply_noise, draw_normals
 from rigidid.core.simulate import Body, body_modes
@@ -361,7 +367,7 @@ def _by_conditioning(positions: Array, directions: Array, c_pos: Array, c_dir: A
     ranks, ratios = [], []
     for where, along in zip(c_pos, c_dir, strict=True):
         lay_p, lay_d = np.vstack([positions, where]), np.vstack([directions, along])
-        s = np.linalg.svd(sensor_matrix(layout_frame(lay_p).to_local(lay_p), lay_d), compute_uv=False)
+        s = np.linalg.svd(local_sensor_matrix(lay_p, lay_d), compute_uv=False)
         r = int(numerical_rank(s, lay_p.shape[0]))
         ranks.append(r)
         ratios.append(s[r - 1] / s[0] if r else 0.0)

@@ -129,7 +129,7 @@ def record_spread(
     """
     from scipy.special import stdtrit
 
-    from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
+    from rigidid.core.geometry import local_sensor_matrix, normalise_directions
     from rigidid.core.selection import select_rigid_modes
     from rigidid.core.timedomain import estimate_modes
 
@@ -137,7 +137,7 @@ def record_spread(
         raise InputError(f"need at least 2 segments, got {segments}", source="segments")
     pos = np.asarray(positions, dtype=float)
     dirs = normalise_directions(directions)
-    t = sensor_matrix(layout_frame(pos).to_local(pos), dirs)
+    t = local_sensor_matrix(pos, dirs)
     arrays = [np.asarray(r, dtype=float) for r in records]
     samples: dict[str, list[Array]] = {key: [] for key in _quantities(full)}
     for j in range(segments):
