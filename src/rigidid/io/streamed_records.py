@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.timedomain.preprocess import CONTENT_ROWS
 from rigidid.errors import InputError
 from rigidid.io.columns import column as _column
 from rigidid.io.columns import column_order
@@ -101,7 +102,7 @@ class StreamedRecord:
     energy : ndarray, shape (m,)
         ``channel_energy(data)`` (computed once, for the decay check and the impact).
     spectrum : (ndarray, ndarray) or None
-        ``content_spectrum`` of the first 2^18 raw samples of the free decay
+        ``content_spectrum`` of the first ``CONTENT_ROWS`` (2^16) raw samples of the free decay
         (the impact located in the first :data:`HEAD_ROWS` rows), accumulated
         while reading, at the file's sample rate: what the estimation computes
         on a whole record. None for a record of at most :data:`HEAD_ROWS`
@@ -300,7 +301,7 @@ class _TimeCheck:
 
 
 class _Welch:
-    """``content_spectrum`` of the decay ``record[start : start + 2^18]`` fed block by block.
+    """``content_spectrum`` of the decay ``record[start : start + CONTENT_ROWS]`` fed block by block.
 
     The segments (4096 samples, half overlap, Hann window, mean removed) are
     transformed as soon as they are complete; each channel's sum is divided by
@@ -309,7 +310,7 @@ class _Welch:
     """
 
     SEG = 4096
-    SPAN = 1 << 18
+    SPAN = CONTENT_ROWS
 
     def __init__(self, start: int, dt: float, channels: int) -> None:
         self.start, self.dt = start, dt
@@ -450,7 +451,7 @@ def read_record_streamed(
     cascade : bool
         Decimate in a second stage while reading too, by the factor the
         estimation would choose (:func:`second_factor`), as soon as the
-        content spectrum is complete (``2^18`` rows of decay): only the
+        content spectrum is complete (``CONTENT_ROWS`` rows of decay): only the
         record at the estimation's rate is then held. Applied only when the
         record is long enough (at least twice the rows the estimation
         requires) and `factor` is not given; ``stages`` says whether it was.

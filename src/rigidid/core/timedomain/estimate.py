@@ -24,11 +24,16 @@ from rigidid.core.timedomain.preprocess import (
     band_limit,
     channel_energy,
     column_peaks,
+    content_from_spectrum,
     content_range,
+    content_spectrum,
+    decimate_in_stages,
     decimation_for,
     find_impact,
+    presum,
+    stage_factors,
 )
-from rigidid.core.timedomain.preprocess import decimate as decimate_record
+from rigidid.core.timedomain.preprocess import decimate as fir_decimate
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
 from rigidid.progress import ProgressCallback
@@ -350,11 +355,17 @@ def estimate_modes(
     # (2) decimation factor; automatic factors are retried smaller if modes are missing
     if content is None:
         content = content_range(decays, dt)
+    presummed: dict[int, list[Array]] = {}
+    if decimate is None:
+        content = _finer_content(decays, dt, band, content, presummed)
     factors = [decimate] if decimate is not None else decimation_factors(decays, dt, band, content)
     options = _Options(method, n_modes, band, max_order, crit, content, progress)
     for attempt, factor in enumerate(factors):
         try:
-            result = _estimate(decays, dt, factor, options)
+            reduced, used = _decimated(
+                decays, factor, exact=decimate is not None, presummed=presummed, progress=progress
+            )
+            result = _estimate(reduced, dt, used, options)
         except IdentificationError:
             if attempt == len(factors) - 1:
                 raise
@@ -451,18 +462,73 @@ class _Options:
     progress: ProgressCallback | None = None
 
 
+def _finer_content(
+    decays: list[Array],
+    dt: float,
+    band: tuple[float, float] | None,
+    content: tuple[float, float],
+    presummed: dict[int, list[Array]],
+) -> tuple[float, float]:
+    """The content range again, on the decays presummed by the first stage of the first factor.
+
+    The spectrum at the records' rate resolves ``1 / (4096 dt)``: on a record
+    sampled far above its modes (50 kHz, modes below 30 Hz) the modes fill
+    its lowest bins and their window leakage reaches a few bins further, so
+    the content seems to reach 5 times higher than it does and the factor
+    comes out 5 times too small. The decays presummed by ``q1`` (the first
+    stage of :func:`stage_factors` of the factor that content allows) are
+    judged again, ``q1`` times finer, up to the Nyquist frequency of that
+    factor (where the presum folds nothing onto the band). The presummed
+    decays are kept in `presummed` for the decimation. Returns `content`
+    unchanged when the factor is too small for two stages or nothing
+    stands out of the finer spectrum.
+    """
+    factor = decimation_factors(decays, dt, band, content)[0]
+    q1, _ = stage_factors(factor)
+    if q1 <= 1:
+        return content
+    presummed[q1] = [presum(d, q1) for d in decays]
+    freqs, total = content_spectrum(presummed[q1], dt * q1)
+    keep = freqs <= 0.5 / (dt * factor)
+    if np.count_nonzero(keep) < 16:
+        return content
+    low, high = content_from_spectrum(freqs[keep], total[keep], 0.5 / (dt * factor))
+    if high >= 0.5 / (dt * factor):  # nothing stood out
+        return content
+    return low, high
+
+
+def _decimated(
+    decays: list[Array],
+    factor: int,
+    *,
+    exact: bool,
+    presummed: dict[int, list[Array]],
+    progress: ProgressCallback | None,
+) -> tuple[list[Array], int]:
+    """The decays decimated by about `factor` in two stages (:func:`stage_factors`), and the factor used."""
+    if factor <= 1:
+        return decays, 1
+    first, second = stage_factors(factor, exact=exact)
+    for q1 in presummed:  # a first stage already computed serves any factor it leaves 4 or more of
+        if factor // q1 >= 4 and (not exact or factor % q1 == 0):
+            first, second = q1, factor // q1
+    done: list[Array] = []
+    for k, d in enumerate(decays):
+        if progress is not None:
+            progress("decimating", k, len(decays))
+        if first > 1 and first in presummed:
+            done.append(fir_decimate(presummed[first][k], second))
+        else:
+            done.append(decimate_in_stages(d, first, second))
+    if progress is not None:
+        progress("decimating", len(decays), len(decays))
+    return done, first * second
+
+
 def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
-    """Steps (2)-(7) of :func:`estimate_modes` at one decimation factor."""
+    """Steps (3)-(7) of :func:`estimate_modes` on the decays decimated by `factor` (sample interval `dt`)."""
     n_modes, band, max_order = options.n_modes, options.band, options.max_order
-    if factor > 1:
-        done: list[Array] = []
-        for d in decays:
-            if options.progress is not None:
-                options.progress("decimating", len(done), len(decays))
-            done.append(decimate_record(d, factor))
-        decays = done
-        if options.progress is not None:
-            options.progress("decimating", len(decays), len(decays))
     dt_fit = dt * factor
     nyquist_fit = 0.5 / dt_fit
 

@@ -70,6 +70,9 @@ class Impact:
 
 
 _ENERGY_BLOCK = 1 << 16
+
+CONTENT_ROWS = 1 << 16
+"""Rows of each free decay the content spectrum is estimated from, at most (``2^16``)."""
 """Values per row block of :func:`channel_energy` (512 kB of float64)."""
 
 
@@ -91,9 +94,10 @@ def channel_energy(record: Array, peaks: Array | None = None) -> Array:
 
     Notes
     -----
-    Two passes (:func:`column_peaks`, then one weighted sum of squares), with
-    no temporary the size of the record: the one channel-energy routine of
-    rigidid (impact location and the reader's decay check both use it).
+    Two passes (:func:`column_peaks`, then the squares of each row block
+    times the weights), with no temporary the size of the record: the one
+    channel-energy routine of rigidid (impact location and the reader's
+    decay check both use it).
     """
     n, p = record.shape
     energy = np.zeros(n)
@@ -101,9 +105,17 @@ def channel_energy(record: Array, peaks: Array | None = None) -> Array:
         return energy
     peak = column_peaks(record) if peaks is None or peaks.shape != (p,) else peaks
     scale = np.divide(1.0, peak, out=np.zeros(p), where=peak > 0.0)
-    # one pass, no temporary: sum_j x_ij^2 s_j^2
-    result: Array = np.einsum("ij,ij,j->i", record, record, scale * scale)
-    return result
+    # row blocks that stay in cache: squares, then one matrix-vector product with the weights
+    # (twice as fast as one einsum pass over narrow rows)
+    weights = scale * scale
+    step = max(1, _ENERGY_BLOCK // max(p, 1))
+    scratch = np.empty((min(step, n), p))
+    for lo in range(0, n, step):
+        block = record[lo : lo + step]
+        squares = scratch[: block.shape[0]]
+        np.multiply(block, block, out=squares)
+        np.dot(squares, weights, out=energy[lo : lo + block.shape[0]])
+    return energy
 
 
 def column_peaks(record: Array) -> Array:
@@ -237,8 +249,8 @@ def content_range(records: Sequence[Array], dt: float, *, floor_factor: float = 
     -----
     The spectrum is a Welch estimate (Hann window, segments of 4096 samples
     or the shortest record, overlapping by half, each channel scaled to unit
-    variance) of at most the first 2^18 samples of each record, so the cost
-    does not grow with record length. The median is a fair noise floor only
+    variance) of at most the first :data:`CONTENT_ROWS` (2^16) samples of
+    each record, so the cost does not grow with record length. The median is a fair noise floor only
     when most of the band holds no mode; otherwise `f_high` comes out high,
     which is the safe side for decimation.
     """
@@ -264,7 +276,7 @@ def content_spectrum(records: Sequence[Array], dt: float) -> tuple[Array, Array]
         with the same segment length add up: the record reader computes one
         per record as it reads and the estimation adds them.
     """
-    parts = [rec[: 1 << 18] for rec in records if rec.shape[0] >= 64]
+    parts = [rec[:CONTENT_ROWS] for rec in records if rec.shape[0] >= 64]
     if not parts:
         return np.zeros(0), np.zeros(0)
     seg = min(4096, *(part.shape[0] for part in parts))
@@ -462,6 +474,141 @@ def decimate(record: Array, factor: int) -> Array:
     return out
 
 
+PRESUM_ORDER = 3
+"""Boxcars in the first stage of :func:`decimate_in_stages` (a third-order CIC filter)."""
+
+_MIN_SECOND_STAGE = 4  # the FIR stage of decimate_in_stages decimates by at least this
+_MIN_STAGED = 12  # factors below this are decimated in one stage
+
+
+def stage_factors(factor: int, *, exact: bool = False) -> tuple[int, int]:
+    """Split a decimation factor into a cheap first stage and an FIR second stage.
+
+    Parameters
+    ----------
+    factor : int
+        Decimation factor wanted, ``q >= 1``.
+    exact : bool
+        Keep `factor` itself (a factor the user chose): split it only into an
+        odd divisor ``q1 >= 3`` and ``q2 = q / q1 >= 4``, the largest such
+        ``q1``. Otherwise the first stage takes the largest odd
+        ``q1 <= q / 4`` and the second ``q2 = floor(q / q1)``: the product may
+        come out below `factor` (by a fifth at most), which is the safe side
+        for an automatic factor, and the first stage does the most of the
+        work at the least cost.
+
+    Returns
+    -------
+    (q1, q2) : tuple of int
+        ``q1`` odd (``1``: one stage, ``q2 = factor``), ``q2 >= 4``,
+        ``q1 q2 <= factor``. One stage below 12.
+
+    Examples
+    --------
+    >>> stage_factors(42), stage_factors(156), stage_factors(11), stage_factors(42, exact=True)
+    ((9, 4), (39, 4), (1, 11), (7, 6))
+    """
+    q = int(factor)
+    if q < _MIN_STAGED:
+        return 1, max(q, 1)
+    if not exact:
+        q1 = q // _MIN_SECOND_STAGE
+        q1 -= 1 - q1 % 2
+        return q1, q // q1
+    for q1 in range(q // _MIN_SECOND_STAGE, 2, -1):
+        if q1 % 2 == 1 and q % q1 == 0:
+            return q1, q // q1
+    return 1, q
+
+
+def presum(record: Array, factor: int) -> Array:
+    """Decimate by a third-order CIC filter: three boxcars of `factor` samples, zero phase.
+
+    Parameters
+    ----------
+    record : ndarray, shape (n, p)
+        Samples by channels.
+    factor : int
+        Odd decimation factor ``q1 >= 3``.
+
+    Returns
+    -------
+    ndarray, shape (n // q1 - 5, p)
+        Samples ``(k + 2) q1`` of the record filtered by the normalised
+        quadratic B-spline of ``3 q1 - 2`` taps centred on them.
+
+    Notes
+    -----
+    The first stage of :func:`decimate_in_stages`: 5 multiply-adds per
+    sample and channel (the FIR filter of :func:`decimate` takes 21). Its
+    response ``(sin(pi f q1 / fs) / (q1 sin(pi f / fs)))^3`` is zero at every
+    multiple of the new sample rate, so what folds onto the band the second
+    stage keeps (a quarter of the first stage's Nyquist frequency or less)
+    comes from near those zeros: attenuated by 50 dB or more at that band's
+    edge, 90 dB at a quarter of it, where :func:`decimation_for`'s margin
+    puts the highest content. The passband droops (1.6 % at the band's
+    edge): the same gain on every channel, which changes neither poles nor
+    mode shapes.
+    """
+    q1 = int(factor)
+    if q1 < 3 or q1 % 2 == 0:
+        raise ValueError(f"the first-stage factor must be odd and at least 3, got {factor}")
+    box = np.ones(q1)
+    kernel = np.convolve(np.convolve(box, box), box)
+    kernel /= kernel.sum()
+    half = 2  # phases a = -2..2 span 5 q1 >= 3 q1 - 2 taps around the centre 2 q1
+    taps = np.zeros((2 * half + 1) * q1)
+    lead = half * q1 - (kernel.size - 1) // 2
+    taps[lead : lead + kernel.size] = kernel
+    blocks = record.shape[0] // q1
+    stop = blocks - half - 1
+    if stop <= half:
+        raise InputError(f"the record is too short to decimate by {q1} ({record.shape[0]} samples)")
+    cube = record[: blocks * q1].reshape(blocks, q1, record.shape[1])
+    out = np.zeros((stop - half, record.shape[1]))
+    _polyphase(taps.reshape(2 * half + 1, q1), cube, half, out)
+    return out
+
+
+def decimate_in_stages(record: Array, first: int, second: int) -> Array:
+    """:func:`presum` by `first`, then :func:`decimate` by `second` (`first` 1: one stage).
+
+    Parameters
+    ----------
+    record : ndarray, shape (n, p)
+        Samples by channels.
+    first, second : int
+        The factors of :func:`stage_factors`.
+
+    Returns
+    -------
+    ndarray, shape (m, p)
+        The record at ``first * second`` times the sample interval: sample
+        ``k`` is the filtered record at sample ``(H second + 2) first + k
+        first second`` (``H`` = :data:`FIR_HALF_LENGTH`).
+
+    Notes
+    -----
+    About 5 + 21 / `first` multiply-adds per sample and channel instead of
+    :func:`decimate`'s 21 (at 42 = 7 x 6: 2.6 times fewer). The second stage
+    is :func:`decimate`'s FIR filter, which sets the band's edge and the
+    attenuation of what would fold onto it.
+
+    Examples
+    --------
+    >>> t = np.arange(200_000) * 1e-4  # 10 kHz
+    >>> x = np.stack([np.sin(2 * np.pi * 12.0 * t), np.cos(2 * np.pi * 30.0 * t)], axis=1)
+    >>> q1, q2 = stage_factors(42)
+    >>> y = decimate_in_stages(x, q1, q2)
+    >>> rows = (FIR_HALF_LENGTH * q2 + 2) * q1 + q1 * q2 * np.arange(y.shape[0])
+    >>> bool(np.max(np.abs(y - x[rows])) < 0.005)  # the signal at those samples, within the filters' ripple
+    True
+    """
+    if first <= 1:
+        return decimate(record, second)
+    return decimate(presum(record, first), second)
+
+
 _POLYPHASE_BLOCK = 1 << 18
 """Input values per row block of :func:`_polyphase` (2 MB: the block stays in cache for the 21 phases)."""
 
@@ -469,20 +616,26 @@ _POLYPHASE_BLOCK = 1 << 18
 def _polyphase(phases: Array, cube: Array, first: int, out: Array) -> None:
     """``out[k] += sum_a phases[a + H] @ cube[first + k + a]``, in row blocks that stay in cache.
 
-    The same products and sums in the same order as one pass per phase over
-    the whole record (bit for bit), about twice as fast: each block of
-    output rows is finished while its input is in cache.
+    ``phases`` has ``2 H + 1`` rows (``H`` = :data:`FIR_HALF_LENGTH` for
+    :func:`decimate`, 2 for :func:`presum`). Each block of input rows is
+    multiplied by all phases at once (one stacked matrix product,
+    ``(2 H + 1, q) @ (q, p)`` per input block), then the phases' products are
+    added in the order of ``a`` along the shifted rows; the block is finished
+    while its input is in cache. :func:`decimate` and :class:`Decimator` both
+    run through here, so they compute the same sums in the same order.
     """
-    half = FIR_HALF_LENGTH
+    na = phases.shape[0]
+    half = (na - 1) // 2
     n, q, p = out.shape[0], cube.shape[1], cube.shape[2]
     step = max(8, _POLYPHASE_BLOCK // max(1, q * p))
-    scratch = np.empty((min(step, n), p))
+    scratch = np.empty((min(step, n) + 2 * half, na, p))
     for lo in range(0, n, step):
         hi = min(n, lo + step)
-        rows, tmp = out[lo:hi], scratch[: hi - lo]
-        for a in range(-half, half + 1):
-            np.matmul(phases[a + half], cube[first + lo + a : first + hi + a], out=tmp)
-            rows += tmp
+        products = scratch[: hi - lo + 2 * half]
+        np.matmul(phases, cube[first + lo - half : first + hi + half], out=products)
+        rows = out[lo:hi]
+        for a in range(na):
+            rows += products[a : a + hi - lo, a]
 
 
 class Decimator:
