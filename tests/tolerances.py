@@ -189,3 +189,12 @@ REFINE_CONVERGED_STD = 1.5
 # the full (Golub-Pereyra) variable-projection Jacobian against central differences (h 1e-6): 1e-7
 # relative observed (Kaufman's: 1.5e-2 at 5 % noise)
 REFINE_GOLUB_PEREYRA_REL = 1e-5
+
+PRESUM_DROOP = 0.06
+"""Gain lost by the third-order CIC presum (rigidid.core.timedomain.preprocess.presum) at 0.8 of the
+second stage's Nyquist frequency with q2 = 4: the filter's own response there, 4.8 % for every q1
+(tests/core/test_estimation_stages.py); a bound from the formula, with room for the tone's phase."""
+
+PRESUM_ALIAS_DB = 45.0
+"""Attenuation (dB) the presum gives a tone that would fold onto the edge of the band the second stage
+keeps (q2 = 4): the response's own value, 47.5 dB at q1 = 3 and 51 dB for large q1."""

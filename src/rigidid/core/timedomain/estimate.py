@@ -22,14 +22,14 @@ from rigidid.core.timedomain.gram import lagged_gram
 from rigidid.core.timedomain.preprocess import (
     Impact,
     band_limit,
-    channel_energy,
-    column_peaks,
+    block_peaks,
     content_from_spectrum,
     content_range,
     content_spectrum,
     decimate_in_stages,
     decimation_for,
     find_impact,
+    impact_from_blocks,
     presum,
     stage_factors,
 )
@@ -117,8 +117,8 @@ class ModalEstimate:
     impacts: tuple[Impact, ...]
 
 
-def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[Array]]:
-    """The records as float arrays, checked, and their column peaks (``max |x|`` per channel)."""
+def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[tuple[Array, Array, int]]]:
+    """The records as float arrays, checked, and their :func:`block_peaks` (``max |x|`` per channel and block)."""
     try:
         step = float(dt)
     except (TypeError, ValueError):
@@ -126,7 +126,7 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array]
     if not (math.isfinite(step) and step > 0.0):
         raise InputError(f"the sample interval must be positive, got {dt}")
     arrays: list[Array] = []
-    peaks: list[Array] = []
+    peaks: list[tuple[Array, Array, int]] = []
     for i, rec in enumerate(records):
         a = np.asarray(rec, dtype=float)
         if a.ndim != 2 or a.shape[0] < 2 or a.shape[1] < 1:
@@ -135,11 +135,11 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array]
             raise InputError(
                 f"{a.shape[1]} channels, the first record has {arrays[0].shape[1]}", location=f"record {i + 1}"
             )
-        peak = column_peaks(a)  # NaN and infinities reach the peaks: no boolean copy of the record
-        if not np.isfinite(peak).all():
+        blocks = block_peaks(a)  # NaN and infinities reach the peaks: no boolean copy of the record
+        if not np.isfinite(blocks[0]).all():
             raise InputError("a value is NaN or infinite", location=f"record {i + 1}")
         arrays.append(a)
-        peaks.append(peak)
+        peaks.append(blocks)
     if not arrays:
         raise InputError("no records")
     return arrays, peaks
@@ -344,9 +344,12 @@ def estimate_modes(
     decays: list[Array] = []
     for k, rec in enumerate(decays_in):
         energy = energies[k] if energies is not None and k < len(energies) else None
-        if energy is None and trim:
-            energy = channel_energy(rec, peaks[k])
-        impact = find_impact(rec, dt, pulse_width=pulse_width, energy=energy) if trim else Impact(0, 0, 0)
+        if not trim:
+            impact = Impact(0, 0, 0)
+        elif energy is not None:
+            impact = find_impact(rec, dt, pulse_width=pulse_width, energy=energy)
+        else:  # the energy of the few rows that can hold the impact, not of every row
+            impact = impact_from_blocks(rec, dt, *peaks[k], pulse_width=pulse_width)
         if trim and settle > 0:
             impact = Impact(impact.onset, impact.peak, min(impact.start + int(settle), rec.shape[0] - 1))
         impacts.append(impact)
