@@ -21,8 +21,9 @@ Run: ``python benchmarks/modes_speed.py [--cases 8x10000,32x1000000] [--method e
 command ``rigidid modes LAYOUT RECORD -o modes.csv`` on the record written as CSV, ``.npy``
 and ``.npz``, against a plain numpy floor run in the same way (a fresh Python that reads the
 CSV with ``pandas.read_csv`` or the ``.npy`` with ``numpy.load``, decimates with the
-project's FIR ``decimate`` by ``decimation_for(40 Hz)``, projects onto the 12 leading
-principal directions, forms the Gram matrix with ``lagged_gram`` (20 block rows) and
+FIR of scipy's ``decimate`` (polyphase numpy, frozen in this script) by
+``decimation_for(40 Hz)``, projects onto the 12 leading principal directions, forms the
+Gram matrix with ``lagged_gram`` (20 block rows) and
 realises 12 states with ``era_basis``/``era_modes``) and against pyOMA2's SSI-cov
 (``pyoma-2`` from PyPI, in its own virtual environment ``.pyoma-venv`` at the repository
 root, never a project dependency: the same pandas/numpy read, ``decimate_data`` with the
@@ -36,12 +37,16 @@ one run are the figures to compare) and how the CSV peak grows with the rows.
 
 The estimation alone (record loaded from ``.npy``, no reading; in each fresh process a
 warm call, then the best of three calls; the median over processes) is reported
-against two references: the floor's own steps (FIR decimation to the factor a 40 Hz
-band gives, 12 principal directions, Gram matrix of 20 block rows, ERA at 12 states: it
-is told the band and fits the record from row 0), and that floor plus the two steps
-rigidid cannot be spared, done plainly in numpy (impact as the first sample above 1 % of
-the peak of the summed squares; a Welch spectrum of 2^18 rows after it, no overlap): the
-like-for-like ratio. ``estimate_modes`` also sweeps 24
+against the floor's own steps (FIR decimation to the factor a 40 Hz band gives, 12
+principal directions, Gram matrix of 20 block rows, ERA at 12 states: it is told the
+band and fits the record from row 0) with three FIR decimations: scipy's
+``decimate(ftype="fir")``, what a plain script calls and what the issue's floor
+measured (0.42 s there); the floor's numpy polyphase FIR, frozen in this script at last
+stop's rigidid ``decimate`` (the end-to-end floor uses it too); and rigidid's current
+``decimate``. Then against the frozen floor plus the two steps rigidid cannot be
+spared, done plainly in numpy (impact as the first sample above 1 % of the peak of the
+summed squares; a Welch spectrum of 2^18 rows after it, no overlap): the like-for-like
+ratio. ``estimate_modes`` also sweeps 24
 model orders and stabilises them, which neither reference does. Both are printed twice:
 with the BLAS threads the environment gives, and with ``OPENBLAS_NUM_THREADS=1`` for
 floor and rigidid alike (on a shared 2-core machine threaded BLAS makes the many small
@@ -278,7 +283,7 @@ ESTIMATION_CODE = (
     """
 import json, sys, time, numpy as np
 from rigidid.core.timedomain import estimate_modes
-from rigidid.core.timedomain.preprocess import channel_energy, content_range, decimate, decimation_for, find_impact
+from rigidid.core.timedomain.preprocess import block_peaks, content_range, decimate, decimation_for, impact_from_blocks
 from rigidid.core.timedomain.gram import lagged_gram
 from rigidid.core.timedomain.era import era_basis, era_modes
 """
@@ -326,9 +331,9 @@ def ours():
     estimate_modes([data], dt)
 
 
-def steps():
+def steps():  # the two steps as estimate_modes runs them
     t0 = time.perf_counter()
-    impact = find_impact(data, dt, energy=channel_energy(data))
+    impact = impact_from_blocks(data, dt, *block_peaks(data))
     t1 = time.perf_counter()
     content_range([data[impact.start :]], dt)
     t2 = time.perf_counter()

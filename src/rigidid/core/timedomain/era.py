@@ -47,12 +47,13 @@ class EraBasis:
 
     Attributes
     ----------
-    vectors : ndarray, shape (s r, s r)
-        ``U``, columns by decreasing singular value.
-    values : ndarray, shape (s r,)
+    vectors : ndarray, shape (s r, k)
+        ``U``, columns by decreasing singular value (the leading ``k``: all
+        ``s r``, or the `max_order` of :func:`era_basis`).
+    values : ndarray, shape (k,)
         ``S``: eigenvalues of ``H0 H0^T`` (squared singular values of ``H0``),
         decreasing, less the noise floor when corrected (see :func:`era_basis`).
-    shifted : ndarray, shape (s r, s r)
+    shifted : ndarray, shape (k, k)
         ``U^T (H1 H0^T) U`` (less the noise floor's lag-0 terms when corrected).
     channels : int
         ``r``.
@@ -67,7 +68,7 @@ class EraBasis:
     noise_floor: float
 
 
-def era_basis(gram: Array, channels: int, *, noise_correction: bool = True) -> EraBasis:
+def era_basis(gram: Array, channels: int, *, noise_correction: bool = True, max_order: int | None = None) -> EraBasis:
     """Decompose the Gram matrices of ERA once, for a sweep over model orders.
 
     Parameters
@@ -80,6 +81,9 @@ def era_basis(gram: Array, channels: int, *, noise_correction: bool = True) -> E
         ``r``.
     noise_correction : bool
         Remove the white-noise floor (see Notes).
+    max_order : int, optional
+        The largest model order :func:`era_modes` will be asked for: only
+        that many leading directions are kept (default: all ``s r``).
 
     Returns
     -------
@@ -111,7 +115,9 @@ def era_basis(gram: Array, channels: int, *, noise_correction: bool = True) -> E
         idx = np.arange(size - r)
         h10[idx, idx + r] -= floor
         values = np.maximum(values - floor, 0.05 * values)
-    return EraBasis(vectors, values, vectors.T @ h10 @ vectors, r, floor)
+    if max_order is not None:
+        vectors, values = vectors[:, :max_order], values[:max_order]
+    return EraBasis(vectors, values, vectors.T @ (h10 @ vectors), r, floor)
 
 
 def era_modes(basis: EraBasis, order: int, dt: float) -> tuple[CArray, CArray]:
@@ -122,7 +128,8 @@ def era_modes(basis: EraBasis, order: int, dt: float) -> tuple[CArray, CArray]:
     basis : EraBasis
         From :func:`era_basis`.
     order : int
-        Number of states ``n`` (at most ``s r``; even for ``n / 2`` modes).
+        Number of states ``n`` (at most the ``k`` directions of `basis`;
+        even for ``n / 2`` modes).
     dt : float
         Sample interval (s).
 
@@ -134,6 +141,8 @@ def era_modes(basis: EraBasis, order: int, dt: float) -> tuple[CArray, CArray]:
     shapes : ndarray of complex, shape (r, k)
         ``C_n`` times the eigenvectors.
     """
+    if order > basis.values.size:
+        raise ValueError(f"order {order} is above the {basis.values.size} directions of the basis")
     s = basis.values[:order]
     tiny = s[0] * 1e-15 if s.size else 0.0
     a = basis.shifted[:order, :order] / np.maximum(s, tiny)[None, :]

@@ -592,7 +592,7 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
         if min_samples <= 2 * rows + 1:
             raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
         gram, _ = _scaled_gram(fitted, rows, unscale)
-        basis_era = era_basis(gram, r)
+        basis_era = era_basis(gram, r, max_order=n_max)
         for n in range(2, n_max + 1, 2):
             if options.progress is not None:
                 options.progress("model-order sweep", n // 2 - 1, n_max // 2)
