@@ -549,17 +549,26 @@ def decimate(record: Array, factor: int) -> Array:
     """
     if factor <= 1:
         return record
+    return _filter_and_keep(record, fir_taps(factor), FIR_HALF_LENGTH, factor)
+
+
+def _filter_and_keep(record: Array, kernel: Array, half: int, factor: int) -> Array:
+    """Samples ``(k + half) factor`` of `record` filtered by the odd-length `kernel` centred on them.
+
+    The kernel lies in ``2 half + 1`` phases of `factor` taps (centre at
+    ``half factor``); outputs are kept where the phases lie wholly inside the
+    record (``half`` blocks lost at the start, ``half + 1`` at the end).
+    """
     blocks = record.shape[0] // factor
-    first = FIR_HALF_LENGTH
-    stop = blocks - FIR_HALF_LENGTH - 1
-    if stop <= first:
+    stop = blocks - half - 1
+    if stop <= half:
         raise InputError(f"the record is too short to decimate by {factor} ({record.shape[0]} samples)")
-    taps = np.zeros((2 * FIR_HALF_LENGTH + 1) * factor)
-    taps[: 2 * FIR_HALF_LENGTH * factor + 1] = fir_taps(factor)
-    phases = taps.reshape(2 * FIR_HALF_LENGTH + 1, factor)
+    taps = np.zeros((2 * half + 1) * factor)
+    lead = half * factor - (kernel.size - 1) // 2
+    taps[lead : lead + kernel.size] = kernel
     cube = record[: blocks * factor].reshape(blocks, factor, record.shape[1])
-    out = np.zeros((stop - first, record.shape[1]))
-    _polyphase(phases, cube, first, out)
+    out = np.zeros((stop - half, record.shape[1]))
+    _polyphase(taps.reshape(2 * half + 1, factor), cube, half, out)
     return out
 
 
@@ -645,19 +654,8 @@ def presum(record: Array, factor: int) -> Array:
         raise ValueError(f"the first-stage factor must be odd and at least 3, got {factor}")
     box = np.ones(q1)
     kernel = np.convolve(np.convolve(box, box), box)
-    kernel /= kernel.sum()
-    half = 2  # phases a = -2..2 span 5 q1 >= 3 q1 - 2 taps around the centre 2 q1
-    taps = np.zeros((2 * half + 1) * q1)
-    lead = half * q1 - (kernel.size - 1) // 2
-    taps[lead : lead + kernel.size] = kernel
-    blocks = record.shape[0] // q1
-    stop = blocks - half - 1
-    if stop <= half:
-        raise InputError(f"the record is too short to decimate by {q1} ({record.shape[0]} samples)")
-    cube = record[: blocks * q1].reshape(blocks, q1, record.shape[1])
-    out = np.zeros((stop - half, record.shape[1]))
-    _polyphase(taps.reshape(2 * half + 1, q1), cube, half, out)
-    return out
+    # phases a = -2..2 span 5 q1 >= 3 q1 - 2 taps around the centre 2 q1
+    return _filter_and_keep(record, kernel / kernel.sum(), 2, q1)
 
 
 def decimate_in_stages(record: Array, first: int, second: int) -> Array:
