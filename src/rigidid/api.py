@@ -880,7 +880,10 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
             label = contents.record_labels[len(records)] if len(contents.record_labels) > len(records) else "a record"
             raise InputError(f"{label} has no record of sensor {missing[0]}", source=src)
         order = [record.sensor_ids.index(sid) for sid in (s.id for s in layout.sensors)]
-        records.append((np.asarray(record.data, dtype=float)[:, order], float(time[1] - time[0])))
+        data = np.asarray(record.data, dtype=float)
+        if order != list(range(data.shape[1])):  # no copy when the file has the layout's order
+            data = data[:, order]
+        records.append((data, float(time[1] - time[0])))
     return TestData(layout, modes, records, list(contents.record_labels))
 
 

@@ -491,6 +491,11 @@ def _read_all(path: Path) -> list[dict[str, Any]]:
         raise InputError("not a regular file (a device or pipe cannot be read as UFF)", source=src)
     if path.stat().st_size > MAX_UFF_BYTES:
         raise InputError(f"larger than the limit of {MAX_UFF_BYTES // 2**20} MiB for a UFF file", source=src)
+    from rigidid.io.uff_scan import scan
+
+    blocks = scan(path)
+    if blocks is not None and any(b.binary58 for b in blocks):
+        return _read_binary58(path, blocks)
     try:
         uff = pyuff.UFF(src)
         n = uff.get_n_sets()
@@ -499,39 +504,88 @@ def _read_all(path: Path) -> list[dict[str, Any]]:
         raise InputError(f"not a readable UFF file: {exc}", source=src) from None
     if n == 0:
         raise InputError("no UFF datasets found (is it a universal file?)", source=src)
-    wanted = {15, 18, 55, 58, 151, 164, 2411, 2420}
+    return _read_sets(uff, types, src)
+
+
+_WANTED = {15, 18, 55, 58, 151, 164, 2411, 2420}
+
+
+def _read_sets(uff: Any, types: list[int], src: str, counts_from: dict[int, int] | None = None) -> list[dict[str, Any]]:
+    """The datasets rigidid reads (others as ``{"type": kind}``); `counts_from`: datasets of each kind before."""
+    before = counts_from or {}
     out: list[dict[str, Any]] = []
     for i, kind in enumerate(types):
-        if kind not in wanted:
+        if kind not in _WANTED:
             out.append({"type": kind})
             continue
         try:
             dset = uff.read_sets(i)
         except Exception as exc:
-            count = types[: i + 1].count(kind)
+            count = types[: i + 1].count(kind) + before.get(kind, 0)
             raise InputError(f"pyuff cannot read it: {exc}", source=src, location=f"dataset {kind} #{count}") from None
         out.append(dset)
     return out
 
 
-def _time_record(reader: _Reader, dset: dict[str, Any], where: str) -> tuple[Array, Array]:
-    data = np.asarray(dset.get("data"))
-    x = np.asarray(dset.get("x"), dtype=float).reshape(-1)
-    if np.iscomplexobj(data):
+def _read_binary58(path: Path, blocks: list[Any]) -> list[dict[str, Any]]:
+    """A file with binary 58 datasets: those read by :mod:`rigidid.io.uff_scan`, the others by pyuff.
+
+    The other datasets (geometry, units, modes, ASCII 58) are written to a
+    temporary file on their own and given to pyuff, so pyuff never reads the
+    binary values; the result is in the file's order.
+    """
+    import tempfile
+
+    from rigidid.io.uff_scan import blocks_text, read_58b
+
+    src = str(path)
+    others = [b for b in blocks if not b.binary58 and b.kind in _WANTED]
+    parsed: list[dict[str, Any]] = []
+    if others:
+        with tempfile.TemporaryDirectory(prefix="rigidid-uff-") as folder:
+            part = Path(folder) / "datasets.uff"
+            part.write_bytes(blocks_text(path, others))
+            try:
+                uff = _pyuff().UFF(str(part))
+                types = [int(t) for t in uff.get_set_types()]
+            except Exception as exc:
+                raise InputError(f"not a readable UFF file: {exc}", source=src) from None
+            parsed = _read_sets(uff, types, src)
+    queue = iter(parsed)
+    out: list[dict[str, Any]] = []
+    for block in blocks:
+        if block.binary58:
+            out.append(read_58b(path, block))
+        elif block.kind in _WANTED:
+            out.append(next(queue))
+        else:
+            out.append({"type": block.kind})
+    return out
+
+
+def _time_axis(reader: _Reader, dset: dict[str, Any], where: str) -> tuple[float, float, int]:
+    """First time, step and samples of a time record, checked (the values are not read)."""
+    n = int(dset.get("num_pts", 0))
+    data = dset.get("data")
+    size = int(np.size(data)) if data is not None else 0
+    if size < 2 or size != n:
+        raise reader.error(f"{size} samples where the header says {dset.get('num_pts')}", where)
+    if np.iscomplexobj(np.asarray(data)):
         raise reader.error("a time record must be real, this one is complex", where)
-    data = data.astype(float).reshape(-1)
-    if data.size < 2 or x.shape != data.shape or data.size != int(dset.get("num_pts", data.size)):
-        raise reader.error(f"{data.size} samples where the header says {dset.get('num_pts')}", where)
-    if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
-        raise reader.error("the record holds NaN or infinite values", where)
     if int(dset.get("abscissa_spacing", 1)) != 1:
-        step = np.diff(x)
-        if np.any(step <= 0.0) or np.ptp(step) > 1e-6 * float(np.mean(step)):
+        x = np.asarray(dset.get("x"), dtype=float).reshape(-1)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            raise reader.error("the time axis holds NaN or infinite values", where)
+        steps = np.diff(x)
+        if np.any(steps <= 0.0) or np.ptp(steps) > 1e-6 * float(np.mean(steps)):
             raise reader.error("the time axis is not uniformly sampled", where)
-        x = x[0] + np.mean(step) * np.arange(x.size)
-    elif not float(dset.get("abscissa_inc", 0.0)) > 0.0:
+        return float(x[0]), float(np.mean(steps)), n
+    first, step = float(dset.get("abscissa_min", 0.0)), float(dset.get("abscissa_inc", 0.0))
+    if not (math.isfinite(first) and math.isfinite(step)):
+        raise reader.error("the record holds NaN or infinite values", where)
+    if not step > 0.0:
         raise reader.error("the time step is not positive", where)
-    return x, data
+    return first, step, n
 
 
 _FUNCTION_TYPES = {
@@ -793,12 +847,18 @@ def _group_records(
     time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]],
     id_of: dict[tuple[int, int], str],
 ) -> tuple[list[UffRecord], list[str]]:
-    groups: dict[tuple[int, int, int], list[tuple[Array, Array, str, str]]] = {}
+    """Time records grouped into impacts (load case and reference), each into one array.
+
+    The time axes are compared from the headers first; then each impact's
+    array is allocated once and every record's values are copied into its
+    column and released (binary 58 values are mapped from the file by
+    :mod:`rigidid.io.uff_scan`, not held), so memory is the records once.
+    """
+    groups: dict[tuple[int, int, int], list[tuple[dict[str, Any], tuple[float, float, int], str, str]]] = {}
     for dset, where, sensor in time_sets:
         key = (int(dset.get("load_case_id", 0)), int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)))
         here = f"{where}, node {sensor[0]}"
-        x, data = _time_record(reader, dset, here)
-        groups.setdefault(key, []).append((x, data, id_of[sensor], here))
+        groups.setdefault(key, []).append((dset, _time_axis(reader, dset, here), id_of[sensor], here))
     records: list[UffRecord] = []
     labels: list[str] = []
     for (case, ref_node, ref_dir), items in groups.items():
@@ -806,23 +866,56 @@ def _group_records(
         if ref_node:
             ref = f"{ref_node}{_dir_name(ref_dir)}" if 1 <= abs(ref_dir) <= 3 else f"{ref_node} dir {ref_dir}"
             label += f", reference {ref}"
-        time0, _, _, where0 = items[0]
+        (first0, step0, n0), where0 = items[0][1], items[0][3]
         seen: dict[str, str] = {}
-        for x, _, sid, where in items:
+        for _, (first, step, n), sid, where in items:
             if sid in seen:
                 raise reader.error(f"sensor {sid} appears twice in {label} (also {seen[sid]})", where)
             seen[sid] = where
-            step = float(time0[1] - time0[0])
-            if x.shape != time0.shape or np.max(np.abs(x - time0)) > 1e-6 * step:
+            last, last0 = first + (n - 1) * step, first0 + (n0 - 1) * step0
+            if n != n0 or max(abs(first - first0), abs(last - last0)) > 1e-6 * step0:
                 raise reader.error(
-                    f"time axis ({x.size} samples from {x[0]:.6g} s, step {x[1] - x[0]:.6g} s) differs from "
-                    f"{where0} ({time0.size} samples from {time0[0]:.6g} s, step {step:.6g} s) of {label}",
+                    f"time axis ({n} samples from {first:.6g} s, step {step:.6g} s) differs from "
+                    f"{where0} ({n0} samples from {first0:.6g} s, step {step0:.6g} s) of {label}",
                     where,
                 )
-        data = np.column_stack([item[1] for item in items])
+        data = np.empty((n0, len(items)))
+        sources = [item[0]["data"] for item in items]
+        if all(isinstance(v, np.memmap) for v in sources):
+            _fill_from_file(data, sources)
+        else:
+            for j, values in enumerate(sources):
+                data[:, j] = values
+        for item in items:
+            item[0]["data"] = None  # file mappings and pyuff's arrays are not held
+        from rigidid.core.timedomain.preprocess import column_peaks
+
+        peaks = column_peaks(data)  # NaN and infinities reach the peaks
+        if not np.isfinite(peaks).all():
+            raise reader.error("the record holds NaN or infinite values", items[int(np.argmin(np.isfinite(peaks)))][3])
+        time0: Array = first0 + step0 * np.arange(n0, dtype=float)
         records.append(UffRecord(time0, data, tuple(item[2] for item in items)))
         labels.append(label)
     return records, labels
+
+
+def _fill_from_file(data: Array, maps: list[np.memmap[Any, Any]]) -> None:
+    """Copy file-mapped columns into `data` a block of rows at a time, read from the file, not the mapping.
+
+    Each block (about 1 MB) is read from every column's place in the file
+    into a channels-by-rows buffer, then written into `data`'s rows in order;
+    the mappings are never touched, so the file does not count in the
+    process's memory.
+    """
+    rows = max(1, (1 << 17) // max(1, data.shape[1]))
+    columns = np.empty((data.shape[1], rows))
+    with open(maps[0].filename, "rb") as fh:  # type: ignore[arg-type]
+        for lo in range(0, data.shape[0], rows):
+            hi = min(data.shape[0], lo + rows)
+            for j, values in enumerate(maps):
+                fh.seek(values.offset + lo * values.itemsize)
+                columns[j, : hi - lo] = np.fromfile(fh, dtype=values.dtype, count=hi - lo)
+            data[lo:hi] = columns[:, : hi - lo].T  # rows written in order: the new array is touched once
 
 
 def _convention(reader: _Reader) -> EigenConvention:
