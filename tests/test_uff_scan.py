@@ -181,3 +181,26 @@ def test_block_offsets_frame_each_dataset(tmp_path: Path) -> None:
         if block.binary58:
             offset, size = block.data
             assert block.start < offset and offset + size < block.end
+
+
+def test_damaged_files_end_in_one_input_error_or_a_reading(tmp_path: Path) -> None:
+    """Bytes of a binary test file overwritten at random: never a traceback, never a hang."""
+    from rigidid.errors import RigididError
+
+    path, _ = _test_file(tmp_path)
+    raw = path.read_bytes()
+    rng = np.random.default_rng(11)
+    damaged = tmp_path / "damaged.uff"
+    for trial in range(60):
+        data = bytearray(raw)
+        for at in rng.integers(0, len(data), size=int(rng.integers(1, 6))):
+            data[at] = int(rng.integers(0, 256)) if trial % 2 else ord(rng.choice(list("-0123456789 b\n")))
+        damaged.write_bytes(bytes(data))
+        blocks = scan(damaged)
+        assert blocks is None or all(isinstance(b, Block) for b in blocks)
+        message = ""
+        try:
+            read_uff(damaged)
+        except RigididError as exc:  # InputError or the package's other one-line errors
+            message = str(exc)
+        assert "\n" not in message

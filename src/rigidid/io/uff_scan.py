@@ -44,6 +44,7 @@ import numpy as np
 __all__ = ["Block", "read_58b", "scan"]
 
 _DELIMITER = b"    -1"
+_MAX_HEADER_LINES = 64  # the specification has 11
 
 # records 6-11 of dataset 58 (pyuff's field names, widths and types: 1 text, 2 integer, 3 real)
 _RECORDS: tuple[tuple[tuple[str, int, int], ...], ...] = (
@@ -139,9 +140,11 @@ def scan(path: str | os.PathLike[str]) -> list[Block] | None:
                     n_lines, n_bytes = int(id_line[19:31]), int(id_line[31:43])
                 except ValueError:
                     return None
+                if not 8 <= n_lines <= _MAX_HEADER_LINES or n_bytes < 0:
+                    return None
                 header = [id_line] + [fh.readline() for _ in range(n_lines)]
                 offset = fh.tell()
-                if n_lines < 8 or n_bytes < 0 or offset + n_bytes > size:
+                if offset + n_bytes > size:
                     return None
                 fh.seek(offset + n_bytes)
                 closing = fh.readline()
