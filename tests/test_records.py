@@ -115,6 +115,7 @@ def test_crlf_bom_and_blank_lines_are_accepted(tmp_path: Path) -> None:
 
 def test_row_numbers_count_blank_lines_and_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(csv_records, "CHUNK_ROWS", 7)
+    monkeypatch.setattr(csv_records, "CHUNK_BYTES", 300)  # a few lines per chunk, cut anywhere
     t, x = _decay(100)
     lines = ["time,1,2,9"] + [f"{ti:.6f}," + ",".join(f"{v:.8g}" for v in xi) for ti, xi in zip(t, x, strict=True)]
     lines.insert(5, "")  # line 6 is blank
@@ -148,9 +149,60 @@ def test_time_rounding_is_tolerated_but_not_too_few_digits(tmp_path: Path) -> No
 
 def test_large_record_is_read_in_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(csv_records, "CHUNK_ROWS", 1000)
+    monkeypatch.setattr(csv_records, "CHUNK_BYTES", 10_000)
     t, x = _decay(5003, dt=1e-4)
     path = tmp_path / "long.csv"
     write_record(path, t, x, IDS)
     data, dt = read_record(path, IDS)
     np.testing.assert_allclose(data, x, rtol=1e-9, atol=1e-12)
     assert dt == pytest.approx(1e-4, rel=1e-12)
+
+
+def _repr_csv(path: Path, t: np.ndarray, x: np.ndarray) -> None:
+    rows = [f"{float(ti)!r}," + ",".join(repr(float(v)) for v in xi) for ti, xi in zip(t, x, strict=True)]
+    path.write_text("\n".join(["time,1,2,9", *rows]) + "\n")
+
+
+def test_values_written_with_repr_come_back_exactly(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(csv_records, "CHUNK_BYTES", 4096)
+    rng = np.random.default_rng(4)
+    t = 1e-3 * np.arange(3000)
+    x = rng.standard_normal((3000, 3)) * np.exp(-3.0 * t)[:, None] * 10.0 ** rng.integers(-8, 8, size=3)
+    path = tmp_path / "exact.csv"
+    _repr_csv(path, t, x)
+    data, _ = read_record(path, IDS)
+    np.testing.assert_array_equal(data, x)  # the fast parser rounds correctly: the binary record's values
+
+
+def test_chunks_the_fast_parser_declines_are_read_by_pandas(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(csv_records, "CHUNK_BYTES", 2048)
+    rng = np.random.default_rng(5)
+    t = 1e-3 * np.arange(2000)
+    x = rng.standard_normal((2000, 3)) * np.exp(-3.0 * t)[:, None]
+    path = tmp_path / "odd.csv"
+    _repr_csv(path, t, x)
+    lines = path.read_text().splitlines()
+    lines[700] = " , ".join(lines[700].split(","))  # spaces around the numbers of one line
+    lines.insert(1500, "")  # and a blank line further on
+    path.write_text("\n".join(lines) + "\n")
+    data, _ = read_record(path, IDS)
+    np.testing.assert_allclose(data, x, rtol=1e-15, atol=0.0)
+
+
+def test_pandas_alone_reads_what_polars_reads(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    t, x = _decay(3000, dt=1e-4)
+    path = tmp_path / "hit.csv"
+    write_record(path, t, x, IDS)
+    fast, _ = read_record(path, IDS)
+    monkeypatch.setattr(csv_records._Parser, "_polars", lambda self, chunk: None)
+    slow, _ = read_record(path, IDS)
+    np.testing.assert_allclose(fast, slow, rtol=1e-15, atol=0.0)
+
+
+def test_the_command_line_imports_no_csv_parser_until_records_are_read() -> None:
+    import subprocess
+    import sys
+
+    code = "import sys, rigidid.cli; print(sorted({m.split('.')[0] for m in sys.modules} & {'polars', 'pandas'}))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

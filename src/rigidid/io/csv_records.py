@@ -1,4 +1,4 @@
-"""Streamed reading of CSV impact records with the pandas C parser, chunk by chunk.
+"""Streamed reading of CSV impact records, chunk by chunk: polars, and pandas where polars declines.
 
 The layout (``docs/FORMATS.md``): a header ``time,<sensor id>,...`` and one
 row per sample. Accepted as spreadsheets and recorders write it (see
@@ -9,17 +9,25 @@ are not sensors but excitation or trigger channels (``force``, ``hammer``,
 ``trigger``, ``excitation``, ``tacho``... with or without a unit) left out
 with a :class:`~rigidid.errors.NonSensorColumnWarning`.
 
-Why pandas: on 32 channels x 200 000 rows (86 MB) here pandas' C engine
-parsed in 0.19 s against 0.40 s for :func:`numpy.loadtxt` (pyarrow and
-polars are not installed in the project's environment; ``benchmarks/
-modes_speed.py`` measures the reader end to end).
+The file after its header is read in chunks of :data:`CHUNK_BYTES` that end
+at line ends. polars parses a chunk on every core (correctly rounded, so a
+CSV written with Python's shortest repr gives the very values of the binary
+record); a chunk polars declines or reads with non-finite values (blank
+lines, text, NaN, ragged lines, spaces around numbers) is parsed again by
+pandas' C engine, which skips blank lines, and its errors are diagnosed
+line by line. Parsers measured on the issue's records by
+``benchmarks/csv_parsers.py`` (32 channels x 10^6 rows, 485 MB): pandas' C
+engine in chunks 1.9 s, pyarrow's streaming reader 2.1 s, polars in 8 MiB
+chunks 1.3 s (its own streaming engine 0.8 s, but 370 MB of the file
+mapped); 8 x 10^7 rows: pandas 6.4 s, polars 2.6 s.
 
-Each chunk (:data:`CHUNK_ROWS` rows) is checked as it arrives (numbers,
-finite) and copied into one preallocated array sized from the file size and
-the line length sampled at five places, so memory is the record (plus a few
-per cent) plus one chunk. Errors are one line naming the file,
-the row (line number, header = 1, blank lines counted) and the column; the
-row of a bad value is found by re-reading the file only on that error path.
+Each block is checked as it arrives (numbers, finite) and handed on (to the
+streamed decimation, or copied into one preallocated array sized from the
+file size and the line length sampled at five places), so memory is the
+record (or the decimated record) plus one chunk. Errors are one line naming
+the file, the row (line number, header = 1, blank lines counted) and the
+column; the row of a bad value is found by re-reading the file only on
+that error path.
 
 Limits: only regular files are read (``/dev/zero``, pipes and terminals are
 refused), the header must end within :data:`MAX_HEADER_BYTES`, and a file
@@ -61,7 +69,11 @@ __all__ = [
 Array = NDArray[np.float64]
 
 CHUNK_ROWS = 1 << 14
-"""Rows parsed per chunk (16384: as fast as larger chunks here, a few MB of temporaries)."""
+"""Rows pandas parses at a time (16384: as fast as larger chunks here, a few MB of temporaries)."""
+
+CHUNK_BYTES = 1 << 23
+"""Bytes of data lines read and parsed at a time (8 MiB; 4 and 16 MiB took as long within the noise here,
+16 MiB held 45 MB more)."""
 
 MAX_HEADER_BYTES = 1 << 20
 """The header line must end within this many bytes (1 MiB)."""
@@ -69,32 +81,6 @@ MAX_HEADER_BYTES = 1 << 20
 _SNIFF_BYTES = 1 << 16
 _TAIL_BYTES = 1 << 16
 _TIME_KEYS = {"time", "time_s", "t_s", "zeit_s"}
-
-
-class _Bounded:
-    """A binary file that refuses to give more than `limit` bytes (a file growing while read)."""
-
-    def __init__(self, fh: Any, limit: int, src: str):
-        self._fh, self._left, self._src = fh, limit, src
-
-    def read(self, n: int = -1) -> bytes:
-        data: bytes = self._fh.read(n if n is not None and n >= 0 else -1)
-        self._left -= len(data)
-        if self._left < 0:
-            raise InputError("the file grew while it was read (an endless or live file?)", source=self._src)
-        return data
-
-    def __iter__(self) -> Any:
-        return self
-
-    def __next__(self) -> bytes:
-        line: bytes = self._fh.readline()
-        if not line:
-            raise StopIteration
-        self._left -= len(line)
-        if self._left < 0:
-            raise InputError("the file grew while it was read (an endless or live file?)", source=self._src)
-        return line
 
 
 class RawCsv:
@@ -275,8 +261,6 @@ def csv_blocks(
     InputError
         One line naming the file and row/column (see the module documentation).
     """
-    import pandas as pd
-
     src = str(path)
     p = Path(path)
     try:
@@ -324,12 +308,101 @@ def csv_blocks(
                 NonSensorColumnWarning,
                 stacklevel=4,
             )
-        n_fields = len(header)
         capacity = _estimate_rows(fh, size, head, len(header_bytes))
         yield CsvHead(capacity, lambda n: _line_map(p, dialect, n), _tail_tokens(p, dialect))
         fh.seek(len(header_bytes))
+        task = f"reading {p.name}"
+        parse = _Parser(p, src, dialect, header, order)
+        for chunk in _byte_chunks(fh, size - len(header_bytes), src):
+            for time_block, block in parse(chunk):
+                if progress is not None:
+                    progress(task, float(fh.tell()), float(size))
+                yield time_block, block
+
+
+def _byte_chunks(fh: Any, size: int, src: str) -> Iterator[bytes]:
+    """The file after its header in chunks of about :data:`CHUNK_BYTES` that end at line ends.
+
+    At most `size` bytes (the size when opened) are read; a byte more means
+    the file grew while it was read, an error.
+    """
+    left, rest = size, b""
+    while left > 0:
+        data = fh.read(min(CHUNK_BYTES, left))
+        if not data:
+            break
+        left -= len(data)
+        if left == 0 and fh.read(1):  # before the last lines: they may be cut where the size was taken
+            raise InputError("the file grew while it was read (an endless or live file?)", source=src)
+        data = rest + data
+        cut = data.rfind(b"\n") + 1 if left > 0 else len(data)
+        rest = data[cut:]
+        if cut:
+            yield data[:cut]
+    if rest:
+        yield rest
+
+
+class _Parser:
+    """Chunks of data lines to checked ``(time, sensors)`` blocks: polars first, pandas where it declines.
+
+    polars parses a chunk of plain numeric lines (every field a number, the
+    header's field count) on all cores, about twice as fast as pandas' C
+    parser. Anything else in a chunk (blank lines, NaN, text, ragged lines,
+    spaces around numbers) makes polars decline or gives non-finite values;
+    the chunk is then parsed again by pandas, whose reading skips blank lines
+    and whose errors are diagnosed line by line as before. Both give the
+    same rows: the data lines that are not blank.
+    """
+
+    def __init__(self, path: Path, src: str, dialect: Dialect, header: list[str], order: list[int]) -> None:
+        self.path, self.src, self.dialect, self.header, self.order = path, src, dialect, header, order
+        self.filled = 0  # data rows before the chunk being parsed
+        try:
+            import polars as pl
+        except ImportError:  # pandas alone, as before polars was a dependency
+            self.polars: Any = None
+        else:
+            self.polars = pl
+            self.schema = {f"c{k}": pl.Float64 for k in range(len(header))}
+
+    def __call__(self, chunk: bytes) -> Iterator[tuple[Array, Array]]:
+        values = self._polars(chunk)
+        if values is None:
+            yield from self._pandas(chunk)
+            return
+        yield self._checked(values, 0, self.order)
+
+    def _polars(self, chunk: bytes) -> Array | None:
+        if self.polars is None:
+            return None
+        import io
+
+        try:
+            frame = self.polars.read_csv(
+                io.BytesIO(chunk),
+                has_header=False,
+                schema=self.schema,
+                separator=self.dialect.delimiter,
+                decimal_comma=self.dialect.decimal == ",",
+                quote_char='"',
+            )
+        except Exception:  # polars declines: pandas parses the chunk and says what is wrong
+            return None
+        values: Array = frame.to_numpy()
+        if values.dtype != np.float64 or not np.isfinite(values).all():  # blank lines read as NaN rows...
+            return None
+        return values
+
+    def _pandas(self, chunk: bytes) -> Iterator[tuple[Array, Array]]:
+        import io
+
+        import pandas as pd
+
+        p, dialect, header, src = self.path, self.dialect, self.header, self.src
+        n_fields = len(header)
         reader = pd.read_csv(
-            _Bounded(fh, size - len(header_bytes), src),
+            io.BytesIO(chunk),
             sep=dialect.delimiter,
             decimal=dialect.decimal,
             header=None,
@@ -340,40 +413,37 @@ def csv_blocks(
             skip_blank_lines=True,
             dtype=None,
         )
-        filled = 0
-        task = f"reading {p.name}"
-        columns = [0, *order]
+        columns = [0, *self.order]
         try:
-            for chunk in reader:
-                if chunk.shape[1] != n_fields:
-                    start = _line_map(p, dialect, filled + chunk.shape[0])(filled)
+            for frame in reader:
+                if frame.shape[1] != n_fields:
+                    start = _line_map(p, dialect, self.filled + frame.shape[0])(self.filled)
                     raise _diagnose(p, dialect, header, _first_bad_line(p, dialect, n_fields, start), src)
                 try:  # all columns numeric (the usual case): one array, no copy of a column subset
-                    values = chunk.to_numpy(dtype=np.float64)
-                    time_column, sensor_columns = 0, order
+                    values = frame.to_numpy(dtype=np.float64)
+                    yield self._checked(values, 0, self.order)
                 except (ValueError, TypeError):  # text somewhere: coerce the columns used, find it below
                     values = np.column_stack(
-                        [pd.to_numeric(chunk.iloc[:, j], errors="coerce").to_numpy(dtype=np.float64) for j in columns]
+                        [pd.to_numeric(frame.iloc[:, j], errors="coerce").to_numpy(dtype=np.float64) for j in columns]
                     )
-                    time_column, sensor_columns = 0, list(range(1, len(columns)))
-                del chunk
-                rows = values.shape[0]
-                time_block = values[:, time_column].copy()
-                block = np.take(values, sensor_columns, axis=1)
-                del values
-                finite = np.isfinite(block).all(axis=1) & np.isfinite(time_block)
-                if not finite.all():
-                    k = int(np.flatnonzero(~finite)[0])
-                    line = _line_map(p, dialect, filled + rows)(filled + k)
-                    raise _diagnose(p, dialect, header, line, src)
-                filled += rows
-                if progress is not None:
-                    progress(task, float(fh.tell()), float(size))
-                yield time_block, block
+                    yield self._checked(values, 0, list(range(1, len(columns))))
         except pd.errors.ParserError:
-            start = _line_map(p, dialect, filled + 1)(filled) if filled else 2
+            start = _line_map(p, dialect, self.filled + 1)(self.filled) if self.filled else 2
             raise _diagnose(p, dialect, header, _first_bad_line(p, dialect, n_fields, start), src) from None
         except pd.errors.EmptyDataError:
             return
         except UnicodeDecodeError:
             raise InputError("not a text file (UTF-8)", source=src) from None
+
+    def _checked(self, values: Array, time_column: int, sensor_columns: list[int]) -> tuple[Array, Array]:
+        """The time and sensor columns of parsed rows, every value finite (else the line's precise error)."""
+        rows = values.shape[0]
+        time_block = values[:, time_column].copy()
+        block = np.take(values, sensor_columns, axis=1)
+        finite = np.isfinite(block).all(axis=1) & np.isfinite(time_block)
+        if not finite.all():
+            k = int(np.flatnonzero(~finite)[0])
+            line = _line_map(self.path, self.dialect, self.filled + rows)(self.filled + k)
+            raise _diagnose(self.path, self.dialect, self.header, line, self.src)
+        self.filled += rows
+        return time_block, block
