@@ -15,11 +15,12 @@ CSV written with Python's shortest repr gives the very values of the binary
 record); a chunk polars declines or reads with non-finite values (blank
 lines, text, NaN, ragged lines, spaces around numbers) is parsed again by
 pandas' C engine, which skips blank lines, and its errors are diagnosed
-line by line. Parsers measured on the issue's records by
-``benchmarks/csv_parsers.py`` (32 channels x 10^6 rows, 485 MB): pandas' C
-engine in chunks 1.9 s, pyarrow's streaming reader 2.1 s, polars in 8 MiB
-chunks 1.3 s (its own streaming engine 0.8 s, but 370 MB of the file
-mapped); 8 x 10^7 rows: pandas 6.4 s, polars 2.6 s.
+line by line. Parsing alone, measured by ``benchmarks/csv_parsers.py``
+(fresh processes, imports included, medians of 3) on 32 channels x 10^6
+rows (485 MB): pandas' C engine in chunks 2.28 s (whole: 1.42 s, 1075 MB),
+pyarrow's streaming reader 2.26 s, polars in 8 MiB chunks 1.37 s and 116
+MB (its streaming engine: 0.95 s, but 360 MB); on 8 x 10^7 rows (1.27 GB):
+4.67 s, 4.78 s and 3.54 s (polars' streaming engine 1.64 s, 355 MB).
 
 Each block is checked as it arrives (numbers, finite) and handed on (to the
 streamed decimation, or copied into one preallocated array sized from the
