@@ -449,6 +449,7 @@ def _estimate(
     source: str | None = None,
     paths: list[Path] | None = None,
     rigid_six: bool = False,
+    settle: int = 0,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modes from the records; with `rigid_six`, seven when one of six looks elastic (identify picks six)."""
     from rigidid import api
@@ -463,11 +464,11 @@ def _estimate(
         if rigid_six and n_modes == 6:
             return api.estimate_rigid_modes(
                 data.layout, paths or data.records, method=method, band=band, max_order=max_order,
-                decimate=decimate, progress=progress,
+                decimate=decimate, progress=progress, settle=settle,
             )  # fmt: skip
         return api.estimate_modes(
             data.layout, paths or data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
-            decimate=decimate, progress=progress,
+            decimate=decimate, progress=progress, settle=settle,
         )  # fmt: skip
 
 
@@ -523,13 +524,25 @@ def _identify(
     # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
     # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
     raw_needed = keep is not None or resample > 0 or (refine and method == "structured")
-    streamed = records and bool(inputs) and not raw_needed and layout.suffix.lower() not in UFF_SUFFIXES
-    if streamed and geometry is None:
+    files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
+    streamed = files_in and not raw_needed
+    # the refit alone fits decays it decimates itself: the records are read pre-decimated, as many values
+    # as it can use kept (four times its row budget), so memory does not grow with their length
+    decimated = None
+    if streamed:
         from rigidid import api
 
         data = api.TestData(api.load_layout(layout))
+    elif files_in and keep is None and resample == 0 and modal.get("decimate") is None:
+        from rigidid import api
+        from rigidid.core.timedomain.refine import MAX_ROWS
+        from rigidid.progress import terminal_progress
+
+        lay = api.load_layout(layout)
+        with _naming(src), terminal_progress() as progress:
+            decimated = api.load_records_decimated(inputs or [], lay, keep_values=4 * MAX_ROWS, progress=progress)
+        data = api.TestData(lay, None, decimated.records, [str(p) for p in inputs or []])
     else:
-        streamed = False
         data = _test_data(layout, inputs or [], records, units, geometry)
     if keep is not None:
         keep["records"] = data.records
@@ -548,10 +561,11 @@ def _identify(
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     with _noted(notes, ElasticModeWarning):
         modes, estimate = (
-            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None)
+            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None,
+                      settle=decimated.settle if decimated is not None else 0)
             if records
             else (data.modes, None)
-        )
+        )  # fmt: skip
     assert modes is not None
     from rigidid.progress import terminal_progress
 
@@ -570,7 +584,13 @@ def _identify(
         )
     if refine and estimate is not None and method == "structured":
         with _naming(src), terminal_progress() as progress, _noted(notes, RefinementWarning):
-            result = api.with_refinement(result, data.records, estimate, progress=progress)
+            result = api.with_refinement(
+                result, data.records, estimate, progress=progress,
+                prefactor=decimated.factor if decimated is not None else 1,
+                guard=decimated.settle if decimated is not None else 0,
+            )  # fmt: skip
+    if decimated is not None and estimate is not None:
+        estimate = decimated.in_file_rows(estimate)  # the total factor, impacts in the files' rows
     result = api.with_warnings(result, notes)
     if resample:
         if not records:

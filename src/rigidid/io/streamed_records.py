@@ -431,6 +431,7 @@ def read_record_streamed(
     progress: ProgressCallback | None = None,
     cascade: bool = False,
     second: int | None = None,
+    keep_rows: int | None = None,
 ) -> StreamedRecord:
     """Read one impact record block by block, checking it and decimating it as it arrives.
 
@@ -458,6 +459,11 @@ def read_record_streamed(
     second : int, optional
         A second-stage factor fixed by the caller (the first record's, for
         the others), applied from the first row.
+    keep_rows : int, optional
+        An automatic pre-factor leaves at least this many rows of the record
+        (of its rows as the file's size tells them): for a caller that
+        decimates further by a factor of its own (the refit, which fits the
+        decays at the smallest factor its row budget allows).
 
     Returns
     -------
@@ -495,6 +501,8 @@ def read_record_streamed(
             welch = _Welch(found[2], found[0], len(wanted))
             if factor is None:
                 factor = _pre_factor(found[0], found[1], f_limit)
+                if keep_rows is not None:
+                    factor = max(1, min(factor, source.rows // max(1, keep_rows)))
     if factor is None:
         factor = 1
     auto = cascade and second is None and factor > 1
@@ -589,6 +597,7 @@ def read_records_streamed(
     progress: ProgressCallback | None = None,
     *,
     cascade: bool = False,
+    keep_rows: int | None = None,
 ) -> tuple[list[StreamedRecord], tuple[float, float] | None]:
     """The records of one estimation, read with :func:`read_record_streamed` at one rate.
 
@@ -609,6 +618,9 @@ def read_records_streamed(
         :func:`read_record_streamed`); the others take it. When the content
         of all records together asks the estimation for another factor than
         the first record's alone, they are read again without it.
+    keep_rows : int, optional
+        See :func:`read_record_streamed` (the first record's pre-factor is
+        everyone's).
 
     Returns
     -------
@@ -624,7 +636,7 @@ def read_records_streamed(
         As :func:`read_record_streamed`; records of different sample intervals.
     """
     first = read_record_streamed(paths[0], sensor_ids, factor=factor, f_limit=f_limit, progress=progress,
-                                 cascade=cascade and factor is None)  # fmt: skip
+                                 cascade=cascade and factor is None, keep_rows=keep_rows)  # fmt: skip
     q0, q2 = first.stages
     streamed = [first]
     streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
@@ -638,5 +650,5 @@ def read_records_streamed(
     content = _content(streamed, dts[0] / total)
     if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
         del streamed, first
-        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False)
+        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False, keep_rows=keep_rows)
     return streamed, content

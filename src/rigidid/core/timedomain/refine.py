@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
 from rigidid.core.statespace import modal_from_poles
-from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
+from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, noise_gain
 from rigidid.errors import InputError
 
 __all__ = [
@@ -261,9 +261,17 @@ class _Data:
     noise_from: str
 
 
-def _prepare(records: Sequence[Array], dt: float, starts: Sequence[int], onsets: Sequence[int], factor: int) -> _Data:
+def _prepare(
+    records: Sequence[Array],
+    dt: float,
+    starts: Sequence[int],
+    onsets: Sequence[int],
+    factor: int,
+    prefactor: int = 1,
+    guard: int = 0,
+) -> _Data:
     p = records[0].shape[1]
-    pre = [r[: max(0, o - 2)] for r, o in zip(records, onsets, strict=True)]
+    pre = [r[: max(0, o - 2 - guard)] for r, o in zip(records, onsets, strict=True)]
     n_pre = sum(x.shape[0] for x in pre)
     factor = _fit_factor([r.shape[0] - s for r, s in zip(records, starts, strict=True)], p, factor)
     decays = []
@@ -283,7 +291,7 @@ def _prepare(records: Sequence[Array], dt: float, starts: Sequence[int], onsets:
         stacked = np.vstack([x - x.mean(axis=0) for x in pre if x.shape[0] > 1])
         s = np.sqrt(np.mean(stacked**2, axis=0))
         if factor > 1:
-            s = s * math.sqrt(float(np.sum(fir_taps(factor) ** 2)))
+            s = s * math.sqrt(noise_gain(factor, prefactor))
         if np.all(s > 0.0):
             sigma, noise_from = s, "pretrigger"
     return _Data(decays, sigma, dt * factor, noise_from)
@@ -494,6 +502,8 @@ def refine_body(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
+    prefactor: int = 1,
+    guard: int = 0,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -519,6 +529,14 @@ def refine_body(
         Largest number of residual evaluations (three per iteration of the
         optimiser, plus one Jacobian per accepted step); 0 evaluates the start only
         (its Cramér-Rao bound, e.g. at the truth of a simulation).
+    prefactor : int
+        The records were decimated by this factor before (1: raw): the
+        pre-trigger noise is then band-limited, and its level after the
+        fit's decimation comes from :func:`~rigidid.core.timedomain.preprocess.noise_gain`.
+    guard : int
+        Samples before each onset left out of the pre-trigger (records
+        decimated before trimming: the filter spreads the impact this far
+        back).
 
     Returns
     -------
@@ -573,7 +591,7 @@ def refine_body(
         np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
         np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
     )  # fmt: skip
-    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
+    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)), max(1, int(prefactor)), int(guard))
     if data.noise_from == "residual":
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
         per = r0.reshape(-1, pos.shape[0])
