@@ -1,4 +1,4 @@
-"""Binary record formats (.npy, .npz, .mat, .h5) read to the same modes as the CSV they came from."""
+"""Binary record formats (.npy, .npz, .mat, .h5, .wav) read to the same modes as the CSV they came from."""
 
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ def test_binary_formats_give_the_csv_modes(engine_csv: tuple[Path, list[str], li
     pytest.importorskip("h5py")
     folder, ids, paths = engine_csv
     reference = _modes(paths)
-    for suffix in (".npz", ".mat", ".h5", ".npy"):
+    for suffix in (".npz", ".mat", ".h5", ".npy", ".wav"):
         converted = []
         for k, path in enumerate(paths):
             data, dt = read_record(path, ids)
@@ -90,14 +90,14 @@ def test_bad_npz_is_one_line_naming_file_and_field(tmp_path: Path, fields: dict,
 
 
 def test_not_a_binary_file(tmp_path: Path) -> None:
-    for suffix in (".npy", ".npz", ".mat", ".h5"):
+    for suffix in (".npy", ".npz", ".mat", ".h5", ".wav"):
         path = tmp_path / f"junk{suffix}"
         path.write_text("time,a,b\n")
         with pytest.raises(InputError, match=str(path).replace(".", r"\.")):
             read_record(path, ["a", "b"])
 
 
-def test_convert_writes_npz_records_that_modes_reads(tmp_path: Path) -> None:
+def test_convert_writes_npz_and_wav_records_that_modes_reads(tmp_path: Path) -> None:
     import json
 
     from rigidid.io.uff import write_uff_test
@@ -117,7 +117,7 @@ def test_convert_writes_npz_records_that_modes_reads(tmp_path: Path) -> None:
     uff = tmp_path / "test.uff"
     write_uff_test(uff, layout, records)
     out = {}
-    for fmt in ("csv", "npz"):
+    for fmt in ("csv", "npz", "wav"):
         target = tmp_path / fmt
         converted = run("convert", uff, "-o", target, "--records-format", fmt)
         assert converted.returncode == 0, converted.stderr
@@ -127,6 +127,7 @@ def test_convert_writes_npz_records_that_modes_reads(tmp_path: Path) -> None:
         assert modes.returncode == 0, modes.stderr
         out[fmt] = np.loadtxt(tmp_path / f"{fmt}.csv", delimiter=",", skiprows=1, usecols=(1, 2))
     np.testing.assert_allclose(out["npz"], out["csv"], rtol=1e-6)
+    np.testing.assert_array_equal(out["wav"], out["npz"])  # 64-bit float WAV: the same values
     bad = run("convert", uff, "-o", tmp_path / "x", "--records-format", "tdms")
     assert bad.returncode == 2 and "tdms" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
@@ -218,3 +219,39 @@ def test_a_file_growing_while_read_stops_with_one_line(tmp_path: Path, monkeypat
     with pytest.raises(InputError, match="grew while it was read") as info:
         read_record(path, ["a", "b"])
     assert "\n" not in str(info.value) and str(path) in str(info.value)
+
+
+@pytest.mark.parametrize("dtype", ["int16", "int32", "uint8", "float32", "float64"])
+def test_wav_samples_are_read_as_stored_in_layout_order(tmp_path: Path, dtype: str) -> None:
+    from scipy.io import wavfile
+
+    from rigidid.io.streamed_records import read_record_streamed
+
+    rng = np.random.default_rng(6)
+    n = 70_000  # longer than the streamed reader's head: read in row blocks
+    decay = np.exp(-np.arange(n) / 8000.0)[:, None] * np.sin(0.01 * np.arange(n))[:, None]
+    values = decay * rng.uniform(0.3, 1.0, 3)
+    scale = {"int16": 2**14, "int32": 2**30, "uint8": 100, "float32": 1.0, "float64": 1.0}[dtype]
+    stored = np.round(values * scale) + (128 if dtype == "uint8" else 0) if dtype[0] in "iu" else values * scale
+    stored = stored.astype(dtype)
+    path = tmp_path / f"hit-{dtype}.wav"
+    wavfile.write(path, 8000, stored)
+    expected = stored.astype(np.float64) - (128.0 if dtype == "uint8" else 0.0)
+    data, dt = read_record(path, ["a", "b", "c"])
+    assert dt == pytest.approx(1.0 / 8000.0, rel=1e-12)
+    np.testing.assert_array_equal(data, expected)
+    streamed = read_record_streamed(path, ["a", "b", "c"], factor=1)
+    np.testing.assert_array_equal(streamed.data, expected)
+    with pytest.raises(InputError, match="3 sensor columns after time, the layout has 2 sensors"):
+        read_record(path, ["a", "b"])
+
+
+def test_wav_records_written_by_convert_round_trip(tmp_path: Path) -> None:
+    t = np.arange(5000) / 2048.0
+    x = np.random.default_rng(7).standard_normal((5000, 2)) * np.exp(-3.0 * t)[:, None]  # a decay
+    write_binary(tmp_path / "r.wav", t, x, ["p", "q"])
+    data, dt = read_record(tmp_path / "r.wav", ["p", "q"])
+    np.testing.assert_array_equal(data, x)  # 64-bit floats: exact
+    assert dt == 1.0 / 2048.0
+    with pytest.raises(InputError, match="whole number of Hz"):
+        write_binary(tmp_path / "s.wav", np.arange(10) / 1000.5, np.zeros((10, 1)), ["p"])

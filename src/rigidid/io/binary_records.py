@@ -1,4 +1,4 @@
-"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat`` and HDF5 ``.h5``.
+"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat``, HDF5 ``.h5`` and WAV.
 
 The layouts (also in ``docs/FORMATS.md``):
 
@@ -6,6 +6,12 @@ The layouts (also in ``docs/FORMATS.md``):
     One 2-D float array, samples x (1 + sensors): column 0 is time (s), the
     other columns are the layout's sensors **in layout order** (a ``.npy``
     file has no room for names).
+``.wav``
+    A WAV file (PCM 8, 16, 24 or 32-bit integers, or 32/64-bit floats), its
+    channels the layout's sensors **in layout order**, sampled at its rate
+    (time starts at 0). Values as stored: integers are counts (8-bit samples
+    centred on 0), so the channels must share one scale, or be calibrated
+    floats; mode shapes compare channels.
 ``.npz``, ``.mat``, ``.h5``/``.hdf5``
     Named arrays (``.h5``: datasets at the root of the file), either
 
@@ -46,7 +52,7 @@ __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_b
 
 Array = NDArray[np.float64]
 
-BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5")
+BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav")
 
 _RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 
@@ -233,8 +239,9 @@ class BlockRecord:
 
     Attributes
     ----------
-    names : list of str
-        Channel names, one per column of ``data``.
+    names : list of str or None
+        Channel names, one per column of ``data`` (None: the layout's sensors
+        in layout order, ``.wav``).
     rows : int
         Samples.
     dt : float or None
@@ -246,11 +253,17 @@ class BlockRecord:
         ``"field 'data'"``, for messages.
     """
 
-    names: list[str]
+    names: list[str] | None
     rows: int
     dt: float | None
     blocks: Any
     field: str
+    columns: int = 0
+
+    @property
+    def count(self) -> int:
+        """Columns of ``data``."""
+        return len(self.names) if self.names is not None else self.columns
 
 
 def _npy_member(zf: Any, name: str) -> tuple[Any, tuple[int, ...]] | None:
@@ -363,6 +376,59 @@ def _h5_blocks(path: Path, rows: int) -> BlockRecord | None:
     return BlockRecord(channels, n, dt, blocks(), _field("data"))
 
 
+def _wav(path: Path, src: str, mmap: bool) -> tuple[float, Any]:
+    """Sample rate and the samples (n, channels) of a WAV file (scipy's reader)."""
+    import warnings
+
+    from scipy.io import wavfile
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", wavfile.WavFileWarning)  # chunks it skips (metadata)
+            rate, data = wavfile.read(path, mmap=mmap)
+    except ValueError as exc:
+        if mmap:
+            raise
+        raise InputError(f"not a WAV file scipy reads ({exc})", source=src) from None
+    except OSError as exc:
+        raise InputError(f"cannot read it as WAV ({exc})", source=src) from None
+    if not float(rate) > 0.0:
+        raise InputError(f"its sample rate is {rate}", source=src, location="header")
+    values = data.reshape(-1, 1) if data.ndim == 1 else data
+    return float(rate), values
+
+
+def _wav_floats(block: Any) -> Array:
+    """WAV samples as float64: values as stored, 8-bit (unsigned) samples centred on 0."""
+    values = np.asarray(block, dtype=np.float64)
+    if block.dtype == np.uint8:
+        values -= 128.0
+    return values
+
+
+def _wav_blocks(path: Path, rows: int) -> BlockRecord | None:
+    try:
+        rate, data = _wav(path, str(path), mmap=True)
+    except (ValueError, InputError):  # a bit depth scipy cannot map (24-bit): read whole instead
+        return None
+    if not isinstance(data, np.memmap) or data.filename is None:
+        return None
+    n, columns, dtype, offset = int(data.shape[0]), int(data.shape[1]), data.dtype, int(data.offset)
+    del data  # read from the file, not the mapping: its pages would count as the process's memory
+
+    def blocks() -> Any:
+        with path.open("rb") as fh:
+            fh.seek(offset)
+            for start in range(0, n, rows):
+                count = min(rows, n - start)
+                block = np.fromfile(fh, dtype=dtype, count=count * columns)
+                if block.size != count * columns:
+                    raise InputError("the file is shorter than its header says", source=str(path))
+                yield None, _wav_floats(block.reshape(count, columns))
+
+    return BlockRecord(None, n, 1.0 / rate, blocks(), "channels", columns=columns)
+
+
 def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
     """A ``.npz`` or ``.h5`` record read `rows` rows at a time, without holding it whole.
 
@@ -382,6 +448,8 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
         return _npz_blocks(p, rows)
     if suffix in (".h5", ".hdf5"):
         return _h5_blocks(p, rows)
+    if suffix == ".wav":
+        return _wav_blocks(p, rows)
     return None
 
 
@@ -421,6 +489,9 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
         except (ValueError, OSError, EOFError) as exc:
             raise InputError(f"not a .npz file ({exc})", source=src) from None
         return _from_mapping(fields, {}, src)
+    if suffix == ".wav":
+        rate, data = _wav(p, src, mmap=False)
+        return RawRecord(None, _wav_floats(data), None, 1.0 / rate, "channels")
     if suffix == ".mat":
         from scipy.io import loadmat
 
@@ -434,12 +505,17 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
 
 
 def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike, sensor_ids: Sequence[str]) -> None:
-    """Write a record as ``.npz`` or ``.h5`` (``time``, ``data``, ``channels``), atomically.
+    """Write a record as ``.npz`` or ``.h5`` (``time``, ``data``, ``channels``) or ``.wav``, atomically.
+
+    A ``.wav`` file holds the channels in the order given as 64-bit floats
+    (exact), at the record's rate, which must be a whole number of Hz; it
+    keeps no names (its channels are read in layout order).
 
     Raises
     ------
     InputError
-        For another suffix, or ``.h5`` without h5py.
+        For another suffix, ``.h5`` without h5py, or a WAV of a rate that is
+        not a whole number of Hz.
     """
     from rigidid.io.atomic import atomic_path
 
@@ -460,5 +536,16 @@ def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike,
             fh.create_dataset("time", data=t)
             fh.create_dataset("data", data=x)
             fh.create_dataset("channels", data=[s.encode("utf-8") for s in names])
+    elif suffix == ".wav":
+        from scipy.io import wavfile
+
+        step = np.diff(t)
+        if t.size < 2 or not np.all(step > 0) or np.ptp(step) > 1e-9 * float(np.mean(step)):
+            raise InputError("a WAV file holds uniformly sampled records only", source=str(p))
+        rate = 1.0 / float(np.mean(step))
+        if abs(rate - round(rate)) > 1e-6 * rate:
+            raise InputError(f"a WAV file's sample rate is a whole number of Hz, this one is {rate:.9g}", source=str(p))
+        with atomic_path(p) as tmp:
+            wavfile.write(tmp, round(rate), np.ascontiguousarray(x, dtype=np.float64))  # 64-bit float: exact
     else:
-        raise InputError(f"records are written as .csv, .npz or .h5, not {suffix!r}", source=str(p))
+        raise InputError(f"records are written as .csv, .npz, .h5 or .wav, not {suffix!r}", source=str(p))

@@ -164,7 +164,7 @@ def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCa
         names, n, step, field = named.names, named.rows, named.dt, named.field
         parts = named.blocks
         try:
-            order = column_order(names, len(names), wanted, src, field)
+            order = column_order(names, named.count, wanted, src, field)
         except InputError:
             parts.close()
             raise
