@@ -754,7 +754,8 @@ def _polyphase(phases: Array, cube: Array, first: int, out: Array) -> None:
     na = phases.shape[0]
     half = (na - 1) // 2
     n, q, p = out.shape[0], cube.shape[1], cube.shape[2]
-    step = max(8, _POLYPHASE_BLOCK // max(1, q * p))
+    # at least 8 output rows per phase: the 2 H rows of the block's edges are multiplied twice
+    step = max(8 * na, _POLYPHASE_BLOCK // max(1, q * p))
     scratch = np.empty((min(step, n) + 2 * half, na, p))
     for lo in range(0, n, step):
         hi = min(n, lo + step)
