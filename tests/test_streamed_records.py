@@ -228,7 +228,8 @@ def test_modes_through_the_second_stage_match_the_whole_record(
     assert content is not None and all(r.stages == records[0].stages for r in records)
     assert records[0].stages[1] > 1
     _, streamed = api.estimate_modes(layout, paths)
-    assert streamed.decimation == records[0].factor
+    # the estimation judges the content again at the second stage's rate and may decimate further
+    assert streamed.decimation % records[0].factor == 0
     np.testing.assert_allclose(streamed.frequency_hz, whole.frequency_hz, rtol=STREAMED_VS_WHOLE_FREQUENCY)
     for impact, path in zip(streamed.impacts, paths, strict=True):
         data, dt = read_record(path, ids)
@@ -287,7 +288,7 @@ def test_missing_modes_after_the_second_stage_read_again_without_it(
     monkeypatch.setattr(timedomain, "estimate_modes", first_fails)
     _, estimate = api.estimate_modes(ENGINE / "layout.json", paths)
     assert len(calls) == 2
-    assert calls[0]["settle"] == FIR_HALF_LENGTH and calls[0]["decimate"] == 1
+    assert calls[0]["settle"] == FIR_HALF_LENGTH and calls[0]["decimate"] is None and calls[0]["content"] is None
     assert calls[1]["settle"] == 0 and calls[1]["decimate"] is None
     assert int(calls[1]["rows"]) > int(calls[0]["rows"])  # type: ignore[call-overload]
     assert estimate.frequency_hz.shape == (6,)

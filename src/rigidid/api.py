@@ -1192,10 +1192,13 @@ def _estimate_streamed(
             n_modes=n_modes,
             band=band,
             max_order=max_order,
-            decimate=None if decimate is None and not cascaded else 1,
+            # after a second stage the estimation judges the content again at the records' new rate, where
+            # its spectrum resolves the modes (at 500 kHz the raw one's bins are 122 Hz wide), and may
+            # decimate further; a user's factor was applied whole while reading
+            decimate=None if decimate is None else 1,
             progress=progress,
             energies=[r.energy for r in streamed],
-            content=content,
+            content=None if cascaded else content,
             settle=FIR_HALF_LENGTH if cascaded else 0,
         )
     except IdentificationError:
