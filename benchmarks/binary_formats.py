@@ -28,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from modes_speed import CLI_CODE, DURATION, _run_peak  # noqa: E402
+from modes_speed import CLI_CODE, DURATION, _run_peak
 
 
 def _write_mat73(path: Path, time_: np.ndarray, data: np.ndarray, ids: list[str]) -> None:
@@ -49,15 +49,17 @@ def _write_mat73(path: Path, time_: np.ndarray, data: np.ndarray, ids: list[str]
 
 
 def _files(folder: Path, channels: int, rows: int) -> tuple[dict[str, Path], Path]:
-    from records_scenario import BODY, IMPACTS, layout
     from scipy.io import savemat
 
+    from records_scenario import BODY, IMPACTS, layout
     from rigidid.core.timedomain import impulse_records, record_time
 
     ids = [f"s{i + 1}" for i in range(channels)]
     pos, dirs = layout(channels)
     lay = folder / f"layout{channels}.json"
-    sensors = [{"id": s, "position": p.tolist(), "direction": d.tolist()} for s, p, d in zip(ids, pos, dirs, strict=True)]
+    sensors = [
+        {"id": s, "position": p.tolist(), "direction": d.tolist()} for s, p, d in zip(ids, pos, dirs, strict=True)
+    ]
     lay.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "sensors": sensors}))
     stem = folder / f"record_{channels}x{rows}"
     files = {
@@ -77,7 +79,9 @@ def _files(folder: Path, channels: int, rows: int) -> tuple[dict[str, Path], Pat
     )[0][:rows]
     time_ = record_time(data.shape[0], rate, pre) - record_time(1, rate, pre)[0]
     np.save(files[".npy"], np.column_stack([time_, data]))
-    np.savez_compressed(files[".npz Fortran (deflated)"], time=time_, data=np.asfortranarray(data), channels=np.array(ids))
+    fortran = np.asfortranarray(data)
+    np.savez_compressed(files[".npz Fortran (deflated)"], time=time_, data=fortran, channels=np.array(ids))
+    del fortran
     names = np.array(ids, dtype=object)
     savemat(files[".mat v5"], {"time": time_, "data": data, "channels": names}, oned_as="column")
     savemat(files[".mat v5 compressed"], {"time": time_, "data": data, "channels": names}, do_compression=True)
@@ -101,11 +105,12 @@ def main() -> None:
         print(f"load average at start: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f} ({os.cpu_count()} CPUs)")
         t0 = time.perf_counter()
         files, lay = _files(folder, args.channels, args.rows)
-        print(f"{args.channels} channels x {args.rows} rows (record {args.channels * args.rows * 8 / 1e6:.0f} MB), "
-              f"files ready in {time.perf_counter() - t0:.0f} s; medians of {args.repeat} interleaved runs")  # fmt: skip
+        size = args.channels * args.rows * 8 / 1e6
+        print(f"{args.channels} channels x {args.rows} rows (record {size:.0f} MB), "
+              f"files ready in {time.perf_counter() - t0:.0f} s; medians of {args.repeat} interleaved runs")
         commands = {
-            name: [sys.executable, "-c", CLI_CODE, "modes", str(lay), str(path), "-o", str(folder / f"m{k}.csv")]
-            for k, (name, path) in enumerate(files.items())
+            name: [sys.executable, "-c", CLI_CODE, "modes", str(lay), str(p), "-o", str(folder / f"m{k}.csv")]
+            for k, (name, p) in enumerate(files.items())
         }
         runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
         for _ in range(args.repeat):

@@ -1,4 +1,4 @@
-"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat``, HDF5 ``.h5`` and WAV.
+"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat``, HDF5 ``.h5``, WAV and TDMS.
 
 The layouts (also in ``docs/FORMATS.md``):
 
@@ -12,6 +12,9 @@ The layouts (also in ``docs/FORMATS.md``):
     (time starts at 0). Values as stored: integers are counts (8-bit samples
     centred on 0), so the channels must share one scale, or be calibrated
     floats; mode shapes compare channels.
+``.tdms``
+    One group of channels named by sensor id, plus optionally ``time``;
+    else the channels' ``wf_increment`` (:mod:`rigidid.io.tdms_records`).
 ``.npz``, ``.mat``, ``.h5``/``.hdf5``
     Named arrays (``.h5``: datasets at the root of the file), either
 
@@ -52,7 +55,7 @@ __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_b
 
 Array = NDArray[np.float64]
 
-BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav")
+BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav", ".tdms")
 
 _RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 
@@ -344,6 +347,14 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
         return BlockRecord(plan.names, plan.rows, plan.dt, parts, plan.field)
     if suffix == ".wav":
         return _wav_blocks(p, rows)
+    if suffix == ".tdms":
+        from rigidid.io.tdms_records import open_tdms
+
+        try:
+            names, n, dt, parts = open_tdms(p, rows)
+        except InputError:
+            return None  # read_binary names the fault
+        return BlockRecord(names, n, dt, parts, "channels")
     return None
 
 
@@ -386,6 +397,14 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     if suffix == ".wav":
         rate, data = _wav(p, src, mmap=False)
         return RawRecord(None, _wav_floats(data), None, 1.0 / rate, "channels")
+    if suffix == ".tdms":
+        from rigidid.io.tdms_records import open_tdms
+
+        names, _, dt, parts = open_tdms(p, 1 << 16)
+        pieces = list(parts)
+        time = None if dt is not None else np.concatenate([t for t, _ in pieces]) if pieces else np.empty(0)
+        data = np.concatenate([v for _, v in pieces]) if pieces else np.empty((0, len(names)))
+        return RawRecord(names, data, time, dt, "channels")
     if suffix == ".mat":
         from scipy.io import loadmat
 
