@@ -8,15 +8,17 @@ whatever the file's size:
 
 - ``.npz`` members are read from their zip stream (stored or deflated); a
   member whose channels are contiguous (Fortran order ``(n, k)``, or C order
-  ``(k, n)``) is read through one stream per channel.
+  ``(k, n)``) is read through one stream per channel (deflated: decompressed
+  once to a temporary file, then read a block per channel).
 - MATLAB v5 ``.mat`` variables are found by walking the file's data-element
   tags (MATLAB 5.0 MAT-file format: 128-byte header, then ``miMATRIX`` or
   ``miCOMPRESSED`` elements). Uncompressed numeric variables are read from
-  their offset in the file; compressed ones (zlib) through
-  :func:`zlib.decompressobj`, one decompressor per channel (MATLAB matrices
-  are column-major: a channel of ``data`` (samples x channels) is
-  contiguous). Small variables (``channels``, ``dt``, ``sample_rate``) are
-  read by :func:`scipy.io.loadmat` restricted to them.
+  their offset in the file, one channel at a time (MATLAB matrices are
+  column-major: a channel of ``data`` (samples x channels) is contiguous);
+  compressed ones (zlib) through :func:`zlib.decompressobj`, a ``data``
+  matrix decompressed once to a temporary file, then read a block per
+  channel. Small variables (``channels``, ``dt``, ``sample_rate``) are read
+  by :func:`scipy.io.loadmat` restricted to them.
 - MATLAB v7.3 ``.mat`` files are HDF5: MATLAB writes an ``m x n`` matrix as
   the dataset of shape ``(n, m)``; cell arrays of names as object references
   to ``uint16`` character arrays, char matrices as ``uint16`` datasets.
@@ -104,6 +106,7 @@ class _Array:
     fortran: bool
     dtype: np.dtype[Any]
     open: Callable[[], _Raw]  # a byte source positioned at the first value
+    compressed: bool = False  # read only from the start (a zlib stream)
 
 
 def _stream_reader(arr: _Array, samples_axis: int, closers: list[Any]) -> Reader:
@@ -123,6 +126,8 @@ def _stream_reader(arr: _Array, samples_axis: int, closers: list[Any]) -> Reader
             return np.asarray(values, dtype=np.float64).reshape(count, k)
 
         return take
+    if arr.compressed:
+        return _spooled_columns(arr, n, k, closers)
     raws = []
     for j in range(k):
         raw = arr.open()
@@ -134,6 +139,47 @@ def _stream_reader(arr: _Array, samples_axis: int, closers: list[Any]) -> Reader
         out = np.empty((count, k))
         for j, raw in enumerate(raws):
             out[:, j] = np.frombuffer(raw.read(count * size), dtype=arr.dtype)
+        return out
+
+    return take_columns
+
+
+def _spooled_columns(arr: _Array, n: int, k: int, closers: list[Any]) -> Reader:
+    """Channels stored one after another in a compressed stream: decompressed once to a temporary file, then read.
+
+    Reading each channel through its own decompressor would decompress the
+    stream up to k times over; the temporary file (the array's size on disk,
+    in the system's temporary folder) costs one pass and bounded memory.
+    """
+    import tempfile
+
+    size = arr.dtype.itemsize
+    spool = tempfile.TemporaryFile()  # noqa: SIM115 (closed with the record's other files)
+    closers.append(spool)
+    where = [j * n * size for j in range(k)]
+    state = {"filled": False}
+
+    def fill() -> None:
+        raw = arr.open()
+        try:
+            left = n * k * size
+            while left:
+                chunk = raw.read(min(left, 1 << 22))
+                spool.write(chunk)
+                left -= len(chunk)
+        finally:
+            raw.close()
+        spool.flush()
+        state["filled"] = True
+
+    def take_columns(count: int) -> Array:
+        if not state["filled"]:
+            fill()
+        out = np.empty((count, k))
+        for j in range(k):
+            spool.seek(where[j])
+            out[:, j] = np.frombuffer(spool.read(count * size), dtype=arr.dtype)
+            where[j] += count * size
         return out
 
     return take_columns
@@ -270,7 +316,8 @@ def _npz_arrays(path: Path) -> tuple[Any, dict[str, _Array]] | None:
             raw.read(skip)
             return raw
 
-        arrays[member[:-4]] = _Array(tuple(int(s) for s in shape), bool(fortran), np.dtype(dtype), opener)
+        deflated = zf.getinfo(member).compress_type != zipfile.ZIP_STORED
+        arrays[member[:-4]] = _Array(tuple(int(s) for s in shape), bool(fortran), np.dtype(dtype), opener, deflated)
     return zf, arrays
 
 
@@ -424,7 +471,7 @@ def _mat5_arrays(path: Path, variables: dict[str, MatVar]) -> dict[str, _Array]:
                 raw.read(var.skip)
             return raw
 
-        arrays[name] = _Array(var.dims, True, var.dtype, opener)
+        arrays[name] = _Array(var.dims, True, var.dtype, opener, var.compressed)
     return arrays
 
 
