@@ -101,7 +101,7 @@ def test_bad_npz_is_one_line_naming_file_and_field(tmp_path: Path, fields: dict,
 
 
 def test_not_a_binary_file(tmp_path: Path) -> None:
-    for suffix in (".npy", ".npz", ".mat", ".h5", ".wav"):
+    for suffix in (".npy", ".npz", ".mat", ".h5", ".wav", ".tdms"):
         path = tmp_path / f"junk{suffix}"
         path.write_text("time,a,b\n")
         with pytest.raises(InputError, match=str(path).replace(".", r"\.")):
