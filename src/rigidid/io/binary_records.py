@@ -361,6 +361,13 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
 def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     """Open a binary record and return its named columns (layouts in the module documentation).
 
+    This loads the file whole (``.mat`` v4 to v7.2 by :func:`scipy.io.loadmat`,
+    v7.3 by h5py): it serves the readers that need every sample, and names
+    the fault of a file :func:`named_blocks` declines. Streamed reading goes
+    through :func:`named_blocks` / :func:`npy_blocks` first; a file they
+    cannot stream (complex, sparse, struct or cell data, v4 ``.mat``, 24-bit
+    WAV) is read here and then cut into blocks.
+
     Raises
     ------
     InputError
