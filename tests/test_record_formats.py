@@ -35,7 +35,7 @@ def test_binary_formats_give_the_csv_modes(engine_csv: tuple[Path, list[str], li
     pytest.importorskip("h5py")
     folder, ids, paths = engine_csv
     reference = _modes(paths)
-    for suffix in (".npz", ".mat", ".h5", ".npy", ".wav"):
+    for suffix in (".npz", ".mat", ".h5", ".npy", ".wav", "-v73.mat", "-fortran.npz"):
         converted = []
         for k, path in enumerate(paths):
             data, dt = read_record(path, ids)
@@ -52,6 +52,17 @@ def test_binary_formats_give_the_csv_modes(engine_csv: tuple[Path, list[str], li
                     savemat(target, {**fields, "sample_rate": 1.0 / dt})
                 else:
                     savemat(target, {"data": data, "channels": np.array(ids, dtype=object), "time": time})
+            elif suffix == "-v73.mat":  # MATLAB v7.3 (HDF5, transposed), then v5 compressed, one array per sensor
+                from scipy.io import savemat
+
+                from .test_array_streams import write_mat73
+
+                if k == 0:
+                    write_mat73(target, {"time": time, "data": data, "channels": list(ids)})
+                else:
+                    savemat(target, {"dt": dt, **{s: data[:, i] for i, s in enumerate(ids)}}, do_compression=True)
+            elif suffix == "-fortran.npz":
+                np.savez_compressed(target, time=time, data=np.asfortranarray(data), channels=np.array(ids))
             else:
                 write_binary(target, time, data, ids)
             converted.append(target)
@@ -90,7 +101,7 @@ def test_bad_npz_is_one_line_naming_file_and_field(tmp_path: Path, fields: dict,
 
 
 def test_not_a_binary_file(tmp_path: Path) -> None:
-    for suffix in (".npy", ".npz", ".mat", ".h5", ".wav"):
+    for suffix in (".npy", ".npz", ".mat", ".h5", ".wav", ".tdms"):
         path = tmp_path / f"junk{suffix}"
         path.write_text("time,a,b\n")
         with pytest.raises(InputError, match=str(path).replace(".", r"\.")):
@@ -117,7 +128,7 @@ def test_convert_writes_npz_and_wav_records_that_modes_reads(tmp_path: Path) -> 
     uff = tmp_path / "test.uff"
     write_uff_test(uff, layout, records)
     out = {}
-    for fmt in ("csv", "npz", "wav"):
+    for fmt in ("csv", "npz", "wav", "mat"):
         target = tmp_path / fmt
         converted = run("convert", uff, "-o", target, "--records-format", fmt)
         assert converted.returncode == 0, converted.stderr
@@ -128,6 +139,7 @@ def test_convert_writes_npz_and_wav_records_that_modes_reads(tmp_path: Path) -> 
         out[fmt] = np.loadtxt(tmp_path / f"{fmt}.csv", delimiter=",", skiprows=1, usecols=(1, 2))
     np.testing.assert_allclose(out["npz"], out["csv"], rtol=1e-6)
     np.testing.assert_array_equal(out["wav"], out["npz"])  # 64-bit float WAV: the same values
+    np.testing.assert_array_equal(out["mat"], out["npz"])  # MATLAB v5 doubles: the same values
     bad = run("convert", uff, "-o", tmp_path / "x", "--records-format", "tdms")
     assert bad.returncode == 2 and "tdms" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()

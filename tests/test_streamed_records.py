@@ -241,7 +241,7 @@ def test_modes_through_the_second_stage_match_the_whole_record(
 def test_named_binary_records_are_read_in_row_blocks(
     engine: tuple[Path, list[str], list[Path]], small_blocks: None, suffix: str
 ) -> None:
-    """.npz and .h5 of the data/channels layout stream in blocks to the same record; other layouts load whole."""
+    """.npz and .h5 records stream in blocks to the same record, in the data/channels or one-array-per-sensor layout."""
     if suffix == ".h5":
         pytest.importorskip("h5py")
     from rigidid.io.binary_records import named_blocks
@@ -250,7 +250,7 @@ def test_named_binary_records_are_read_in_row_blocks(
     data, dt = read_record(paths[0], ids)
     target = folder / f"named{suffix}"
     order = list(reversed(range(len(ids))))  # columns in another order than the layout's
-    shuffled = np.ascontiguousarray(data[:, order])  # (a Fortran-ordered .npz member is read whole)
+    shuffled = np.ascontiguousarray(data[:, order])
     write_binary(target, np.arange(data.shape[0]) * dt, shuffled, [ids[i] for i in order])
     blocks = named_blocks(target, 1000)
     assert blocks is not None and blocks.rows == data.shape[0] and blocks.names == [ids[i] for i in order]
@@ -259,10 +259,12 @@ def test_named_binary_records_are_read_in_row_blocks(
     np.testing.assert_array_equal(np.concatenate([values for _, values in parts]), data[:, order])
     from_blocks = read_record_streamed(target, ids)
     np.testing.assert_allclose(from_blocks.data, read_record_streamed(paths[0], ids).data, rtol=0, atol=1e-12)
-    # one array per sensor (no 'data'): not this layout, read whole, the same record
+    # one array per sensor (no 'data'): also read in row blocks, the same record
     columns = {s: data[:, i] for i, s in enumerate(ids)}
     np.savez(folder / "per_sensor.npz", time=np.arange(data.shape[0]) * dt, **columns)
-    assert named_blocks(folder / "per_sensor.npz", 1000) is None
+    per_sensor = named_blocks(folder / "per_sensor.npz", 1000)
+    assert per_sensor is not None and per_sensor.names == ids
+    assert max(values.shape[0] for _, values in per_sensor.blocks) == 1000
     np.testing.assert_allclose(
         read_record_streamed(folder / "per_sensor.npz", ids).data, from_blocks.data, rtol=0, atol=1e-12
     )

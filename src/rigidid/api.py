@@ -1376,7 +1376,7 @@ def convert(
         ``{"length", "mass"}`` when the file has no dataset 164.
     geometry : path-like, optional
         A UFF file completing `path` (see :func:`load_uff`).
-    records_format : {"csv", "npz", "h5", "wav"}
+    records_format : {"csv", "npz", "mat", "h5", "wav"}
         File format of the records (``record-<k>.<format>``; layouts in ``docs/FORMATS.md``).
 
     Returns
@@ -1386,8 +1386,8 @@ def convert(
     """
     import json
 
-    if records_format not in ("csv", "npz", "h5", "wav"):
-        raise InputError(f"records format {records_format!r}: one of csv, npz, h5, wav", source="records_format")
+    if records_format not in ("csv", "npz", "mat", "h5", "wav"):
+        raise InputError(f"records format {records_format!r}: one of csv, npz, mat, h5, wav", source="records_format")
     from rigidid.io.atomic import check_folder, transaction
     from rigidid.io.records import write_record
 

@@ -1190,7 +1190,7 @@ def convert(
     units: Units = None,
     geometry: Geometry = None,
     records_format: Annotated[
-        str, typer.Option("--records-format", help="Format of the record files: csv, npz, h5 (needs h5py) or wav.")
+        str, typer.Option("--records-format", help="Format of the record files: csv, npz, mat, h5 (needs h5py) or wav.")
     ] = "csv",
 ) -> None:
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""

@@ -1,4 +1,4 @@
-"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat``, HDF5 ``.h5`` and WAV.
+"""Impact records in binary files: NumPy ``.npy``/``.npz``, MATLAB ``.mat``, HDF5 ``.h5``, WAV and TDMS.
 
 The layouts (also in ``docs/FORMATS.md``):
 
@@ -12,6 +12,9 @@ The layouts (also in ``docs/FORMATS.md``):
     (time starts at 0). Values as stored: integers are counts (8-bit samples
     centred on 0), so the channels must share one scale, or be calibrated
     floats; mode shapes compare channels.
+``.tdms``
+    One group of channels named by sensor id, plus optionally ``time``;
+    else the channels' ``wf_increment`` (:mod:`rigidid.io.tdms_records`).
 ``.npz``, ``.mat``, ``.h5``/``.hdf5``
     Named arrays (``.h5``: datasets at the root of the file), either
 
@@ -52,7 +55,7 @@ __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_b
 
 Array = NDArray[np.float64]
 
-BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav")
+BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav", ".tdms")
 
 _RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 
@@ -266,116 +269,6 @@ class BlockRecord:
         return len(self.names) if self.names is not None else self.columns
 
 
-def _npy_member(zf: Any, name: str) -> tuple[Any, tuple[int, ...]] | None:
-    """An open ``.npy`` member of a zip file, positioned at its data, and its shape (None: not plain <f8, C order)."""
-    try:
-        fh = zf.open(name + ".npy")
-        version = np.lib.format.read_magic(fh)
-        reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-        shape, fortran, dtype = reader(fh)
-    except (KeyError, ValueError, OSError, EOFError):
-        return None
-    if fortran or dtype != np.dtype("<f8"):
-        fh.close()
-        return None
-    return fh, tuple(int(k) for k in shape)
-
-
-def _npz_blocks(path: Path, rows: int) -> BlockRecord | None:
-    import zipfile
-
-    try:
-        zf = zipfile.ZipFile(path)
-    except (zipfile.BadZipFile, OSError):
-        return None
-    names_in = {n[:-4] for n in zf.namelist() if n.endswith(".npy")}
-    if "data" not in names_in or "channels" not in names_in or not ({"time", "dt", "sample_rate"} & names_in):
-        zf.close()
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as npz:
-            small: dict[str, Any] = {k: npz[k] for k in ("channels", "dt", "sample_rate") if k in names_in}
-    except (ValueError, OSError, EOFError):
-        zf.close()
-        return None
-    data = _npy_member(zf, "data")
-    time = _npy_member(zf, "time") if "time" in names_in else None
-    channels = _names(small["channels"], str(path))
-    ok = data is not None and len(data[1]) == 2 and data[1][1] == len(channels)
-    ok = ok and ("time" not in names_in or (time is not None and time[1] == (data[1][0],)))  # type: ignore[index]
-    dt = None
-    if ok and time is None:
-        key = "dt" if "dt" in small else "sample_rate"
-        value = np.ravel(np.asarray(small[key], dtype=np.float64))
-        ok = value.size == 1 and math.isfinite(float(value[0])) and float(value[0]) > 0.0
-        dt = (1.0 / float(value[0]) if key == "sample_rate" else float(value[0])) if ok else None
-    if not ok or data is None:
-        for member in (data, time):
-            if member is not None:
-                member[0].close()
-        zf.close()
-        return None
-    n, columns = data[1]
-
-    def blocks() -> Any:
-        try:
-            for start in range(0, n, rows):
-                count = min(rows, n - start)
-                values = np.frombuffer(data[0].read(count * columns * 8), dtype="<f8").reshape(count, columns)
-                t = np.frombuffer(time[0].read(count * 8), dtype="<f8") if time is not None else None
-                yield t, values
-        finally:
-            data[0].close()
-            if time is not None:
-                time[0].close()
-            zf.close()
-
-    return BlockRecord(channels, n, dt, blocks(), _field("data"))
-
-
-def _h5_blocks(path: Path, rows: int) -> BlockRecord | None:
-    try:
-        import h5py
-    except ImportError:
-        return None
-    try:
-        fh = h5py.File(path, "r")
-    except OSError:
-        return None
-    data = fh.get("data")
-    time = fh.get("time")
-    ok = isinstance(data, h5py.Dataset) and data.ndim == 2 and isinstance(fh.get("channels"), h5py.Dataset)
-    ok = ok and (time is None or (isinstance(time, h5py.Dataset) and time.shape == (data.shape[0],)))
-    dt = None
-    if ok:
-        channels = _names(fh["channels"][()], str(path))
-        ok = len(channels) == data.shape[1] and data.dtype.kind == "f"
-    if ok and time is None:
-        attrs = {**dict(fh.attrs), **{k: v for k, v in data.attrs.items() if k in ("dt", "sample_rate")}}
-        for key in ("dt", "sample_rate"):
-            for where in (fh, attrs):
-                if dt is None and key in where:
-                    value = np.asarray(where[key][()] if where is fh else where[key], dtype=float)
-                    if value.size == 1 and float(value.reshape(-1)[0]) > 0.0:
-                        dt = float(value.reshape(-1)[0]) if key == "dt" else 1.0 / float(value.reshape(-1)[0])
-        ok = dt is not None and math.isfinite(dt)
-    if not ok:
-        fh.close()
-        return None
-    n = int(data.shape[0])
-
-    def blocks() -> Any:
-        try:
-            for start in range(0, n, rows):
-                stop = min(n, start + rows)
-                t = np.asarray(time[start:stop], dtype=float) if time is not None else None
-                yield t, np.ascontiguousarray(data[start:stop], dtype=float)
-        finally:
-            fh.close()
-
-    return BlockRecord(channels, n, dt, blocks(), _field("data"))
-
-
 def _wav(path: Path, src: str, mmap: bool) -> tuple[float, Any]:
     """Sample rate and the samples (n, channels) of a WAV file (scipy's reader)."""
     import warnings
@@ -444,17 +337,36 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
     suffix = p.suffix.lower()
     if not p.is_file():
         return None
-    if suffix == ".npz":
-        return _npz_blocks(p, rows)
-    if suffix in (".h5", ".hdf5"):
-        return _h5_blocks(p, rows)
+    if suffix in (".npz", ".h5", ".hdf5", ".mat"):
+        from rigidid.io.array_streams import open_blocks
+
+        opened = open_blocks(p, rows)
+        if opened is None:
+            return None
+        plan, parts = opened
+        return BlockRecord(plan.names, plan.rows, plan.dt, parts, plan.field)
     if suffix == ".wav":
         return _wav_blocks(p, rows)
+    if suffix == ".tdms":
+        from rigidid.io.tdms_records import open_tdms
+
+        try:
+            names, n, dt, parts = open_tdms(p, rows)
+        except InputError:
+            return None  # read_binary names the fault
+        return BlockRecord(names, n, dt, parts, "channels")
     return None
 
 
 def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     """Open a binary record and return its named columns (layouts in the module documentation).
+
+    This loads the file whole (``.mat`` v4 to v7.2 by :func:`scipy.io.loadmat`,
+    v7.3 by h5py): it serves the readers that need every sample, and names
+    the fault of a file :func:`named_blocks` declines. Streamed reading goes
+    through :func:`named_blocks` / :func:`npy_blocks` first; a file they
+    cannot stream (complex, sparse, struct or cell data, v4 ``.mat``, 24-bit
+    WAV) is read here and then cut into blocks.
 
     Raises
     ------
@@ -492,9 +404,27 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     if suffix == ".wav":
         rate, data = _wav(p, src, mmap=False)
         return RawRecord(None, _wav_floats(data), None, 1.0 / rate, "channels")
+    if suffix == ".tdms":
+        from rigidid.io.tdms_records import open_tdms
+
+        names, _, dt, parts = open_tdms(p, 1 << 16)
+        pieces = list(parts)
+        time = None if dt is not None else np.concatenate([t for t, _ in pieces]) if pieces else np.empty(0)
+        data = np.concatenate([v for _, v in pieces]) if pieces else np.empty((0, len(names)))
+        return RawRecord(names, data, time, dt, "channels")
     if suffix == ".mat":
         from scipy.io import loadmat
 
+        from rigidid.io.array_streams import is_mat73, mat73_fields
+
+        if is_mat73(p):  # MATLAB v7.3 is HDF5
+            try:
+                import h5py  # noqa: F401
+            except ImportError:
+                raise InputError(
+                    "reading MATLAB v7.3 files needs h5py: pip install 'rigidid[hdf5]'", source=src
+                ) from None
+            return _from_mapping(mat73_fields(p, src), {}, src)
         try:
             mat = loadmat(p, squeeze_me=True, chars_as_strings=True)
         except Exception as exc:  # scipy raises several unrelated types on a bad file
@@ -536,6 +466,11 @@ def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike,
             fh.create_dataset("time", data=t)
             fh.create_dataset("data", data=x)
             fh.create_dataset("channels", data=[s.encode("utf-8") for s in names])
+    elif suffix == ".mat":
+        from scipy.io import savemat
+
+        with atomic_path(p) as tmp, tmp.open("wb") as fh:  # MATLAB v5, uncompressed: read back in row blocks
+            savemat(fh, {"time": t, "data": x, "channels": np.array(list(names), dtype=object)}, oned_as="column")
     elif suffix == ".wav":
         from scipy.io import wavfile
 
@@ -548,4 +483,4 @@ def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike,
         with atomic_path(p) as tmp:
             wavfile.write(tmp, round(rate), np.ascontiguousarray(x, dtype=np.float64))  # 64-bit float: exact
     else:
-        raise InputError(f"records are written as .csv, .npz, .h5 or .wav, not {suffix!r}", source=str(p))
+        raise InputError(f"records are written as .csv, .npz, .mat, .h5 or .wav, not {suffix!r}", source=str(p))
