@@ -523,8 +523,9 @@ def _identify(
     src = _source(layout, inputs)
     # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
     # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
-    raw_needed = keep is not None or resample > 0 or (refine and method == "structured")
+    raw_needed = keep is not None or resample > 0
     files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
+    # the refit reads the files again in row blocks (api.refine_records): the same answer, memory bounded
     streamed = files_in and not raw_needed
     # the refit alone fits decays it decimates itself: the records are read pre-decimated, as many values
     # as it can use kept (four times its row budget), so memory does not grow with their length
@@ -584,11 +585,14 @@ def _identify(
         )
     if refine and estimate is not None and method == "structured":
         with _naming(src), terminal_progress() as progress, _noted(notes, RefinementWarning):
-            result = api.with_refinement(
-                result, data.records, estimate, progress=progress,
-                prefactor=decimated.factor if decimated is not None else 1,
-                guard=decimated.settle if decimated is not None else 0,
-            )  # fmt: skip
+            if paths is not None:
+                result = api.refine_records(result, paths, data.layout, estimate, progress=progress)
+            else:
+                result = api.with_refinement(
+                    result, data.records, estimate, progress=progress,
+                    prefactor=decimated.factor if decimated is not None else 1,
+                    guard=decimated.settle if decimated is not None else 0,
+                )  # fmt: skip
     if decimated is not None and estimate is not None:
         estimate = decimated.in_file_rows(estimate)  # the total factor, impacts in the files' rows
     result = api.with_warnings(result, notes)
