@@ -192,3 +192,59 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     factor = data["modal_estimation"]["decimation"]
     for impact in data["modal_estimation"]["impacts"]:  # file rows: 0.1 s (1000 rows) in, as fine as the factor
         assert 990 <= impact["onset"] <= 1000 + factor and impact["start"] > impact["peak"] >= impact["onset"]
+
+
+def test_the_report_spectrum_of_files_read_in_row_blocks_is_the_whole_records(long_records: list[Path]) -> None:
+    """The report's summed spectrum streamed (io/streamed_spectrum) equals summed_spectrum of the whole records."""
+    from rigidid import api
+    from rigidid.core.spectrum import summed_spectrum
+
+    layout = api.load_layout(FOUR / "layout.json")
+    raw = api.load_records(long_records, layout)
+    freq, power = summed_spectrum([r for r, _ in raw], raw[0][1])
+    got = api.records_spectrum(long_records, layout)
+    assert got is not None
+    np.testing.assert_array_equal(got[0], freq)
+    np.testing.assert_allclose(got[1], power, rtol=0.0, atol=STREAMED_DECAY_ATOL * power.max())
+
+
+def test_report_records_never_holds_the_raw_records(
+    long_records: list[Path], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """report --records (default refit) reads long record files in row blocks only, spectrum figure included."""
+    from typer.testing import CliRunner
+
+    from rigidid import api
+    from rigidid.cli import app
+    from rigidid.core.timedomain import refine
+
+    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    seen: list[int] = []
+    real = api.records_spectrum
+
+    def spy(*args: object, **kwargs: object) -> object:
+        got = real(*args, **kwargs)  # type: ignore[arg-type]
+        assert got is not None
+        seen.append(got[1].size)
+        return got
+
+    def refuse(*_: object, **__: object) -> None:
+        raise AssertionError("records loaded whole")
+
+    drawn: list[object] = []
+    real_report = api.report
+
+    def report(*args: object, **kwargs: object) -> str:
+        drawn.append(kwargs.get("spectrum"))
+        return real_report(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(api, "records_spectrum", spy)
+    monkeypatch.setattr(api, "report", report)
+    monkeypatch.setattr(api, "load_records", refuse)
+    out = CliRunner().invoke(app, ["report", str(FOUR / "layout.json"), "--records", *map(str, long_records),
+                                   "-o", str(tmp_path / "r.html")])  # fmt: skip
+    assert out.exit_code == 0, out.output
+    assert seen == [2049]  # one streamed spectrum, the one the report draws
+    assert len(drawn) == 1 and drawn[0] is not None and len(drawn[0]) == 2  # type: ignore[arg-type]
+    assert (tmp_path / "r.html").stat().st_size > 0

@@ -1225,6 +1225,7 @@ def report(
     body: BodyFile | None = None,
     records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
     progress: ProgressCallback | None = None,
+    spectrum: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> str:
     """A self-contained HTML report of an identification (tables and pictures).
 
@@ -1247,6 +1248,9 @@ def report(
         The impact records, whose summed spectrum goes behind the stabilisation diagram.
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
+    spectrum : (ndarray, ndarray), optional
+        That summed spectrum computed already (frequency in Hz, power), e.g. from record files read in row
+        blocks (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); used instead of `records`.
 
     Returns
     -------
@@ -1255,11 +1259,13 @@ def report(
     """
     from rigidid.reporting import render_report
 
-    stiffness, spectrum = None, None
+    stiffness = None
     if body is not None:
         mounts = [m.position for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
-    if records and stabilisation is not None:
+    if stabilisation is None:
+        spectrum = None
+    elif spectrum is None and records:
         spectrum = _spectrum(records)
     identified, roll = _report_mounts(result, force_unit)
     return render_report(
@@ -1307,6 +1313,7 @@ def report_pngs(
     body: BodyFile | None = None,
     records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
     progress: ProgressCallback | None = None,
+    spectrum: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> list[Path]:
     """The figures of :func:`report` as PNG files in `directory` (see :func:`rigidid.reporting.save_pngs`).
 
@@ -1336,7 +1343,7 @@ def report_pngs(
         stabilisation=stabilisation,
         mode_labels=result.modes_used,
         mount_labels=labels,
-        spectrum=_spectrum(records) if records and stabilisation is not None else None,
+        spectrum=None if stabilisation is None else spectrum or (_spectrum(records) if records else None),
         progress=progress,
         roll_axis=None if roll is None else roll["direction"],
     )
@@ -1888,3 +1895,50 @@ def refine_records(
         if progress is not None:
             progress("refit", 1, 1)
     return _accept_refinement(result, refinement)
+
+
+def records_spectrum(
+    paths: Sequence[PathLike], layout: LayoutFile | PathLike, *, progress: ProgressCallback | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The report's summed spectrum of record files (:func:`report`'s `spectrum`), read in row blocks.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        The record files (one per impact), checked already (read by the estimation).
+    layout : LayoutFile or path-like
+        The sensors.
+    progress : ProgressCallback, optional
+        Reading progress.
+
+    Returns
+    -------
+    (ndarray, ndarray) or None
+        Frequency (Hz) and summed power spectral density, as
+        :func:`rigidid.core.spectrum.summed_spectrum` gives on the whole records
+        (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); the
+        records read whole when one is shorter than a Welch segment (4096 rows).
+    """
+    from rigidid.io.records import layout_ids
+    from rigidid.io.refit_records import _source
+    from rigidid.io.streamed_spectrum import summed_spectrum_streamed
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    ids = [s.id for s in lay.sensors]
+    sources = [_source(Path(p), layout_ids(ids, str(p)), None) for p in paths]
+    if not sources:
+        return None
+    if min(s.rows for s in sources) < 2 * 4096:  # short records (rows told by the header or the size): read whole
+        del sources
+        return _spectrum(load_records(paths, lay))
+    dt = _source_dt(sources[0])
+    del sources
+    return summed_spectrum_streamed(paths, ids, dt, progress=progress)
+
+
+def _source_dt(source: Any) -> float:
+    """The sample interval of a row-block source: its own, or from the first block's time column."""
+    if source.dt:
+        return float(source.dt)
+    t, _ = next(iter(source.blocks))
+    return float(t[1] - t[0])

@@ -523,9 +523,10 @@ def _identify(
     src = _source(layout, inputs)
     # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
     # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
-    raw_needed = keep is not None or resample > 0
+    raw_needed = resample > 0
     files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
-    # the refit reads the files again in row blocks (api.refine_records): the same answer, memory bounded
+    # the refit reads the files again in row blocks (api.refine_records), the report's spectrum too
+    # (api.records_spectrum): the same answers, memory bounded
     streamed = files_in and not raw_needed
     # the refit alone fits decays it decimates itself: the records are read pre-decimated, as many values
     # as it can use kept (four times its row budget), so memory does not grow with their length
@@ -545,7 +546,7 @@ def _identify(
         data = api.TestData(lay, None, decimated.records, [str(p) for p in inputs or []])
     else:
         data = _test_data(layout, inputs or [], records, units, geometry)
-    if keep is not None:
+    if keep is not None and not streamed:
         keep["records"] = data.records
     if resample and data.records:  # before any estimation: blame the option, not the records
         shortest = min(values.shape[0] for values, _ in data.records)
@@ -556,6 +557,9 @@ def _identify(
                 source="--resample",
             )
     paths = list(inputs or []) if streamed else None
+    if keep is not None and paths:
+        with _naming(src):
+            keep["spectrum"], keep["records"] = api.records_spectrum(paths, data.layout), None
     chosen = _parse_modes(modes_used)
     from rigidid.errors import ElasticModeWarning, RefinementWarning
 
@@ -1171,6 +1175,7 @@ def report(
             text = api.report(
                 result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
                 force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
+                spectrum=kept.get("spectrum"),
             )  # fmt: skip
         paths: list[Any] = []
         with OutputSet() as outs:  # every output or none
@@ -1180,7 +1185,7 @@ def report(
                 with terminal_progress() as progress:
                     paths = api.report_pngs(
                         result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
-                        records=kept.get("records"), progress=progress,
+                        records=kept.get("records"), progress=progress, spectrum=kept.get("spectrum"),
                     )  # fmt: skip
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:
