@@ -508,7 +508,8 @@ def _identify(
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share.
 
-    With `keep`, its ``"records"`` entry receives the records read (for the report's spectrum).
+    With `keep`, its ``"records"`` entry receives the records read, or its ``"spectrum"`` entry the summed spectrum
+    of record files read in row blocks (for the report's spectrum).
     """
     from rigidid import api
     from rigidid.core.identify import METHODS
@@ -557,9 +558,6 @@ def _identify(
                 source="--resample",
             )
     paths = list(inputs or []) if streamed else None
-    if keep is not None and paths:
-        with _naming(src):
-            keep["spectrum"], keep["records"] = api.records_spectrum(paths, data.layout), None
     chosen = _parse_modes(modes_used)
     from rigidid.errors import ElasticModeWarning, RefinementWarning
 
@@ -572,6 +570,9 @@ def _identify(
             else (data.modes, None)
         )  # fmt: skip
     assert modes is not None
+    if keep is not None and paths:  # after the estimation, which checked the files
+        with _naming(src):
+            keep["spectrum"], keep["records"] = api.records_spectrum(paths, data.layout), None
     from rigidid.progress import terminal_progress
 
     with _naming(src), terminal_progress() as progress:
