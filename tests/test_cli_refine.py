@@ -248,3 +248,28 @@ def test_report_records_never_holds_the_raw_records(
     assert seen == [2049]  # one streamed spectrum, the one the report draws
     assert len(drawn) == 1 and drawn[0] is not None and len(drawn[0]) == 2  # type: ignore[arg-type]
     assert (tmp_path / "r.html").stat().st_size > 0
+
+
+def test_the_row_block_passes_read_csv_records_as_npy(long_records: list[Path], tmp_path: Path) -> None:
+    """A CSV record (rows only estimated from its size) gives the row-block passes the .npy's numbers."""
+    from rigidid import api
+    from rigidid.core.timedomain import Impact
+    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+
+    layout = api.load_layout(FOUR / "layout.json")
+    ids = [s.id for s in layout.sensors]
+    data = np.load(long_records[0])
+    csv = tmp_path / "hit1.csv"
+    np.savetxt(csv, data, delimiter=",", header=",".join(["time", *ids]), comments="", fmt="%.17g")
+    dt, near = 1e-4, [Impact(1000, 1028, 1336)]  # as a decimation by 28 put it
+    found = [locate_impacts([p], ids, dt, near, 700) for p in (long_records[0], csv)]
+    assert found[0] == found[1] and found[0] is not None and found[0][0].onset == 1000
+    impact = found[0][0]
+    a, b = (read_prepared_decays([p], ids, dt, starts=[impact.start], onsets=[impact.onset], factor=9)
+            for p in (long_records[0], csv))  # fmt: skip
+    assert a.dt == b.dt and a.noise_from == b.noise_from == "pretrigger"
+    np.testing.assert_array_equal(a.decays[0], b.decays[0])
+    np.testing.assert_array_equal(a.sigma, b.sigma)
+    spectra = [api.records_spectrum([p], layout) for p in (long_records[0], csv)]
+    assert spectra[0] is not None and spectra[1] is not None
+    np.testing.assert_allclose(spectra[1][1], spectra[0][1], rtol=0.0, atol=STREAMED_DECAY_ATOL * spectra[0][1].max())
