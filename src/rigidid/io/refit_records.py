@@ -45,6 +45,9 @@ Array = NDArray[np.float64]
 
 _THRESHOLD = 0.01  # find_impact's defaults, as the estimation uses them
 _PULSE_WIDTH = 0.005
+_CHUNK = 128  # rows per maximum kept outside the window (the energy bound's resolution)
+AFTER_ROWS = 1 << 16
+"""Raw rows held after the estimate's decay start (at least): where the largest channel energy is sought."""
 
 
 def _source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
@@ -57,6 +60,16 @@ def _source(path: Path, wanted: list[str], progress: ProgressCallback | None) ->
         if is_binary_record(path, src)
         else _csv_source(path, wanted, progress)
     )
+
+
+def _chunk_maxima(mags: Array) -> Array:
+    """``max |x|`` per channel of every :data:`_CHUNK` rows of `mags`, shape (chunks, p)."""
+    n = mags.shape[0]
+    whole = n // _CHUNK * _CHUNK
+    parts = [mags[:whole].reshape(-1, _CHUNK, mags.shape[1]).max(axis=1)] if whole else []
+    if whole < n:
+        parts.append(mags[whole:].max(axis=0, keepdims=True))
+    return np.concatenate(parts) if parts else np.zeros((0, mags.shape[1]))
 
 
 def _locate_one(
@@ -77,11 +90,11 @@ def _locate_one(
         mags = np.abs(values)
         peaks = np.maximum(peaks, mags.max(axis=0))
         if row < lo:
-            before.append(mags[: min(stop, lo) - row].max(axis=0))
+            before.append(_chunk_maxima(mags[: min(stop, lo) - row]))
         if stop > lo and row < hi:
             held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
         if stop > hi:
-            after.append(mags[max(0, hi - row) :].max(axis=0))
+            after.append(_chunk_maxima(mags[max(0, hi - row) :]))
         row = stop
     if not held:
         return None
@@ -92,8 +105,8 @@ def _locate_one(
         return None
     scale = np.divide(1.0, peaks, out=np.zeros(p), where=peaks > 0.0)
 
-    def bound(parts: list[Array]) -> float:
-        return float(max(((m * scale) ** 2).sum() for m in parts)) if parts else 0.0
+    def bound(parts: list[Array]) -> float:  # no row of these chunks has a larger energy
+        return float(max((((m * scale) ** 2).sum(axis=1)).max() for m in parts)) if parts else 0.0
 
     # the largest energy lies in the window, no row before it reaches the threshold
     if bound(after) > top or bound(before) > _THRESHOLD * top:
@@ -142,7 +155,9 @@ def locate_impacts(
     Notes
     -----
     Per file, one pass holds the raw rows ``near.onset - reach ... near.start
-    + reach`` and each block's ``max |x|`` per channel. The energy weights
+    + max(reach, AFTER_ROWS)`` (the largest energy can come a cycle of the
+    slowest mode after the impact) and, outside them, ``max |x|`` per channel
+    of every 128 rows. The energy weights
     (``1 / max |x|`` per channel, :func:`channel_energy`) come from the whole
     record; the rows outside the window are bounded by their blocks' maxima, as
     :func:`~rigidid.core.timedomain.preprocess.impact_from_blocks` does.
@@ -151,7 +166,7 @@ def locate_impacts(
 
     found = []
     for path, impact in zip(paths, near, strict=True):
-        lo, hi = max(0, impact.onset - reach), impact.start + reach
+        lo, hi = max(0, impact.onset - reach), impact.start + max(reach, AFTER_ROWS)
         one = _locate_one(Path(path), layout_ids(sensor_ids, str(path)), dt, lo, hi, progress)
         if one is None:
             return None
