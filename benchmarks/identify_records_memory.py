@@ -3,14 +3,18 @@
 For each case (the records ``modes_speed.py --floor ... --keep DIR`` writes, ``.npy`` or CSV), in
 fresh processes, interleaved ``--repeat`` times:
 
-- ``identify --records`` as shipped: the record files read block by block and pre-decimated while
-  read (``api.load_records_decimated``), the refit on those;
-- the same with ``load_records_decimated`` replaced by a whole read at the file's rate (the route
-  before this change: the raw records held, the refit decimating them itself).
+- ``row blocks``: ``identify --records`` as shipped: the modes estimated from the files read block by
+  block and decimated as they arrive (as ``rigidid modes``), then the files read again in row blocks
+  for the refit (``api.refine_records``: the impacts located on the raw rows, the pre-trigger
+  statistics and the decays at the fit's rate, nothing else held);
+- ``whole``: the same with ``api.STREAM_REFIT_VALUES`` raised so far that the refit reads the raw
+  records whole (the refit's numbers of a whole read);
+- ``before`` (with ``--before-src DIR``, the ``src`` folder of an older checkout, e.g.
+  ``git archive <commit> src | tar -x -C DIR``): that version's ``identify --records``.
 
 It prints medians of wall time (start-up included) and peak resident memory (the child's VmHWM),
 how the peak grows from the first case to the last (same channels), and the CG, its standard error
-and the normalised cost of both routes.
+and the normalised cost of every route.
 
 Run: ``python benchmarks/identify_records_memory.py --cases-dir /tmp/cases --cases 8x1000000,8x10000000``
 """
@@ -19,14 +23,17 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from modes_speed import CLI_CODE, PEAK_PREAMBLE, _run_peak
+from modes_speed import CLI_CODE, PEAK_PREAMBLE
 
 WHOLE_CODE = (
     PEAK_PREAMBLE
@@ -34,16 +41,26 @@ WHOLE_CODE = (
 import sys
 from rigidid import api
 
-def whole(paths, layout, *, keep_values, progress=None):  # the raw records, as before
-    records = api.load_records(paths, layout)
-    return api.DecimatedRecords(records, 1, [0] * len(records), 0)
-
-api.load_records_decimated = whole
+api.STREAM_REFIT_VALUES = 10**18  # the refit reads the raw records whole
 from rigidid.cli import main
 sys.argv = ["rigidid", *sys.argv[1:]]
 main()
 """
 )
+
+
+def _run_peak(cmd: list[str], folder: Path, src: str | None) -> tuple[float, float]:
+    """Wall time (s) and peak resident memory (MB, the child's VmHWM) of a child process."""
+    peak_file = folder / "peak.txt"
+    env = {**os.environ, "RIGIDID_BENCH_PEAK": str(peak_file)}
+    if src is not None:
+        env["PYTHONPATH"] = src
+    start = time.perf_counter()
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    if out.returncode:
+        raise SystemExit(f"{' '.join(cmd[3:6])}... failed with exit status {out.returncode}: {out.stderr.strip()}")
+    return wall, float(peak_file.read_text()) / 1024.0
 
 
 def main() -> None:
@@ -52,24 +69,28 @@ def main() -> None:
     parser.add_argument("--cases", default="8x1000000,8x10000000", help="comma-separated CHANNELSxSAMPLES")
     parser.add_argument("--suffix", default=".npy", help="record format: .npy or .csv")
     parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument("--before-src", help="src folder of an older checkout to measure too")
+    parser.add_argument("--routes", default="row blocks,whole", help="comma-separated: row blocks, whole")
     args = parser.parse_args()
     folder = Path(args.cases_dir)
-    peaks: dict[str, list[float]] = {"pre-decimated": [], "whole": []}
+    names = [r.strip() for r in args.routes.split(",")] + (["before"] if args.before_src else [])
+    peaks: dict[str, list[float]] = {name: [] for name in names}
+    srcs = {name: (args.before_src if name == "before" else None) for name in names}
     for case in args.cases.split(","):
         channels, samples = (int(v) for v in case.split("x"))
         record = folder / f"record_{channels}x{samples}{args.suffix}"
         layout = folder / f"layout{channels}.json"
-        out = {name: folder / f"identify_{name}.json" for name in peaks}
+        out = {name: folder / f"identify_{name.replace(' ', '_')}.json" for name in peaks}
+        codes = {"row blocks": CLI_CODE, "whole": WHOLE_CODE, "before": CLI_CODE}
         commands = {
-            "pre-decimated": [sys.executable, "-c", CLI_CODE, "identify", str(layout), "--records", str(record),
-                              "--json", str(out["pre-decimated"])],
-            "whole": [sys.executable, "-c", WHOLE_CODE, "identify", str(layout), "--records", str(record),
-                      "--json", str(out["whole"])],
+            name: [sys.executable, "-c", codes[name], "identify", str(layout), "--records", str(record),
+                   "--json", str(out[name])]
+            for name in names
         }  # fmt: skip
         runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
         for _ in range(args.repeat):
             for name, cmd in commands.items():
-                runs[name].append(_run_peak(cmd, folder))
+                runs[name].append(_run_peak(cmd, folder, srcs[name]))
         print(f"\n{channels} channels x {samples} samples ({record.name}); medians of {args.repeat} interleaved runs")
         print(f"{'route':<16} {'wall s':>7} {'peak MB':>8}  CG (m), its std, normalised cost")
         for name, values in runs.items():

@@ -10,6 +10,7 @@ import pytest
 
 from .conftest import SAMPLES
 from .test_cli import run
+from .tolerances import STREAMED_DECAY_ATOL, STREAMED_REFIT_REL
 
 FOUR = SAMPLES / "four-mounts"
 
@@ -95,11 +96,73 @@ def long_records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     return paths
 
 
-def test_the_refit_reads_long_records_pre_decimated_with_the_same_answer(
+def test_the_refit_data_read_in_row_blocks_equal_the_whole_records(
     long_records: list[Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """identify --records (refit) holds the records pre-decimated, not raw (issue 14): the answer within a tenth
-    of its standard error of the raw records' refit, the impacts in the files' rows."""
+    """The second pass (io/refit_records) builds the refit's decays and noise levels the whole records give."""
+    from rigidid import api
+    from rigidid.core.timedomain import refine
+    from rigidid.core.timedomain.preprocess import find_impact
+    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+
+    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # the fit decimates (q > 1) and cuts the decays
+    layout = api.load_layout(FOUR / "layout.json")
+    ids = [s.id for s in layout.sensors]
+    raw = api.load_records(long_records, layout)
+    _, estimate = api.estimate_rigid_modes(layout, long_records)  # streamed: impacts in the files' rows
+    dt = raw[0][1]
+    exact = [find_impact(r, dt) for r, _ in raw]
+    assert [i.onset for i in estimate.impacts] != [i.onset for i in exact]  # only as fine as the pre-factor
+    reach = 22 * estimate.decimation + 52
+    located = locate_impacts(long_records, ids, dt, estimate.impacts, reach)
+    assert located == exact
+    assert locate_impacts(long_records, ids, dt, estimate.impacts, 5) is None  # rows held too few to prove it
+    starts, onsets = [i.start for i in exact], [i.onset for i in exact]
+    whole = refine.prepare_decays([r for r, _ in raw], dt, starts, onsets, estimate.decimation)
+    streamed = read_prepared_decays(long_records, ids, dt, starts=starts, onsets=onsets, factor=estimate.decimation)
+    assert round(whole.dt / dt) > 1 and whole.dt == streamed.dt and whole.noise_from == streamed.noise_from
+    lengths = [r.shape[0] - s for (r, _), s in zip(raw, starts, strict=True)]
+    assert sum(d.size for d in whole.decays) <= 40_000 < sum(lengths) * len(ids)
+    assert [d.shape for d in whole.decays] == [d.shape for d in streamed.decays]
+    for a, b in zip(whole.decays, streamed.decays, strict=True):
+        np.testing.assert_allclose(b, a, rtol=0.0, atol=STREAMED_DECAY_ATOL * np.abs(a).max())
+    np.testing.assert_allclose(streamed.sigma, whole.sigma, rtol=STREAMED_DECAY_ATOL)
+
+
+def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
+    long_records: list[Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """api.refine_records above its threshold (lowered here) never holds the raw records: the same body."""
+    from rigidid import api
+    from rigidid.core.timedomain import refine
+
+    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    layout = api.load_layout(FOUR / "layout.json")
+    modes, estimate = api.estimate_rigid_modes(layout, long_records)
+    start = api.identify(layout, modes)
+    whole = api.refine_records(start, long_records, layout, estimate, stream_above=10**12)
+    real = api.load_records
+
+    def refuse(*_: object, **__: object) -> None:
+        raise AssertionError("records loaded whole")
+
+    monkeypatch.setattr(api, "load_records", refuse)
+    streamed = api.refine_records(start, long_records, layout, estimate, stream_above=0)
+    monkeypatch.setattr(api, "load_records", real)
+    assert whole.record_bound is not None and streamed.record_bound is not None
+    for name in ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass"):
+        a, b = getattr(whole.identification, name), getattr(streamed.identification, name)
+        np.testing.assert_allclose(b, a, rtol=0.0, atol=STREAMED_REFIT_REL * np.abs(a).max())
+    np.testing.assert_allclose(
+        streamed.record_bound.center_of_gravity.std, whole.record_bound.center_of_gravity.std, rtol=STREAMED_REFIT_REL
+    )
+
+
+def test_identify_records_refits_from_the_files_read_in_row_blocks(
+    long_records: list[Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """identify --records (default refit) reads long record files twice in row blocks, never whole (issue 14):
+    the JSON keys of the whole read, the impacts in the files' rows."""
     from typer.testing import CliRunner
 
     from rigidid import api
@@ -107,33 +170,106 @@ def test_the_refit_reads_long_records_pre_decimated_with_the_same_answer(
     from rigidid.core.timedomain import refine
 
     monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
+    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 10**12)
+    whole = CliRunner().invoke(app, args)
+    assert whole.exit_code == 0, whole.output
+    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+
+    def refuse(*_: object, **__: object) -> None:
+        raise AssertionError("records loaded whole")
+
+    monkeypatch.setattr(api, "load_records", refuse)
+    out = CliRunner().invoke(app, args)
+    assert out.exit_code == 0, out.output
+    data, expected = json.loads(out.stdout), json.loads(whole.stdout)
+    assert sorted(data) == sorted(expected)
+    assert sorted(data["uncertainty_records_crb"]) == sorted(expected["uncertainty_records_crb"])
+    crb, crb_whole = data["uncertainty_records_crb"], expected["uncertainty_records_crb"]
+    assert crb["noise_from"] == "pretrigger" and 0.5 < crb["normalised_cost"] < 2.0
+    assert crb["normalised_cost"] == pytest.approx(crb_whole["normalised_cost"], rel=STREAMED_REFIT_REL)
+    np.testing.assert_allclose(data["center_of_gravity"], expected["center_of_gravity"], rtol=STREAMED_REFIT_REL)
+    factor = data["modal_estimation"]["decimation"]
+    for impact in data["modal_estimation"]["impacts"]:  # file rows: 0.1 s (1000 rows) in, as fine as the factor
+        assert 990 <= impact["onset"] <= 1000 + factor and impact["start"] > impact["peak"] >= impact["onset"]
+
+
+def test_the_report_spectrum_of_files_read_in_row_blocks_is_the_whole_records(long_records: list[Path]) -> None:
+    """The report's summed spectrum streamed (io/streamed_spectrum) equals summed_spectrum of the whole records."""
+    from rigidid import api
+    from rigidid.core.spectrum import summed_spectrum
+
     layout = api.load_layout(FOUR / "layout.json")
     raw = api.load_records(long_records, layout)
-    modes, estimate = api.estimate_rigid_modes(layout, raw)
-    whole = api.with_refinement(api.identify(layout, modes), raw, estimate)
-    assert whole.record_bound is not None
+    freq, power = summed_spectrum([r for r, _ in raw], raw[0][1])
+    got = api.records_spectrum(long_records, layout)
+    assert got is not None
+    np.testing.assert_array_equal(got[0], freq)
+    np.testing.assert_allclose(got[1], power, rtol=0.0, atol=STREAMED_DECAY_ATOL * power.max())
 
-    read: list[int] = []
-    real = api.load_records_decimated
 
-    def spy(*args: object, **kwargs: object) -> api.DecimatedRecords:
+def test_report_records_never_holds_the_raw_records(
+    long_records: list[Path], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """report --records (default refit) reads long record files in row blocks only, spectrum figure included."""
+    from typer.testing import CliRunner
+
+    from rigidid import api
+    from rigidid.cli import app
+    from rigidid.core.timedomain import refine
+
+    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    seen: list[int] = []
+    real = api.records_spectrum
+
+    def spy(*args: object, **kwargs: object) -> object:
         got = real(*args, **kwargs)  # type: ignore[arg-type]
-        read.append(got.factor)
+        assert got is not None
+        seen.append(got[1].size)
         return got
 
-    monkeypatch.setattr(api, "load_records_decimated", spy)
-    out = CliRunner().invoke(app, ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records),
-                                   "--json", "-"])  # fmt: skip
+    def refuse(*_: object, **__: object) -> None:
+        raise AssertionError("records loaded whole")
+
+    drawn: list[object] = []
+    real_report = api.report
+
+    def report(*args: object, **kwargs: object) -> str:
+        drawn.append(kwargs.get("spectrum"))
+        return real_report(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(api, "records_spectrum", spy)
+    monkeypatch.setattr(api, "report", report)
+    monkeypatch.setattr(api, "load_records", refuse)
+    out = CliRunner().invoke(app, ["report", str(FOUR / "layout.json"), "--records", *map(str, long_records),
+                                   "-o", str(tmp_path / "r.html")])  # fmt: skip
     assert out.exit_code == 0, out.output
-    assert read and read[0] > 1  # pre-decimated while read
-    data = json.loads(out.stdout)
-    crb = data["uncertainty_records_crb"]
-    # the pre-trigger noise level right after two filters: without the guard before the onset, 0.92 here
-    assert 0.95 < crb["normalised_cost"] < 1.1
-    std = np.array(crb["center_of_gravity"]["std"])
-    np.testing.assert_allclose(std, whole.record_bound.center_of_gravity.std, rtol=0.15)
-    assert np.all(np.abs(np.subtract(data["center_of_gravity"], whole.identification.center_of_gravity)) < 0.5 * std)
-    estimation = data["modal_estimation"]
-    assert estimation["decimation"] % read[0] == 0
-    for impact in estimation["impacts"]:  # file rows: the impacts come 0.1 s (1000 rows) into each record
-        assert 990 <= impact["onset"] <= 1010 and impact["start"] > impact["peak"] >= impact["onset"]
+    assert seen == [2049]  # one streamed spectrum, the one the report draws
+    assert len(drawn) == 1 and drawn[0] is not None and len(drawn[0]) == 2  # type: ignore[arg-type]
+    assert (tmp_path / "r.html").stat().st_size > 0
+
+
+def test_the_row_block_passes_read_csv_records_as_npy(long_records: list[Path], tmp_path: Path) -> None:
+    """A CSV record (rows only estimated from its size) gives the row-block passes the .npy's numbers."""
+    from rigidid import api
+    from rigidid.core.timedomain import Impact
+    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+
+    layout = api.load_layout(FOUR / "layout.json")
+    ids = [s.id for s in layout.sensors]
+    data = np.load(long_records[0])
+    csv = tmp_path / "hit1.csv"
+    np.savetxt(csv, data, delimiter=",", header=",".join(["time", *ids]), comments="", fmt="%.17g")
+    dt, near = 1e-4, [Impact(1000, 1028, 1336)]  # as a decimation by 28 put it
+    found = [locate_impacts([p], ids, dt, near, 700) for p in (long_records[0], csv)]
+    assert found[0] == found[1] and found[0] is not None and found[0][0].onset == 1000
+    impact = found[0][0]
+    a, b = (read_prepared_decays([p], ids, dt, starts=[impact.start], onsets=[impact.onset], factor=9)
+            for p in (long_records[0], csv))  # fmt: skip
+    assert a.dt == b.dt and a.noise_from == b.noise_from == "pretrigger"
+    np.testing.assert_array_equal(a.decays[0], b.decays[0])
+    np.testing.assert_array_equal(a.sigma, b.sigma)
+    spectra = [api.records_spectrum([p], layout) for p in (long_records[0], csv)]
+    assert spectra[0] is not None and spectra[1] is not None
+    np.testing.assert_allclose(spectra[1][1], spectra[0][1], rtol=0.0, atol=STREAMED_DECAY_ATOL * spectra[0][1].max())

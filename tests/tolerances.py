@@ -198,3 +198,8 @@ second stage's Nyquist frequency with q2 = 4: the filter's own response there, 4
 PRESUM_ALIAS_DB = 45.0
 """Attenuation (dB) the presum gives a tone that would fold onto the edge of the band the second stage
 keeps (q2 = 4): the response's own value, 47.5 dB at q1 = 3 and 51 dB for large q1."""
+
+# identify --records read in row blocks for the refit (issue 14, tests/test_cli_refine.py): the decays and
+# noise levels against the whole records' (relative to the largest sample), and the refitted body
+STREAMED_DECAY_ATOL = 1e-12
+STREAMED_REFIT_REL = 1e-9

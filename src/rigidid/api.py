@@ -1228,6 +1228,7 @@ def report(
     body: BodyFile | None = None,
     records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
     progress: ProgressCallback | None = None,
+    spectrum: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> str:
     """A self-contained HTML report of an identification (tables and pictures).
 
@@ -1250,6 +1251,9 @@ def report(
         The impact records, whose summed spectrum goes behind the stabilisation diagram.
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
+    spectrum : (ndarray, ndarray), optional
+        That summed spectrum computed already (frequency in Hz, power), e.g. from record files read in row
+        blocks (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); used instead of `records`.
 
     Returns
     -------
@@ -1258,11 +1262,13 @@ def report(
     """
     from rigidid.reporting import render_report
 
-    stiffness, spectrum = None, None
+    stiffness = None
     if body is not None:
         mounts = [m.position for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
-    if records and stabilisation is not None:
+    if stabilisation is None:
+        spectrum = None
+    elif spectrum is None and records:
         spectrum = _spectrum(records)
     identified, roll = _report_mounts(result, force_unit)
     return render_report(
@@ -1310,6 +1316,7 @@ def report_pngs(
     body: BodyFile | None = None,
     records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
     progress: ProgressCallback | None = None,
+    spectrum: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> list[Path]:
     """The figures of :func:`report` as PNG files in `directory` (see :func:`rigidid.reporting.save_pngs`).
 
@@ -1339,7 +1346,7 @@ def report_pngs(
         stabilisation=stabilisation,
         mode_labels=result.modes_used,
         mount_labels=labels,
-        spectrum=_spectrum(records) if records and stabilisation is not None else None,
+        spectrum=None if stabilisation is None else spectrum or (_spectrum(records) if records else None),
         progress=progress,
         roll_axis=None if roll is None else roll["direction"],
     )
@@ -1712,7 +1719,7 @@ def with_refinement(
     """
     import warnings
 
-    from rigidid.core.timedomain.refine import good_fit, record_bound, refine_body
+    from rigidid.core.timedomain.refine import refine_body
     from rigidid.errors import RefinementWarning
 
     ident = result.identification
@@ -1752,6 +1759,17 @@ def with_refinement(
     finally:
         if progress is not None:
             progress("refit", 1, 1)
+    return _accept_refinement(result, refinement)
+
+
+def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResult:
+    """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
+    import warnings
+
+    from rigidid.core.timedomain.refine import good_fit, record_bound
+    from rigidid.errors import RefinementWarning
+
+    ident = result.identification
     if not good_fit(refinement):
         warnings.warn(
             f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
@@ -1769,3 +1787,161 @@ def with_refinement(
         damping_per_mass=refinement.damping_per_mass,
     )
     return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+
+
+STREAM_REFIT_VALUES = 16 * 150_000
+"""Raw values (samples x sensors, all records) above which :func:`refine_records` reads
+the record files in row blocks instead of whole (16 times the refit's row budget)."""
+
+
+def refine_records(
+    result: IdentifyResult,
+    paths: Sequence[PathLike],
+    layout: LayoutFile | PathLike,
+    estimate: ModalEstimate,
+    *,
+    progress: ProgressCallback | None = None,
+    stream_above: int | None = None,
+) -> IdentifyResult:
+    """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The structured identification from the records' estimated modes.
+    paths : sequence of path-like
+        The record files `estimate` came from (one per impact).
+    layout : LayoutFile or path-like
+        The sensors.
+    estimate : ModalEstimate
+        The modal estimate, its impacts in the files' rows and its total
+        decimation (as :func:`estimate_modes` gives for record files).
+    progress : ProgressCallback, optional
+        Reading and ``("refit", done, total)``.
+    stream_above : int, optional
+        Records of more raw values than this (default :data:`STREAM_REFIT_VALUES`) (samples x sensors, all files,
+        as their headers or sizes tell) are read in row blocks
+        (:func:`rigidid.io.refit_records.read_prepared_decays`: the pre-trigger
+        statistics and the decays at the fit's rate, nothing else held);
+        smaller ones are read whole.
+
+    Returns
+    -------
+    IdentifyResult
+        As :func:`with_refinement`: the same answer whichever way the files
+        were read (to the order of floating-point sums).
+
+    Notes
+    -----
+    The impacts are located again on the raw records
+    (:func:`~rigidid.core.timedomain.preprocess.find_impact`, as an estimation
+    on the whole records would: `estimate`'s, from records decimated while
+    read, are only as fine as that factor), by one more pass in row blocks
+    (:func:`rigidid.io.refit_records.locate_impacts`) holding the rows around
+    `estimate`'s impacts. The records are read whole when that pass cannot
+    prove its impacts, and when `result` leaves out a mode of `estimate` (an
+    elastic one, subtracted from the raw records). The refit's decimation is
+    the smallest up to `estimate`'s factor that fits its row budget, so it may
+    differ from a whole-record estimation's when that budget binds.
+    """
+    import warnings
+
+    from rigidid.core.timedomain.refine import refine_prepared
+    from rigidid.errors import RefinementWarning
+    from rigidid.io.records import layout_ids
+    from rigidid.io.refit_records import _source
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    ids = [s.id for s in lay.sensors]
+    unused = any(k + 1 not in result.modes_used for k in range(estimate.poles.size))
+    size = 0
+    if not unused:
+        size = sum(_source(Path(p), layout_ids(ids, str(p)), None).rows for p in paths) * len(ids)
+    dt = estimate.sample_interval / max(1, estimate.decimation)
+    impacts = None
+    if not unused and size > (STREAM_REFIT_VALUES if stream_above is None else stream_above):
+        from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
+        from rigidid.io.refit_records import locate_impacts
+
+        reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
+        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress)
+    if impacts is None:  # read whole; the impacts where the raw records put them (as their estimation would)
+        from rigidid.core.timedomain.preprocess import find_impact
+
+        raw = load_records(paths, lay)
+        found = tuple(find_impact(data, step) for data, step in raw)
+        return with_refinement(result, raw, replace(estimate, impacts=found), progress=progress)
+    estimate = replace(estimate, impacts=tuple(impacts))
+    from rigidid.io.refit_records import read_prepared_decays
+
+    ident = result.identification
+    if progress is not None:
+        progress("refit", 0, 1)
+    try:
+        data = read_prepared_decays(
+            paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
+            factor=estimate.decimation, progress=progress,
+        )  # fmt: skip
+        refinement = refine_prepared(
+            data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
+            inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
+            damping_per_mass=ident.damping_per_mass,
+        )  # fmt: skip
+    except (np.linalg.LinAlgError, InputError, ValueError) as exc:
+        warnings.warn(
+            f"refinement on the records failed ({exc}); kept the answer from the modes" + _suspect_mode(ident),
+            RefinementWarning,
+            stacklevel=2,
+        )
+        return result
+    finally:
+        if progress is not None:
+            progress("refit", 1, 1)
+    return _accept_refinement(result, refinement)
+
+
+def records_spectrum(
+    paths: Sequence[PathLike], layout: LayoutFile | PathLike, *, progress: ProgressCallback | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The report's summed spectrum of record files (:func:`report`'s `spectrum`), read in row blocks.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        The record files (one per impact), checked already (read by the estimation).
+    layout : LayoutFile or path-like
+        The sensors.
+    progress : ProgressCallback, optional
+        Reading progress.
+
+    Returns
+    -------
+    (ndarray, ndarray) or None
+        Frequency (Hz) and summed power spectral density, as
+        :func:`rigidid.core.spectrum.summed_spectrum` gives on the whole records
+        (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); the
+        records read whole when one is shorter than a Welch segment (4096 rows).
+    """
+    from rigidid.io.records import layout_ids
+    from rigidid.io.refit_records import _source
+    from rigidid.io.streamed_spectrum import summed_spectrum_streamed
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    ids = [s.id for s in lay.sensors]
+    sources = [_source(Path(p), layout_ids(ids, str(p)), None) for p in paths]
+    if not sources:
+        return None
+    if min(s.rows for s in sources) < 2 * 4096:  # short records (rows told by the header or the size): read whole
+        del sources
+        return _spectrum(load_records(paths, lay))
+    dt = _source_dt(sources[0])
+    del sources
+    return summed_spectrum_streamed(paths, ids, dt, progress=progress)
+
+
+def _source_dt(source: Any) -> float:
+    """The sample interval of a row-block source: its own, or from the first block's time column."""
+    if source.dt:
+        return float(source.dt)
+    t, _ = next(iter(source.blocks))
+    return float(t[1] - t[0])

@@ -508,7 +508,8 @@ def _identify(
 ) -> tuple[IdentifyResult, ModalEstimate | None]:
     """Load the test, estimate its modes from records if asked, identify: what identify and report share.
 
-    With `keep`, its ``"records"`` entry receives the records read (for the report's spectrum).
+    With `keep`, its ``"records"`` entry receives the records read, or its ``"spectrum"`` entry the summed spectrum
+    of record files read in row blocks (for the report's spectrum).
     """
     from rigidid import api
     from rigidid.core.identify import METHODS
@@ -523,8 +524,10 @@ def _identify(
     src = _source(layout, inputs)
     # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
     # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
-    raw_needed = keep is not None or resample > 0 or (refine and method == "structured")
+    raw_needed = resample > 0
     files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
+    # the refit reads the files again in row blocks (api.refine_records), the report's spectrum too
+    # (api.records_spectrum): the same answers, memory bounded
     streamed = files_in and not raw_needed
     # the refit alone fits decays it decimates itself: the records are read pre-decimated, as many values
     # as it can use kept (four times its row budget), so memory does not grow with their length
@@ -544,7 +547,7 @@ def _identify(
         data = api.TestData(lay, None, decimated.records, [str(p) for p in inputs or []])
     else:
         data = _test_data(layout, inputs or [], records, units, geometry)
-    if keep is not None:
+    if keep is not None and not streamed:
         keep["records"] = data.records
     if resample and data.records:  # before any estimation: blame the option, not the records
         shortest = min(values.shape[0] for values, _ in data.records)
@@ -567,6 +570,9 @@ def _identify(
             else (data.modes, None)
         )  # fmt: skip
     assert modes is not None
+    if keep is not None and paths:  # after the estimation, which checked the files
+        with _naming(src):
+            keep["spectrum"], keep["records"] = api.records_spectrum(paths, data.layout), None
     from rigidid.progress import terminal_progress
 
     with _naming(src), terminal_progress() as progress:
@@ -584,11 +590,14 @@ def _identify(
         )
     if refine and estimate is not None and method == "structured":
         with _naming(src), terminal_progress() as progress, _noted(notes, RefinementWarning):
-            result = api.with_refinement(
-                result, data.records, estimate, progress=progress,
-                prefactor=decimated.factor if decimated is not None else 1,
-                guard=decimated.settle if decimated is not None else 0,
-            )  # fmt: skip
+            if paths is not None:
+                result = api.refine_records(result, paths, data.layout, estimate, progress=progress)
+            else:
+                result = api.with_refinement(
+                    result, data.records, estimate, progress=progress,
+                    prefactor=decimated.factor if decimated is not None else 1,
+                    guard=decimated.settle if decimated is not None else 0,
+                )  # fmt: skip
     if decimated is not None and estimate is not None:
         estimate = decimated.in_file_rows(estimate)  # the total factor, impacts in the files' rows
     result = api.with_warnings(result, notes)
@@ -1167,6 +1176,7 @@ def report(
             text = api.report(
                 result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
                 force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
+                spectrum=kept.get("spectrum"),
             )  # fmt: skip
         paths: list[Any] = []
         with OutputSet() as outs:  # every output or none
@@ -1176,7 +1186,7 @@ def report(
                 with terminal_progress() as progress:
                     paths = api.report_pngs(
                         result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
-                        records=kept.get("records"), progress=progress,
+                        records=kept.get("records"), progress=progress, spectrum=kept.get("spectrum"),
                     )  # fmt: skip
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:

@@ -32,11 +32,17 @@ from rigidid.errors import InputError
 __all__ = [
     "MAX_ROWS",
     "N_PARAMETERS",
+    "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "cut_decays",
+    "fit_factor",
     "good_fit",
+    "prepare_decays",
+    "pretrigger_sigma",
     "record_bound",
     "refine_body",
+    "refine_prepared",
 ]
 
 Array = NDArray[np.float64]
@@ -254,14 +260,83 @@ def _modes(theta: Array, pos: Array, dirs: Array, with_derivatives: bool) -> tup
 
 
 @dataclass(frozen=True)
-class _Data:
-    decays: list[Array]  # (n_i, p), weighted (divided by sigma)
+class PreparedDecays:
+    """What the refit fits: the decays at the fit's rate and each channel's noise level.
+
+    Attributes
+    ----------
+    decays : list of ndarray, shape (n_i, p)
+        Per impact, the free decay from its start, decimated by the fit's
+        factor (:func:`fit_factor`) and cut to :data:`MAX_ROWS` values in all.
+    sigma : ndarray, shape (p,)
+        Noise level of each channel at the fit's rate (ones when unknown).
+    dt : float
+        Sample interval of `decays` (s).
+    noise_from : {"pretrigger", "residual"}
+        Where `sigma` comes from ("residual": the refit measures it).
+    """
+
+    decays: list[Array]  # (n_i, p)
     sigma: Array  # (p,) noise level of each channel in the decays fitted
     dt: float
     noise_from: str
 
 
-def _prepare(
+_Data = PreparedDecays
+
+
+def pretrigger_sigma(
+    counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int, prefactor: int = 1
+) -> tuple[Array, str]:
+    """Each channel's noise level at the fit's rate from the pre-trigger statistics.
+
+    Parameters
+    ----------
+    counts : sequence of int
+        Pre-trigger samples of each record.
+    squares : sequence of ndarray, shape (p,)
+        Per record, the sum of squared deviations from its own mean, per channel.
+    n_records : int
+        Number of records (at least :data:`_MIN_PRETRIGGER` samples each, on average, are needed).
+    factor, prefactor : int
+        The fit's decimation and the one the records had before
+        (:func:`~rigidid.core.timedomain.preprocess.noise_gain`).
+
+    Returns
+    -------
+    sigma : ndarray, shape (p,)
+    noise_from : {"pretrigger", "residual"}
+        "residual" (and ones) when the pre-trigger is too short or silent.
+    """
+    p = squares[0].shape[0] if len(squares) else 0
+    if sum(counts) >= _MIN_PRETRIGGER * n_records:
+        used = [(n, m2) for n, m2 in zip(counts, squares, strict=True) if n > 1]
+        s = np.sqrt(sum(m2 for _, m2 in used) / sum(n for n, _ in used))
+        if factor > 1:
+            s = s * math.sqrt(noise_gain(factor, prefactor))
+        if np.all(s > 0.0):
+            return s, "pretrigger"
+    return np.ones(p), "residual"
+
+
+def cut_decays(decays: list[Array], p: int) -> list[Array]:
+    """`decays` cut to :data:`MAX_ROWS` values in all (the same rows of each); too short ones refused.
+
+    Raises
+    ------
+    InputError
+        A decay shorter than ``4 FIR_HALF_LENGTH`` samples.
+    """
+    total = sum(d.shape[0] for d in decays) * p
+    if total > MAX_ROWS:
+        keep = MAX_ROWS // (p * len(decays))
+        decays = [d[:keep] for d in decays]
+    if min(d.shape[0] for d in decays) < 4 * FIR_HALF_LENGTH:
+        raise InputError("records too short for the refinement")
+    return decays
+
+
+def prepare_decays(
     records: Sequence[Array],
     dt: float,
     starts: Sequence[int],
@@ -269,35 +344,52 @@ def _prepare(
     factor: int,
     prefactor: int = 1,
     guard: int = 0,
-) -> _Data:
+) -> PreparedDecays:
+    """The refit's data from whole records (:func:`refine_body`'s first step).
+
+    Parameters
+    ----------
+    records : sequence of ndarray, shape (n_i, p)
+        The records, samples by sensors.
+    dt : float
+        Sample interval (s).
+    starts, onsets : sequence of int
+        Per record, the first sample of the free decay and of the impact.
+    factor : int
+        The modal estimate's decimation: the fit's is the smallest up to it
+        whose decays fit :data:`MAX_ROWS` (:func:`fit_factor`).
+    prefactor, guard : int
+        As for :func:`refine_body`.
+
+    Returns
+    -------
+    PreparedDecays
+
+    Notes
+    -----
+    The pre-trigger is ``r[:onset - 2 - guard]``; its level per channel is the
+    RMS about each record's mean, scaled by the fit filter's noise gain
+    (:func:`pretrigger_sigma`). :mod:`rigidid.io.refit_records` builds the same
+    from record files read in row blocks.
+    """
     p = records[0].shape[1]
     pre = [r[: max(0, o - 2 - guard)] for r, o in zip(records, onsets, strict=True)]
-    n_pre = sum(x.shape[0] for x in pre)
-    factor = _fit_factor([r.shape[0] - s for r, s in zip(records, starts, strict=True)], p, factor)
+    factor = fit_factor([r.shape[0] - s for r, s in zip(records, starts, strict=True)], p, factor)
     decays = []
     for rec, start in zip(records, starts, strict=True):
         d = rec[start:]
         d = decimate(d, factor) if factor > 1 else d
         decays.append(np.asarray(d, dtype=float))
-    total = sum(d.shape[0] for d in decays) * p
-    if total > MAX_ROWS:
-        keep = MAX_ROWS // (p * len(decays))
-        decays = [d[:keep] for d in decays]
-    if min(d.shape[0] for d in decays) < 4 * FIR_HALF_LENGTH:
-        raise InputError("records too short for the refinement")
-    noise_from = "residual"
-    sigma = np.ones(p)
-    if n_pre >= _MIN_PRETRIGGER * len(records):
-        stacked = np.vstack([x - x.mean(axis=0) for x in pre if x.shape[0] > 1])
-        s = np.sqrt(np.mean(stacked**2, axis=0))
-        if factor > 1:
-            s = s * math.sqrt(noise_gain(factor, prefactor))
-        if np.all(s > 0.0):
-            sigma, noise_from = s, "pretrigger"
-    return _Data(decays, sigma, dt * factor, noise_from)
+    decays = cut_decays(decays, p)
+    squares = [((x - x.mean(axis=0)) ** 2).sum(axis=0) if x.shape[0] > 1 else np.zeros(p) for x in pre]
+    sigma, noise_from = pretrigger_sigma([x.shape[0] for x in pre], squares, len(records), factor, prefactor)
+    return PreparedDecays(decays, sigma, dt * factor, noise_from)
 
 
-def _fit_factor(lengths: Sequence[int], p: int, factor: int) -> int:
+_prepare = prepare_decays
+
+
+def fit_factor(lengths: Sequence[int], p: int, factor: int) -> int:
     """The smallest decimation factor up to `factor` whose decays fit :data:`MAX_ROWS`.
 
     Decimation keeps the band, but its filter loses ``FIR_HALF_LENGTH q`` samples at the
@@ -309,6 +401,9 @@ def _fit_factor(lengths: Sequence[int], p: int, factor: int) -> int:
         if sum(n // q for n in lengths) * p <= MAX_ROWS:
             return q
     return max(1, factor)
+
+
+_fit_factor = fit_factor
 
 
 # --- variable projection ----------------------------------------------------------------
@@ -575,6 +670,51 @@ def refine_body(
     above 1 exposes (the caller falls back).
     """
     recs = [np.asarray(r, dtype=float) for r in records]
+    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)), max(1, int(prefactor)), int(guard))
+    del recs
+    return refine_prepared(
+        data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
+        stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
+    )  # fmt: skip
+
+
+def refine_prepared(
+    data: PreparedDecays,
+    dt: float,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    *,
+    center_of_gravity: ArrayLike,
+    inertia_per_mass: ArrayLike,
+    stiffness_per_mass: ArrayLike,
+    damping_per_mass: ArrayLike,
+    max_evaluations: int = 240,
+) -> Refinement:
+    """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
+
+    Parameters
+    ----------
+    data : PreparedDecays
+        The decays at the fit's rate and the channels' noise levels.
+    dt : float
+        Sample interval of the records the decays came from (s): the fit's
+        factor is ``data.dt / dt``.
+    positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
+        As for :func:`refine_body`.
+
+    Returns
+    -------
+    Refinement
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the start has not six underdamped modes.
+
+    Notes
+    -----
+    The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
+    """
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -591,7 +731,6 @@ def refine_body(
         np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
         np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
     )  # fmt: skip
-    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)), max(1, int(prefactor)), int(guard))
     if data.noise_from == "residual":
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
         per = r0.reshape(-1, pos.shape[0])
@@ -615,8 +754,8 @@ def refine_body(
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
-    fit_factor = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], fit_factor)
+    q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit)
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
