@@ -887,87 +887,6 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
     return TestData(layout, modes, records, list(contents.record_labels))
 
 
-@dataclass(frozen=True)
-class DecimatedRecords:
-    """Records read block by block and decimated while read, ready for the array routes.
-
-    Attributes
-    ----------
-    records : list of (ndarray, float)
-        Each record at ``factor`` times the file's sample interval (samples x
-        sensors in layout order, and that interval).
-    factor : int
-        The decimation applied while reading (1: the records as read).
-    offsets : list of int
-        File row (from 0) of each record's first sample; sample ``k`` is
-        file row ``offset + k factor``.
-    settle : int
-        What the estimation drops after each impact (``settle`` of
-        :func:`estimate_modes`): the anti-alias filter's reach when the
-        records were decimated, else 0.
-    """
-
-    records: list[tuple[NDArray[np.float64], float]]
-    factor: int
-    offsets: list[int]
-    settle: int
-
-    def in_file_rows(self, estimate: ModalEstimate) -> ModalEstimate:
-        """`estimate` (of these records) with its total decimation and its impacts in the files' rows."""
-        from rigidid.core.timedomain import Impact
-
-        if self.factor == 1:
-            return estimate
-        impacts = tuple(
-            Impact(*(offset + k * self.factor for k in (i.onset, i.peak, i.start)))
-            for offset, i in zip(self.offsets, estimate.impacts, strict=False)
-        )
-        return replace(estimate, decimation=estimate.decimation * self.factor, impacts=impacts)
-
-
-def load_records_decimated(
-    paths: Sequence[PathLike],
-    layout: LayoutFile | PathLike,
-    *,
-    keep_values: int,
-    progress: ProgressCallback | None = None,
-) -> DecimatedRecords:
-    """Record files read block by block and pre-decimated as they arrive, for a route that needs arrays.
-
-    The pre-factor is the one ``rigidid modes`` chooses from the head of the
-    first record (a quarter or less of what its content allows,
-    :mod:`rigidid.io.streamed_records`), capped so the records keep at least
-    `keep_values` values (samples x sensors, all records together): memory
-    is the decimated records, not the raw ones.
-
-    Parameters
-    ----------
-    paths : sequence of path-like
-        One record file per impact.
-    layout : LayoutFile or path-like
-        The sensors.
-    keep_values : int
-        Values the decimated records hold at least (the refit's row budget
-        times a margin, so it still chooses its own factor).
-    progress : ProgressCallback, optional
-        Reading progress.
-
-    Returns
-    -------
-    DecimatedRecords
-    """
-    from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
-    from rigidid.io.streamed_records import read_records_streamed
-
-    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
-    ids = [s.id for s in lay.sensors]
-    keep_rows = max(1, keep_values // (len(ids) * max(1, len(paths))))
-    streamed, _ = read_records_streamed(paths, ids, None, None, progress, cascade=False, keep_rows=keep_rows)
-    factor = streamed[0].factor
-    records = [(r.data, r.dt) for r in streamed]
-    return DecimatedRecords(records, factor, [r.offset for r in streamed], FIR_HALF_LENGTH if factor > 1 else 0)
-
-
 def estimate_modes(
     layout: LayoutFile | PathLike,
     records: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]],
@@ -978,7 +897,6 @@ def estimate_modes(
     max_order: int | None = None,
     decimate: int | None = None,
     progress: ProgressCallback | None = None,
-    settle: int = 0,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modal parameters from impact records (the paper's time-domain step).
 
@@ -1002,10 +920,6 @@ def estimate_modes(
         Decimation factor (default chosen from the records' spectrum).
     progress : ProgressCallback, optional
         Progress of the decimation and the model-order sweep.
-    settle : int
-        Samples dropped after each impact's free-decay start, for arrays
-        decimated before they were trimmed (:func:`load_records_decimated`:
-        its ``settle``).
 
     Returns
     -------
@@ -1051,7 +965,6 @@ def estimate_modes(
         max_order=max_order,
         decimate=decimate,
         progress=progress,
-        settle=settle,
     )
     ids = tuple(s.id for s in lay.sensors)
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
@@ -1067,7 +980,6 @@ def estimate_rigid_modes(
     max_order: int | None = None,
     decimate: int | None = None,
     progress: ProgressCallback | None = None,
-    settle: int = 0,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Six modes from the records, or seven when one of the six looks elastic.
 
@@ -1082,7 +994,7 @@ def estimate_rigid_modes(
 
     Parameters
     ----------
-    layout, records, method, band, max_order, decimate, progress, settle
+    layout, records, method, band, max_order, decimate, progress
         As for :func:`estimate_modes`.
 
     Returns
@@ -1107,8 +1019,7 @@ def estimate_rigid_modes(
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
-        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress,
-        "settle": settle,
+        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
     }  # fmt: skip
     table, estimate = estimate_modes(lay, records, n_modes=6, **options)
     _, positions, directions = files.layout_arrays(lay)
@@ -1682,8 +1593,6 @@ def with_refinement(
     estimate: ModalEstimate,
     *,
     progress: ProgressCallback | None = None,
-    prefactor: int = 1,
-    guard: int = 0,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -1697,10 +1606,6 @@ def with_refinement(
         The modal estimate the modes came from (impacts found, decimation).
     progress : ProgressCallback, optional
         Called with ``("refit", done, total)``.
-    prefactor, guard : int
-        For records decimated while read (:func:`load_records_decimated`):
-        their factor and ``settle`` (see
-        :func:`~rigidid.core.timedomain.refine.refine_body`).
 
     Returns
     -------
@@ -1746,8 +1651,6 @@ def with_refinement(
             inertia_per_mass=ident.inertia_per_mass,
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
-            prefactor=prefactor,
-            guard=guard,
         )
     except (np.linalg.LinAlgError, InputError, ValueError) as exc:
         warnings.warn(

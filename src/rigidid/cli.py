@@ -449,7 +449,6 @@ def _estimate(
     source: str | None = None,
     paths: list[Path] | None = None,
     rigid_six: bool = False,
-    settle: int = 0,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modes from the records; with `rigid_six`, seven when one of six looks elastic (identify picks six)."""
     from rigidid import api
@@ -464,11 +463,11 @@ def _estimate(
         if rigid_six and n_modes == 6:
             return api.estimate_rigid_modes(
                 data.layout, paths or data.records, method=method, band=band, max_order=max_order,
-                decimate=decimate, progress=progress, settle=settle,
+                decimate=decimate, progress=progress,
             )  # fmt: skip
         return api.estimate_modes(
             data.layout, paths or data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
-            decimate=decimate, progress=progress, settle=settle,
+            decimate=decimate, progress=progress,
         )  # fmt: skip
 
 
@@ -529,22 +528,10 @@ def _identify(
     # the refit reads the files again in row blocks (api.refine_records), the report's spectrum too
     # (api.records_spectrum): the same answers, memory bounded
     streamed = files_in and not raw_needed
-    # the refit alone fits decays it decimates itself: the records are read pre-decimated, as many values
-    # as it can use kept (four times its row budget), so memory does not grow with their length
-    decimated = None
     if streamed:
         from rigidid import api
 
         data = api.TestData(api.load_layout(layout))
-    elif files_in and keep is None and resample == 0 and modal.get("decimate") is None:
-        from rigidid import api
-        from rigidid.core.timedomain.refine import MAX_ROWS
-        from rigidid.progress import terminal_progress
-
-        lay = api.load_layout(layout)
-        with _naming(src), terminal_progress() as progress:
-            decimated = api.load_records_decimated(inputs or [], lay, keep_values=4 * MAX_ROWS, progress=progress)
-        data = api.TestData(lay, None, decimated.records, [str(p) for p in inputs or []])
     else:
         data = _test_data(layout, inputs or [], records, units, geometry)
     if keep is not None and not streamed:
@@ -564,11 +551,10 @@ def _identify(
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     with _noted(notes, ElasticModeWarning):
         modes, estimate = (
-            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None,
-                      settle=decimated.settle if decimated is not None else 0)
+            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None)
             if records
             else (data.modes, None)
-        )  # fmt: skip
+        )
     assert modes is not None
     if keep is not None and paths:  # after the estimation, which checked the files
         with _naming(src):
@@ -593,13 +579,7 @@ def _identify(
             if paths is not None:
                 result = api.refine_records(result, paths, data.layout, estimate, progress=progress)
             else:
-                result = api.with_refinement(
-                    result, data.records, estimate, progress=progress,
-                    prefactor=decimated.factor if decimated is not None else 1,
-                    guard=decimated.settle if decimated is not None else 0,
-                )  # fmt: skip
-    if decimated is not None and estimate is not None:
-        estimate = decimated.in_file_rows(estimate)  # the total factor, impacts in the files' rows
+                result = api.with_refinement(result, data.records, estimate, progress=progress)
     result = api.with_warnings(result, notes)
     if resample:
         if not records:

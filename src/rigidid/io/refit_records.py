@@ -243,7 +243,7 @@ def read_prepared_decays(
     -------
     PreparedDecays
         The same as ``prepare_decays(records, dt, starts, onsets, factor)`` on
-        the whole records (raw, so ``prefactor=1`` and ``guard=0``).
+        the whole records.
 
     Raises
     ------

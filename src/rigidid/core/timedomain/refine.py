@@ -286,7 +286,7 @@ _Data = PreparedDecays
 
 
 def pretrigger_sigma(
-    counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int, prefactor: int = 1
+    counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int
 ) -> tuple[Array, str]:
     """Each channel's noise level at the fit's rate from the pre-trigger statistics.
 
@@ -298,9 +298,9 @@ def pretrigger_sigma(
         Per record, the sum of squared deviations from its own mean, per channel.
     n_records : int
         Number of records (at least :data:`_MIN_PRETRIGGER` samples each, on average, are needed).
-    factor, prefactor : int
-        The fit's decimation and the one the records had before
-        (:func:`~rigidid.core.timedomain.preprocess.noise_gain`).
+    factor : int
+        The fit's decimation (its filter's noise gain,
+        :func:`~rigidid.core.timedomain.preprocess.noise_gain`).
 
     Returns
     -------
@@ -313,7 +313,7 @@ def pretrigger_sigma(
         used = [(n, m2) for n, m2 in zip(counts, squares, strict=True) if n > 1]
         s = np.sqrt(sum(m2 for _, m2 in used) / sum(n for n, _ in used))
         if factor > 1:
-            s = s * math.sqrt(noise_gain(factor, prefactor))
+            s = s * math.sqrt(noise_gain(factor))
         if np.all(s > 0.0):
             return s, "pretrigger"
     return np.ones(p), "residual"
@@ -342,8 +342,6 @@ def prepare_decays(
     starts: Sequence[int],
     onsets: Sequence[int],
     factor: int,
-    prefactor: int = 1,
-    guard: int = 0,
 ) -> PreparedDecays:
     """The refit's data from whole records (:func:`refine_body`'s first step).
 
@@ -358,22 +356,19 @@ def prepare_decays(
     factor : int
         The modal estimate's decimation: the fit's is the smallest up to it
         whose decays fit :data:`MAX_ROWS` (:func:`fit_factor`).
-    prefactor, guard : int
-        As for :func:`refine_body`.
-
     Returns
     -------
     PreparedDecays
 
     Notes
     -----
-    The pre-trigger is ``r[:onset - 2 - guard]``; its level per channel is the
+    The pre-trigger is ``r[:onset - 2]``; its level per channel is the
     RMS about each record's mean, scaled by the fit filter's noise gain
     (:func:`pretrigger_sigma`). :mod:`rigidid.io.refit_records` builds the same
     from record files read in row blocks.
     """
     p = records[0].shape[1]
-    pre = [r[: max(0, o - 2 - guard)] for r, o in zip(records, onsets, strict=True)]
+    pre = [r[: max(0, o - 2)] for r, o in zip(records, onsets, strict=True)]
     factor = fit_factor([r.shape[0] - s for r, s in zip(records, starts, strict=True)], p, factor)
     decays = []
     for rec, start in zip(records, starts, strict=True):
@@ -382,7 +377,7 @@ def prepare_decays(
         decays.append(np.asarray(d, dtype=float))
     decays = cut_decays(decays, p)
     squares = [((x - x.mean(axis=0)) ** 2).sum(axis=0) if x.shape[0] > 1 else np.zeros(p) for x in pre]
-    sigma, noise_from = pretrigger_sigma([x.shape[0] for x in pre], squares, len(records), factor, prefactor)
+    sigma, noise_from = pretrigger_sigma([x.shape[0] for x in pre], squares, len(records), factor)
     return PreparedDecays(decays, sigma, dt * factor, noise_from)
 
 
@@ -597,8 +592,6 @@ def refine_body(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
-    prefactor: int = 1,
-    guard: int = 0,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -624,14 +617,6 @@ def refine_body(
         Largest number of residual evaluations (three per iteration of the
         optimiser, plus one Jacobian per accepted step); 0 evaluates the start only
         (its Cramér-Rao bound, e.g. at the truth of a simulation).
-    prefactor : int
-        The records were decimated by this factor before (1: raw): the
-        pre-trigger noise is then band-limited, and its level after the
-        fit's decimation comes from :func:`~rigidid.core.timedomain.preprocess.noise_gain`.
-    guard : int
-        Samples before each onset left out of the pre-trigger (records
-        decimated before trimming: the filter spreads the impact this far
-        back).
 
     Returns
     -------
@@ -670,7 +655,7 @@ def refine_body(
     above 1 exposes (the caller falls back).
     """
     recs = [np.asarray(r, dtype=float) for r in records]
-    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)), max(1, int(prefactor)), int(guard))
+    data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
     del recs
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
