@@ -112,11 +112,15 @@ def test_the_refit_data_read_in_row_blocks_equal_the_whole_records(
     _, estimate = api.estimate_rigid_modes(layout, long_records)  # streamed: impacts in the files' rows
     dt = raw[0][1]
     exact = [find_impact(r, dt) for r, _ in raw]
-    assert [i.onset for i in estimate.impacts] != [i.onset for i in exact]  # only as fine as the pre-factor
+    # the estimate's impacts are only as fine as its decimation (here they may or may not fall on the raw ones)
+    assert all(abs(a.onset - b.onset) <= 2 * estimate.decimation for a, b in zip(estimate.impacts, exact, strict=True))
     reach = 22 * estimate.decimation + 52
     located = locate_impacts(long_records, ids, dt, estimate.impacts, reach)
     assert located == exact
-    assert locate_impacts(long_records, ids, dt, estimate.impacts, 5) is None  # rows held too few to prove it
+    from rigidid.core.timedomain import Impact
+
+    late = tuple(Impact(i.onset + 500, i.peak + 500, i.start + 500) for i in estimate.impacts)
+    assert locate_impacts(long_records, ids, dt, late, 5) is None  # the rows held miss the onset: not proven
     starts, onsets = [i.start for i in exact], [i.onset for i in exact]
     whole = refine.prepare_decays([r for r, _ in raw], dt, starts, onsets, estimate.decimation)
     streamed = read_prepared_decays(long_records, ids, dt, starts=starts, onsets=onsets, factor=estimate.decimation)

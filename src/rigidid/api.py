@@ -1622,10 +1622,8 @@ def with_refinement(
     are subtracted from the records first
     (:func:`rigidid.core.timedomain.nuisance.subtract_modes`).
     """
-    import warnings
 
     from rigidid.core.timedomain.refine import refine_body
-    from rigidid.errors import RefinementWarning
 
     ident = result.identification
     if progress is not None:
@@ -1638,8 +1636,9 @@ def with_refinement(
         arrays = subtract_modes(
             arrays, records[0][1], [impact.start for impact in estimate.impacts], estimate.poles, unused
         )
-    try:
-        refinement = refine_body(
+    return _refit(
+        result,
+        lambda: refine_body(
             arrays,
             records[0][1],
             result.positions,
@@ -1651,12 +1650,25 @@ def with_refinement(
             inertia_per_mass=ident.inertia_per_mass,
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
-        )
+        ),
+        progress,
+    )
+
+
+def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) -> IdentifyResult:
+    """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
+    import warnings
+
+    from rigidid.errors import RefinementWarning
+
+    try:
+        refinement = fit()
     except (np.linalg.LinAlgError, InputError, ValueError) as exc:
         warnings.warn(
-            f"refinement on the records failed ({exc}); kept the answer from the modes" + _suspect_mode(ident),
+            f"refinement on the records failed ({exc}); kept the answer from the modes"
+            + _suspect_mode(result.identification),
             RefinementWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return result
     finally:
@@ -1747,10 +1759,8 @@ def refine_records(
     the smallest up to `estimate`'s factor that fits its row budget, so it may
     differ from a whole-record estimation's when that budget binds.
     """
-    import warnings
 
     from rigidid.core.timedomain.refine import refine_prepared
-    from rigidid.errors import RefinementWarning
     from rigidid.io.records import layout_ids
     from rigidid.io.refit_records import _source
 
@@ -1780,27 +1790,18 @@ def refine_records(
     ident = result.identification
     if progress is not None:
         progress("refit", 0, 1)
-    try:
+    def fit() -> Any:
         data = read_prepared_decays(
             paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
             factor=estimate.decimation, progress=progress,
         )  # fmt: skip
-        refinement = refine_prepared(
+        return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
         )  # fmt: skip
-    except (np.linalg.LinAlgError, InputError, ValueError) as exc:
-        warnings.warn(
-            f"refinement on the records failed ({exc}); kept the answer from the modes" + _suspect_mode(ident),
-            RefinementWarning,
-            stacklevel=2,
-        )
-        return result
-    finally:
-        if progress is not None:
-            progress("refit", 1, 1)
-    return _accept_refinement(result, refinement)
+
+    return _refit(result, fit, progress)
 
 
 def records_spectrum(
