@@ -1762,14 +1762,14 @@ def refine_records(
 
     from rigidid.core.timedomain.refine import refine_prepared
     from rigidid.io.records import layout_ids
-    from rigidid.io.refit_records import _source
+    from rigidid.io.streamed_records import open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]
     unused = any(k + 1 not in result.modes_used for k in range(estimate.poles.size))
     size = 0
     if not unused:
-        size = sum(_source(Path(p), layout_ids(ids, str(p)), None).rows for p in paths) * len(ids)
+        size = sum(open_source(Path(p), layout_ids(ids, str(p)), None).rows for p in paths) * len(ids)
     dt = estimate.sample_interval / max(1, estimate.decimation)
     impacts = None
     if not unused and size > (STREAM_REFIT_VALUES if stream_above is None else stream_above):
@@ -1827,12 +1827,12 @@ def records_spectrum(
         records read whole when one is shorter than a Welch segment (4096 rows).
     """
     from rigidid.io.records import layout_ids
-    from rigidid.io.refit_records import _source
+    from rigidid.io.streamed_records import open_source
     from rigidid.io.streamed_spectrum import summed_spectrum_streamed
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]
-    sources = [_source(Path(p), layout_ids(ids, str(p)), None) for p in paths]
+    sources = [open_source(Path(p), layout_ids(ids, str(p)), None) for p in paths]
     if not sources:
         return None
     if min(s.rows for s in sources) < 2 * 4096:  # short records (rows told by the header or the size): read whole

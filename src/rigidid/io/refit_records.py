@@ -33,11 +33,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.timedomain.preprocess import Impact
+from rigidid.io.streamed_records import open_source
 from rigidid.progress import ProgressCallback
 
 if TYPE_CHECKING:
     from rigidid.core.timedomain.refine import PreparedDecays
-    from rigidid.io.streamed_records import _Source
 
 __all__ = ["locate_impacts", "read_prepared_decays"]
 
@@ -48,18 +48,6 @@ _PULSE_WIDTH = 0.005
 _CHUNK = 128  # rows per maximum kept outside the window (the energy bound's resolution)
 AFTER_ROWS = 1 << 16
 """Raw rows held after the estimate's decay start (at least): where the largest channel energy is sought."""
-
-
-def _source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.records import is_binary_record
-    from rigidid.io.streamed_records import _binary_source, _csv_source
-
-    src = str(path)
-    return (
-        _binary_source(path, wanted, src, progress)
-        if is_binary_record(path, src)
-        else _csv_source(path, wanted, progress)
-    )
 
 
 def _chunk_maxima(mags: Array) -> Array:
@@ -79,7 +67,7 @@ def _locate_one(
     from rigidid.core.timedomain.preprocess import Impact, channel_energy, find_impact
 
     p = len(wanted)
-    source = _source(path, wanted, progress)
+    source = open_source(path, wanted, progress)
     peaks = np.zeros(p)
     held: list[Array] = []
     before: list[Array] = []  # max |x| per channel of each block part before the window
@@ -181,7 +169,7 @@ def _read_one(
     from rigidid.core.timedomain.preprocess import Decimator
 
     p = len(wanted)
-    source = _source(path, wanted, progress)
+    source = open_source(path, wanted, progress)
     stream = Decimator(factor, p)
     n_pre, mean, m2 = 0, np.zeros(p), np.zeros(p)
     parts: list[Array] = []
@@ -258,7 +246,7 @@ def read_prepared_decays(
     guess = []
     for path in files:
         wanted = layout_ids(sensor_ids, str(path))
-        guess.append(_source(path, wanted, None).rows)  # the header's rows (a CSV's: from its size)
+        guess.append(open_source(path, wanted, None).rows)  # the header's rows (a CSV's: from its size)
     rows: list[int] = guess
     cap = MAX_ROWS // p + 1  # no decay keeps more (cut_decays)
     for _ in range(2):

@@ -142,6 +142,16 @@ class _Source:
         self.blocks, self.rows, self.line_of, self.time_tokens, self.dt = blocks, rows, line_of, time_tokens, dt
 
 
+def open_source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
+    """A record file's row blocks (CSV or binary, by its suffix), its sensor columns in the order of `wanted`."""
+    from rigidid.io.records import is_binary_record
+
+    src = str(path)
+    if is_binary_record(path, src):
+        return _binary_source(path, wanted, src, progress)
+    return _csv_source(path, wanted, progress)
+
+
 def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
     from rigidid.io.csv_records import CsvHead, csv_blocks
 
@@ -481,12 +491,11 @@ def read_record_streamed(
         row and column; and a record too short for `factor`.
     """
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, Decimator, channel_energy
-    from rigidid.io.records import MIN_ROWS, _check_decay, is_binary_record, layout_ids
+    from rigidid.io.records import MIN_ROWS, _check_decay, layout_ids
 
     src = str(path)
     wanted = layout_ids(sensor_ids, src)
-    p = Path(path)
-    source = _binary_source(p, wanted, src, progress) if is_binary_record(p, src) else _csv_source(p, wanted, progress)
+    source = open_source(Path(path), wanted, progress)
     times = _TimeCheck(source, src)
     peaks = np.zeros(len(wanted))
     pending: list[tuple[Array, Array]] = []

@@ -25,10 +25,10 @@ Array = NDArray[np.float64]
 def _record_power(path: Path, wanted: list[str], n: int, window: Array, progress: ProgressCallback | None) -> Array:
     """Sum over channels of the mean of ``|rfft((x_s - mean) w)|^2`` over every Welch segment of one file."""
     from rigidid.core.timedomain.preprocess import segment_power
-    from rigidid.io.refit_records import _source
+    from rigidid.io.streamed_records import open_source
 
     step = n - n // 2
-    source = _source(path, wanted, progress)
+    source = open_source(path, wanted, progress)
     power = np.zeros((n // 2 + 1, len(wanted)))
     count = 0
     buffer = np.empty((0, len(wanted)))
