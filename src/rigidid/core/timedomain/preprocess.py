@@ -513,45 +513,6 @@ def fir_taps(factor: int) -> Array:
     return result
 
 
-def noise_gain(factor: int, prefactor: int = 1) -> float:
-    """Variance of noise after :func:`decimate` by `factor`, over its variance before.
-
-    Parameters
-    ----------
-    factor : int
-        The decimation factor ``q``.
-    prefactor : int
-        The noise was white before a first :func:`decimate` by this factor
-        (1: white as it comes).
-
-    Returns
-    -------
-    float
-        ``sum_j h_j^2`` for white noise (``h`` = :func:`fir_taps`); after a
-        first decimation by ``q0``, ``sum_m c_m rho_m`` with ``c`` the taps'
-        autocorrelation and ``rho_m`` the first filter's normalised
-        autocorrelation at ``m q0``: that noise is band-limited, not white
-        (3 % more than the white formula at ``q0 = 8``, ``q = 12``).
-
-    Examples
-    --------
-    >>> round(noise_gain(4), 4), round(noise_gain(12, prefactor=8) / noise_gain(12), 2)
-    (0.241, 1.04)
-    """
-    h = fir_taps(factor) if factor > 1 else np.ones(1)
-    if prefactor <= 1:
-        return float(np.sum(h * h))
-    h0 = fir_taps(prefactor)
-    auto0 = np.correlate(h0, h0, mode="full")
-    centre = h0.size - 1
-    lags = np.arange(-(h.size - 1), h.size)
-    at = centre + lags * int(prefactor)
-    inside = (at >= 0) & (at < auto0.size)
-    rho = np.zeros(lags.size)
-    rho[inside] = auto0[at[inside]] / auto0[centre]
-    return float(np.dot(np.correlate(h, h, mode="full"), rho))
-
-
 def decimate(record: Array, factor: int) -> Array:
     """Low-pass filter and keep every `factor`-th sample, zero phase.
 

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
 from rigidid.core.statespace import modal_from_poles
-from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, noise_gain
+from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
 __all__ = [
@@ -299,8 +299,8 @@ def pretrigger_sigma(
     n_records : int
         Number of records (at least :data:`_MIN_PRETRIGGER` samples each, on average, are needed).
     factor : int
-        The fit's decimation (its filter's noise gain,
-        :func:`~rigidid.core.timedomain.preprocess.noise_gain`).
+        The fit's decimation: white noise's variance after its filter is
+        ``sum h^2`` of :func:`~rigidid.core.timedomain.preprocess.fir_taps`.
 
     Returns
     -------
@@ -313,7 +313,7 @@ def pretrigger_sigma(
         used = [(n, m2) for n, m2 in zip(counts, squares, strict=True) if n > 1]
         s = np.sqrt(sum(m2 for _, m2 in used) / sum(n for n, _ in used))
         if factor > 1:
-            s = s * math.sqrt(noise_gain(factor))
+            s = s * math.sqrt(float(np.sum(fir_taps(factor) ** 2)))
         if np.all(s > 0.0):
             return s, "pretrigger"
     return np.ones(p), "residual"
