@@ -17,7 +17,7 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -229,10 +229,15 @@ def impact_from_blocks(
         if hits.size:
             onset = b * rows + int(hits[0])
             break
+    return _after_onset(onset, lambda window: energy(onset, onset + window), dt, pulse_width, n)
+
+
+def _after_onset(onset: int, pulse: Callable[[int], Array], dt: float, pulse_width: float, n: int) -> Impact:
+    """The impact whose onset is `onset`: the energy peak in the pulse window after it (``pulse(window)``
+    gives the energy of those rows), the decay half a window after the peak (:func:`find_impact`'s rule)."""
     window = max(2, round(pulse_width / dt))
-    peak = onset + int(np.argmax(energy(onset, onset + window)))
-    start = min(peak + max(1, window // 2), n - 1)
-    return Impact(onset, peak, start)
+    peak = onset + int(np.argmax(pulse(window)))
+    return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
 
 
 def find_impact(
@@ -284,10 +289,7 @@ def find_impact(
         raise InputError("the record is empty or all zero")
     top = float(energy.max())
     onset = int(np.argmax(energy > threshold * top))
-    window = max(2, round(pulse_width / dt))
-    peak = onset + int(np.argmax(energy[onset : onset + window]))
-    start = min(peak + max(1, window // 2), record.shape[0] - 1)
-    return Impact(onset, peak, start)
+    return _after_onset(onset, lambda window: energy[onset : onset + window], dt, pulse_width, record.shape[0])
 
 
 def free_decay(record: Array, dt: float, *, pulse_width: float = 0.005) -> tuple[Array, Impact]:
