@@ -64,7 +64,7 @@ def _locate_one(
     path: Path, wanted: list[str], dt: float, lo: int, hi: int, progress: ProgressCallback | None
 ) -> Impact | None:
     """:func:`find_impact` on the raw record, from its rows ``lo:hi`` and every block's maxima; None if unsure."""
-    from rigidid.core.timedomain.preprocess import Impact, channel_energy, find_impact
+    from rigidid.core.timedomain.preprocess import Impact, channel_energy, energy_bound, find_impact
 
     p = len(wanted)
     source = open_source(path, wanted, progress)
@@ -91,10 +91,9 @@ def _locate_one(
     top = float(energy.max()) if energy.size else 0.0
     if top <= 0.0:
         return None
-    scale = np.divide(1.0, peaks, out=np.zeros(p), where=peaks > 0.0)
 
     def bound(parts: list[Array]) -> float:  # no row of these chunks has a larger energy
-        return float(max((((m * scale) ** 2).sum(axis=1)).max() for m in parts)) if parts else 0.0
+        return float(max(energy_bound(m, peaks).max() for m in parts)) if parts else 0.0
 
     # the largest energy lies in the window, no row before it reaches the threshold
     if bound(after) > top or bound(before) > _THRESHOLD * top:

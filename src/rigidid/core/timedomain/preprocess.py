@@ -104,10 +104,9 @@ def channel_energy(record: Array, peaks: Array | None = None) -> Array:
     if n == 0 or p == 0:
         return energy
     peak = column_peaks(record) if peaks is None or peaks.shape != (p,) else peaks
-    scale = np.divide(1.0, peak, out=np.zeros(p), where=peak > 0.0)
     # row blocks that stay in cache: squares, then one matrix-vector product with the weights
     # (twice as fast as one einsum pass over narrow rows)
-    weights = scale * scale
+    weights = _energy_weights(peak)
     step = max(1, _ENERGY_BLOCK // max(p, 1))
     scratch = np.empty((min(step, n), p))
     for lo in range(0, n, step):
@@ -116,6 +115,32 @@ def channel_energy(record: Array, peaks: Array | None = None) -> Array:
         np.multiply(block, block, out=squares)
         np.dot(squares, weights, out=energy[lo : lo + block.shape[0]])
     return energy
+
+
+def _energy_weights(peaks: Array) -> Array:
+    """``1 / max |x|^2`` per channel (0 for a channel that is all zero): :func:`channel_energy`'s weights."""
+    scale = np.divide(1.0, peaks, out=np.zeros(peaks.shape[0]), where=peaks > 0.0)
+    weights: Array = scale * scale
+    return weights
+
+
+def energy_bound(maxima: Array, peaks: Array) -> Array:
+    """The largest :func:`channel_energy` any row can have, from its rows' ``max |x|`` per channel.
+
+    Parameters
+    ----------
+    maxima : ndarray, shape (m, p)
+        ``max |x|`` per channel of each of m groups of rows.
+    peaks : ndarray, shape (p,)
+        ``max |x|`` per channel of the whole record (the energy's weights).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        ``sum_i (maxima[b, i] / peaks[i])^2``: no row of group ``b`` has a larger energy.
+    """
+    bound: Array = (maxima * maxima) @ _energy_weights(peaks)
+    return bound
 
 
 def column_peaks(record: Array) -> Array:
@@ -209,9 +234,8 @@ def impact_from_blocks(
     window after the onset: on an impact record a small part of the rows,
     where :func:`find_impact` needs the energy of every row.
     """
-    n, p = record.shape
-    scale = np.divide(1.0, peaks, out=np.zeros(p), where=peaks > 0.0)
-    bound = (maxima * maxima) @ (scale * scale)
+    n = record.shape[0]
+    bound = energy_bound(maxima, peaks)
 
     def energy(lo: int, hi: int) -> Array:
         return channel_energy(record[lo:hi], peaks)
