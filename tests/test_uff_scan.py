@@ -204,3 +204,12 @@ def test_damaged_files_end_in_one_input_error_or_a_reading(tmp_path: Path) -> No
         except RigididError as exc:  # InputError or the package's other one-line errors
             message = str(exc)
         assert "\n" not in message
+
+
+def test_a_dataset_pyuff_cannot_read_is_numbered_among_all_of_its_kind(tmp_path: Path) -> None:
+    path, records = _test_file(tmp_path)
+    n58 = sum(r[1].shape[1] for r in records)  # binary 58 datasets written: one per sensor and impact
+    path.write_bytes(path.read_bytes() + b"    -1\n    58\n garbage\n    -1\n")  # an ASCII 58 after them
+    with pytest.raises(InputError, match="pyuff cannot read it") as info:
+        read_uff(path)
+    assert info.value.location == f"dataset 58 #{n58 + 1}"

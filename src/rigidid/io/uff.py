@@ -510,9 +510,13 @@ def _read_all(path: Path) -> list[dict[str, Any]]:
 _WANTED = {15, 18, 55, 58, 151, 164, 2411, 2420}
 
 
-def _read_sets(uff: Any, types: list[int], src: str, counts_from: dict[int, int] | None = None) -> list[dict[str, Any]]:
-    """The datasets rigidid reads (others as ``{"type": kind}``); `counts_from`: datasets of each kind before."""
-    before = counts_from or {}
+def _read_sets(uff: Any, types: list[int], src: str, ordinals: list[int] | None = None) -> list[dict[str, Any]]:
+    """The datasets rigidid reads (others as ``{"type": kind}``).
+
+    `ordinals`: each dataset's number among those of its kind in the original
+    file, when `uff` holds only some of them (its own count otherwise), for
+    the message naming the one pyuff cannot read.
+    """
     out: list[dict[str, Any]] = []
     for i, kind in enumerate(types):
         if kind not in _WANTED:
@@ -521,7 +525,7 @@ def _read_sets(uff: Any, types: list[int], src: str, counts_from: dict[int, int]
         try:
             dset = uff.read_sets(i)
         except Exception as exc:
-            count = types[: i + 1].count(kind) + before.get(kind, 0)
+            count = ordinals[i] if ordinals is not None else types[: i + 1].count(kind)
             raise InputError(f"pyuff cannot read it: {exc}", source=src, location=f"dataset {kind} #{count}") from None
         out.append(dset)
     return out
@@ -539,7 +543,13 @@ def _read_binary58(path: Path, blocks: list[Any]) -> list[dict[str, Any]]:
     from rigidid.io.uff_scan import blocks_text, read_58b
 
     src = str(path)
+    seen: dict[int, int] = {}
+    ordinals = []  # each dataset's number among its kind's in the file (binary 58 ones counted too)
+    for b in blocks:
+        seen[b.kind] = seen.get(b.kind, 0) + 1
+        ordinals.append(seen[b.kind])
     others = [b for b in blocks if not b.binary58 and b.kind in _WANTED]
+    others_ordinals = [k for b, k in zip(blocks, ordinals, strict=True) if not b.binary58 and b.kind in _WANTED]
     parsed: list[dict[str, Any]] = []
     if others:
         with tempfile.TemporaryDirectory(prefix="rigidid-uff-") as folder:
@@ -550,7 +560,7 @@ def _read_binary58(path: Path, blocks: list[Any]) -> list[dict[str, Any]]:
                 types = [int(t) for t in uff.get_set_types()]
             except Exception as exc:
                 raise InputError(f"not a readable UFF file: {exc}", source=src) from None
-            parsed = _read_sets(uff, types, src)
+            parsed = _read_sets(uff, types, src, others_ordinals if len(types) == len(others) else None)
     queue = iter(parsed)
     out: list[dict[str, Any]] = []
     for block in blocks:
