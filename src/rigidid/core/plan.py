@@ -744,28 +744,11 @@ def check_references(
     weakest_parameter = INERTIAL_PARAMETERS[int(np.argmax(np.abs(weak)))]
     load_rank = int(numerical_rank(np.linalg.svd(loads.T, compute_uv=False), loads.shape[1]))
 
-    # the references to add, one at a time (at most three): each sensor's place (and the references'
-    # own) along x, y and z, the one giving the highest rank, then the lowest condition
     places = np.vstack([pos, rpos])
     labels = list(names or [f"#{i + 1}" for i in range(pos.shape[0])])
     labels += [f"reference #{j + 1}" for j in range(len(rpos))]
+    chosen, best_rank, best_cond = _references_to_add(places, loads, mass_s, loads_of, rank, cond)
     unit_text = " " + unit if unit else ""
-    chosen: list[tuple[int, int]] = []
-    current = loads
-    best_rank, best_cond = rank, cond
-    while len(chosen) < 3:
-        best = (-1, math.inf, 0, 0)
-        for i, place in enumerate(places):
-            for axis in range(3):
-                extra = loads_of(place[None], np.eye(3)[axis][None])
-                r, c = _condition(_parameter_map(mass_s, np.hstack([current, extra])))[:2]
-                if r > best[0] or (r == best[0] and c < best[1]):
-                    best = (r, c, i, axis)
-        chosen.append((best[2], best[3]))
-        current = np.hstack([current, loads_of(places[best[2]][None], np.eye(3)[best[3]][None])])
-        best_rank, best_cond = best[0], best[1]
-        if _accepted(best_rank, best_cond) or _accepted(rank, cond):
-            break
     parts = []
     for i, axis in chosen:
         where = f"sensor {labels[i]}" if i < pos.shape[0] else labels[i]
@@ -777,47 +760,12 @@ def check_references(
     add_pos = places[chosen[0][0]].copy()
     add_dir = np.eye(3)[chosen[0][1]]
 
-    participation = frequencies = None
-    if body is not None and body.mounts:
-        from rigidid.core.simulate import system_matrices
-
-        m_cg, k_cg, _ = system_matrices(body)
-        eigvals, psi = _mass_normal_modes(k_cg, m_cg)
-        if eigvals is not None:
-            g_cg = sensor_matrix(rpos, rdirs, np.asarray(body.center_of_gravity, dtype=float)).T  # (6, q)
-            norms = np.sqrt(np.einsum("aj,aj->j", g_cg, np.linalg.solve(m_cg, g_cg)))
-            participation = np.max(np.abs(psi.T @ g_cg) / norms, axis=1)
-            frequencies = np.sqrt(np.clip(eigvals, 0.0, None)) / (2.0 * np.pi)
+    participation, frequencies = _participation(body, rpos, rdirs)
 
     ok = _accepted(rank, cond)
     excited = participation is None or bool(np.all(participation >= PARTICIPATION_MIN))
     q = rpos.shape[0]
-    subject = "the reference" if q == 1 else f"the {q} references"
-    absent = [name for name, v in zip(RIGID_LOADS, coverage, strict=True) if v < 1e-9]
-    if absent:
-        listed = absent[0] if len(absent) == 1 else ", a ".join(absent[:-1]) + " or a " + absent[-1]
-        missing = f"no reference gives a {listed}"
-    else:
-        missing = f"the weakest load is the {weakest_load} ({coverage.min():.0%} of the strongest)"
-    if q == 2 and rank < 10:
-        missing += (
-            "; two references never determine the inertia about the axis normal to the two rotations "
-            "they cause: a third is needed"
-        )
-    if ok:
-        statement = (
-            f"{subject} determine{'s' if q == 1 else ''} mass, CG and inertia from the mass line "
-            f"(condition {cond:.3g}); {missing}"
-        )
-    elif rank < 10:
-        statement = (
-            f"{subject} leave{'s' if q == 1 else ''} {weakest_parameter} undetermined (rank {rank} of 10); {missing}"
-        )
-    else:
-        statement = (
-            f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
-            f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
-        )
+    statement = _reference_statement(q, rank, cond, ok, coverage, weakest_load, weakest_parameter)
     if participation is not None and frequencies is not None:
         k = int(np.argmin(participation))
         if not excited:
@@ -861,3 +809,84 @@ def _mass_normal_modes(stiffness: Array, mass: Array) -> tuple[Array | None, Arr
     eigvals, vecs = np.linalg.eigh(0.5 * (a + a.T))
     psi: Array = np.linalg.solve(chol.T, vecs)
     return eigvals, psi
+
+
+def _references_to_add(
+    places: Array,
+    loads: Array,
+    mass_s: Array,
+    loads_of: Callable[[Array, Array], Array],
+    rank: int,
+    cond: float,
+) -> tuple[list[tuple[int, int]], int, float]:
+    """The references to add, one at a time (at most three), and the rank and condition they reach.
+
+    Each candidate is a place (a sensor's or a reference's) along x, y or z; the one giving the highest
+    rank of the inertial-parameter map, then the lowest condition, is taken.
+    """
+    chosen: list[tuple[int, int]] = []
+    current = loads
+    best_rank, best_cond = rank, cond
+    while len(chosen) < 3:
+        best = (-1, math.inf, 0, 0)
+        for i, place in enumerate(places):
+            for axis in range(3):
+                extra = loads_of(place[None], np.eye(3)[axis][None])
+                r, c = _condition(_parameter_map(mass_s, np.hstack([current, extra])))[:2]
+                if r > best[0] or (r == best[0] and c < best[1]):
+                    best = (r, c, i, axis)
+        chosen.append((best[2], best[3]))
+        current = np.hstack([current, loads_of(places[best[2]][None], np.eye(3)[best[3]][None])])
+        best_rank, best_cond = best[0], best[1]
+        if _accepted(best_rank, best_cond) or _accepted(rank, cond):
+            break
+    return chosen, int(best_rank), float(best_cond)
+
+
+def _participation(body: Body | None, rpos: Array, rdirs: Array) -> tuple[Array | None, Array | None]:
+    """Each rigid-body mode's largest participation in the references' loads, and the modes' frequencies (Hz).
+
+    None, None without a body on mounts (or when its modes cannot be computed).
+    """
+    if body is None or not body.mounts:
+        return None, None
+    from rigidid.core.simulate import system_matrices
+
+    m_cg, k_cg, _ = system_matrices(body)
+    eigvals, psi = _mass_normal_modes(k_cg, m_cg)
+    if eigvals is None:
+        return None, None
+    g_cg = sensor_matrix(rpos, rdirs, np.asarray(body.center_of_gravity, dtype=float)).T  # (6, q)
+    norms = np.sqrt(np.einsum("aj,aj->j", g_cg, np.linalg.solve(m_cg, g_cg)))
+    participation: Array = np.max(np.abs(psi.T @ g_cg) / norms, axis=1)
+    frequencies: Array = np.sqrt(np.clip(eigvals, 0.0, None)) / (2.0 * np.pi)
+    return participation, frequencies
+
+
+def _reference_statement(
+    q: int, rank: int, cond: float, ok: bool, coverage: Array, weakest_load: str, weakest_parameter: str
+) -> str:
+    """What the references determine, and the load they miss or give least of."""
+    subject = "the reference" if q == 1 else f"the {q} references"
+    absent = [name for name, v in zip(RIGID_LOADS, coverage, strict=True) if v < 1e-9]
+    if absent:
+        listed = absent[0] if len(absent) == 1 else ", a ".join(absent[:-1]) + " or a " + absent[-1]
+        missing = f"no reference gives a {listed}"
+    else:
+        missing = f"the weakest load is the {weakest_load} ({coverage.min():.0%} of the strongest)"
+    if q == 2 and rank < 10:
+        missing += (
+            "; two references never determine the inertia about the axis normal to the two rotations "
+            "they cause: a third is needed"
+        )
+    if ok:
+        return (
+            f"{subject} determine{'s' if q == 1 else ''} mass, CG and inertia from the mass line "
+            f"(condition {cond:.3g}); {missing}"
+        )
+    if rank < 10:
+        return f"{subject} leave{'s' if q == 1 else ''} {weakest_parameter} undetermined (rank {rank} of 10); {missing}"
+    return (
+        f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
+        f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
+    )
