@@ -1,4 +1,5 @@
-"""TODO docstring frf."""
+"""The FRF routes: simulated FRFs, modes fitted to FRFs (pLSCF + LSFD), and mass, CG and inertia from the
+mass line or from force-scaled residues."""
 
 from __future__ import annotations
 

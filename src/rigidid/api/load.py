@@ -1,4 +1,5 @@
-"""TODO docstring load."""
+"""Loading a test: layout, modes, records, UFF and body files, validated once at this boundary, and the one
+check that two files speak the same units (:func:`same_units`)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""TODO docstring mounts."""
+"""Mounts on an identified body: per-mount rates and the torque roll axis from K and C, and the mount model
+(CG, inertia and mount rates fitted together) for ``--method mounts``."""
 
 from __future__ import annotations
 

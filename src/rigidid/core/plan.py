@@ -449,15 +449,7 @@ def suggest_sensors(
     dirs = normalise_directions(directions) if pos.shape[0] else np.zeros((0, 3))
     if dirs.shape != pos.shape:
         raise InputError(f"directions must match positions {pos.shape}, got {dirs.shape}")
-    cand = candidate_grid(pos) if candidates is None else np.asarray(candidates, dtype=float).reshape(-1, 3)
-    if candidate_directions is None:
-        c_pos = np.repeat(cand, 3, axis=0)
-        c_dir = np.tile(np.eye(3), (cand.shape[0], 1))
-    else:
-        c_dir = normalise_directions(candidate_directions)
-        if c_dir.shape != cand.shape:
-            raise InputError(f"candidate directions must match candidates {cand.shape}, got {c_dir.shape}")
-        c_pos = cand
+    c_pos, c_dir = _sensor_candidates(pos, candidates, candidate_directions)
     if not (1 <= add <= c_pos.shape[0]):
         raise InputError(f"can add between 1 and {c_pos.shape[0]} sensors (the candidates), asked for {add}")
     if not (isinstance(draws, int) and draws >= 2):
@@ -890,3 +882,16 @@ def _reference_statement(
         f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
         f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
     )
+
+
+def _sensor_candidates(
+    positions: Array, candidates: ArrayLike | None, candidate_directions: ArrayLike | None
+) -> tuple[Array, Array]:
+    """Candidate sensors (positions, unit directions): each candidate place along x, y and z unless directed."""
+    cand = candidate_grid(positions) if candidates is None else np.asarray(candidates, dtype=float).reshape(-1, 3)
+    if candidate_directions is None:
+        return np.repeat(cand, 3, axis=0), np.tile(np.eye(3), (cand.shape[0], 1))
+    c_dir = normalise_directions(candidate_directions)
+    if c_dir.shape != cand.shape:
+        raise InputError(f"candidate directions must match candidates {cand.shape}, got {c_dir.shape}")
+    return cand, c_dir
