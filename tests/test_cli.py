@@ -138,7 +138,7 @@ def test_simulate_rejects_unit_mismatch(tmp_path: Path) -> None:
     (tmp_path / "layout.json").write_text(json.dumps(layout))
     out = run("simulate", ENGINE / "body.json", tmp_path / "layout.json")
     assert out.returncode == 2
-    assert "body.json: units: units (mm, kg) differ from layout units (m, kg)" in out.stderr
+    assert "body.json: units: units (mm, kg) differ from the layout's units (m, kg)" in out.stderr
 
 
 def test_help_and_version() -> None:

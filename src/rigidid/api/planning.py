@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rigidid.api.load import body_from_file, load_uff, same_units
+from rigidid.api.load import body_from_file, load_references_for, load_uff, same_units
 from rigidid.api.mounts import read_mount_spec
 from rigidid.core.simulate import Body
 from rigidid.errors import InputError
@@ -112,9 +112,7 @@ def plan(
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(
-            layout_units, report, references=_plan_references(references, lay, None), mount_split=split
-        )
+        return PlanResult(layout_units, report, references=_plan_references(references, lay, None), mount_split=split)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -142,7 +140,6 @@ def plan(
     return PlanResult(layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction)
 
 
-
 def _plan_references(
     references: ReferencesFile | PathLike | None, layout: LayoutFile, body: Body | None
 ) -> ReferenceReport | None:
@@ -150,12 +147,9 @@ def _plan_references(
     if references is None:
         return None
     from rigidid.core.plan import check_references
-    from rigidid.io.frf import load_references, reference_arrays
+    from rigidid.io.frf import reference_arrays
 
-    refs = references if isinstance(references, ReferencesFile) else load_references(references)
-    if refs.units is not None and refs.units != layout.units:
-        source = None if isinstance(references, ReferencesFile) else str(references)
-        raise InputError("units differ from the layout's units", source=source, location="units")
+    refs = load_references_for(references, layout)
     ids, positions, directions = files.layout_arrays(layout)
     _, rpos, rdirs = reference_arrays(refs)
     return check_references(positions, directions, rpos, rdirs, body=body, unit=layout.units.length, names=ids)

@@ -35,7 +35,6 @@ from rigidid.cli.options import (
     TorqueAxis,
     Units,
 )
-from rigidid.errors import InputError
 
 if TYPE_CHECKING:
     pass
@@ -79,6 +78,7 @@ def report(
         from rigidid import api
         from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import load_body
+        from rigidid.units import check_same_units
 
         force_unit = check_force_unit(force_unit)
         check_outputs({"--output": output}, {"--png": png})
@@ -96,13 +96,7 @@ def report(
         spec = None
         if body is not None:
             spec = load_body(body)
-            if dict(spec.units.model_dump()) != dict(result.units):
-                raise InputError(
-                    f"units {spec.units.length},{spec.units.mass} differ from the layout's "
-                    f"{result.units.get('length')},{result.units.get('mass')}",
-                    source=str(body),
-                    location="units",
-                )
+            check_same_units(spec.units, result.units, source=str(body))
         diagram = None if estimate is None else estimate.diagram
         from rigidid.progress import terminal_progress
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -93,18 +93,10 @@ def simulate(
         with OutputSet() as outs:  # every output or none
             written = []
             if records is not None:
-                from rigidid.progress import terminal_progress
-
-                try:
-                    with terminal_progress() as progress:
-                        written = api.simulate_records(
-                            body, layout, records, impacts=impacts, sample_rate=sample_rate, duration=duration,
-                            pretrigger=pretrigger, noise=record_noise, seed=seed, progress=progress,
-                        )  # fmt: skip
-                except InputError as exc:
-                    if exc.source == "sample_rate":
-                        raise InputError(exc.message, source="--sample-rate/--duration") from None
-                    raise
+                written = _simulate_records(
+                    body, layout, records, impacts=impacts, sample_rate=sample_rate, duration=duration,
+                    pretrigger=pretrigger, noise=record_noise, seed=seed,
+                )  # fmt: skip
             if frf is not None:
                 _simulate_frf(body, layout, frf, references, frf_noise, seed, frf_format)
             if output == "-":
@@ -117,6 +109,21 @@ def simulate(
             sys.stderr.write(
                 f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
             )
+
+
+def _simulate_records(body: Path, layout: Path, records: Path, **options: Any) -> list[Path]:
+    """``simulate --records DIR``: the impact records written; a record length the rate cannot fill blames both."""
+    from rigidid import api
+    from rigidid.progress import terminal_progress
+
+    try:
+        with terminal_progress() as progress:
+            written: list[Path] = api.simulate_records(body, layout, records, progress=progress, **options)
+            return written
+    except InputError as exc:
+        if exc.source == "sample_rate":
+            raise InputError(exc.message, source="--sample-rate/--duration") from None
+        raise
 
 
 def _simulate_frf(
