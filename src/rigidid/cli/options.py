@@ -230,3 +230,31 @@ FLAGS = {
     "geometry": "--geometry",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
+
+# simulate's record and FRF outputs
+RecordsOut = Annotated[
+    Path | None,
+    typer.Option(help="Also write impulse-response records (record-<k>.csv) into DIR.", rich_help_panel=RECORDS_PANEL),
+]
+Impacts = Annotated[
+    list[str] | None,
+    typer.Option(
+        help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
+        "\\[default: two impacts at the first sensors].",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+SampleRate = Annotated[float, typer.Option(help="Samples per second.", rich_help_panel=RECORDS_PANEL)]
+Duration = Annotated[float, typer.Option(help="Free decay per record (s).", rich_help_panel=RECORDS_PANEL)]
+Pretrigger = Annotated[float, typer.Option(help="Record before the impact (s).", rich_help_panel=RECORDS_PANEL)]
+RecordNoise = Annotated[
+    float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=RECORDS_PANEL)
+]
+FrfFormat = Annotated[
+    str | None,
+    typer.Option(
+        "--frf-format",
+        help="Format of --frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
+        show_default=False,
+    ),
+]

@@ -9,7 +9,16 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rigidid.cli.common import check_options, check_outputs, reported
-from rigidid.cli.options import RECORDS_PANEL, ReferencesPath
+from rigidid.cli.options import (
+    Duration,
+    FrfFormat,
+    Impacts,
+    Pretrigger,
+    RecordNoise,
+    RecordsOut,
+    ReferencesPath,
+    SampleRate,
+)
 from rigidid.cli.plan import parse_impact
 from rigidid.errors import InputError, named_source
 
@@ -25,41 +34,18 @@ def simulate(
     damping_noise: Annotated[float, typer.Option(help="Relative std of damping-ratio noise.")] = 0.0,
     shape_noise: Annotated[float, typer.Option(help="Complex shape noise relative to each mode's RMS.")] = 0.0,
     seed: Annotated[int | None, typer.Option(help="Seed of the noise.")] = None,
-    records: Annotated[
-        Path | None,
-        typer.Option(
-            help="Also write impulse-response records (record-<k>.csv) into DIR.", rich_help_panel=RECORDS_PANEL
-        ),
-    ] = None,
-    impact: Annotated[
-        list[str] | None,
-        typer.Option(
-            help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
-            "\\[default: two impacts at the first sensors].",
-            rich_help_panel=RECORDS_PANEL,
-        ),
-    ] = None,
-    sample_rate: Annotated[float, typer.Option(help="Samples per second.", rich_help_panel=RECORDS_PANEL)] = 512.0,
-    duration: Annotated[float, typer.Option(help="Free decay per record (s).", rich_help_panel=RECORDS_PANEL)] = 8.0,
-    pretrigger: Annotated[
-        float, typer.Option(help="Record before the impact (s).", rich_help_panel=RECORDS_PANEL)
-    ] = 0.1,
-    record_noise: Annotated[
-        float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=RECORDS_PANEL)
-    ] = 0.0,
+    records: RecordsOut = None,
+    impact: Impacts = None,
+    sample_rate: SampleRate = 512.0,
+    duration: Duration = 8.0,
+    pretrigger: Pretrigger = 0.1,
+    record_noise: RecordNoise = 0.0,
     frf: Annotated[
         Path | None, typer.Option("--frf", help="Also write accelerance FRFs to PATH (CSV, or UFF for .uff/.unv).")
     ] = None,
     references: ReferencesPath = None,
     frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
-    frf_format: Annotated[
-        str | None,
-        typer.Option(
-            "--frf-format",
-            help="Format of --frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
-            show_default=False,
-        ),
-    ] = None,
+    frf_format: FrfFormat = None,
     mounts: Annotated[
         Path | None,
         typer.Option("--mounts", help="mounts.json whose mounts (with their stiffness) replace the body's."),

@@ -737,18 +737,8 @@ def check_references(
     load_rank = int(numerical_rank(np.linalg.svd(loads.T, compute_uv=False), loads.shape[1]))
 
     places = np.vstack([pos, rpos])
-    labels = list(names or [f"#{i + 1}" for i in range(pos.shape[0])])
-    labels += [f"reference #{j + 1}" for j in range(len(rpos))]
     chosen, best_rank, best_cond = _references_to_add(places, loads, mass_s, loads_of, rank, cond)
-    unit_text = " " + unit if unit else ""
-    parts = []
-    for i, axis in chosen:
-        where = f"sensor {labels[i]}" if i < pos.shape[0] else labels[i]
-        coords = ", ".join(f"{v:.4g}" for v in places[i])
-        parts.append(f"along +{'xyz'[axis]} at {where} ({coords}{unit_text})")
-    suggestion = f"add a reference {' and one '.join(parts)}: " + (
-        f"condition {best_cond:.3g}" if best_rank == 10 else f"rank {best_rank} of 10"
-    )
+    suggestion = _suggestion_text(places, pos.shape[0], chosen, best_rank, best_cond, names, unit)
     add_pos = places[chosen[0][0]].copy()
     add_dir = np.eye(3)[chosen[0][1]]
 
@@ -758,15 +748,7 @@ def check_references(
     excited = participation is None or bool(np.all(participation >= PARTICIPATION_MIN))
     q = rpos.shape[0]
     statement = _reference_statement(q, rank, cond, ok, coverage, weakest_load, weakest_parameter)
-    if participation is not None and frequencies is not None:
-        k = int(np.argmin(participation))
-        if not excited:
-            statement += (
-                f"; rigid-body mode {k + 1} ({frequencies[k]:.3g} Hz) is not excited "
-                f"(participation {participation[k]:.1%} < {PARTICIPATION_MIN:.0%})"
-            )
-        else:
-            statement += f"; every rigid-body mode is excited (least: mode {k + 1}, {participation[k]:.0%})"
+    statement += _participation_text(participation, frequencies)
     return ReferenceReport(
         references=q,
         point=point,
@@ -895,3 +877,39 @@ def _sensor_candidates(
     if c_dir.shape != cand.shape:
         raise InputError(f"candidate directions must match candidates {cand.shape}, got {c_dir.shape}")
     return cand, c_dir
+
+
+def _suggestion_text(
+    places: Array,
+    sensors: int,
+    chosen: list[tuple[int, int]],
+    rank: int,
+    cond: float,
+    names: tuple[str, ...] | None,
+    unit: str,
+) -> str:
+    """The references to add, in words: where (a sensor's or a reference's place), along which axis."""
+    labels = list(names or [f"#{i + 1}" for i in range(sensors)])
+    labels += [f"reference #{j + 1}" for j in range(places.shape[0] - sensors)]
+    unit_text = " " + unit if unit else ""
+    parts = []
+    for i, axis in chosen:
+        where = f"sensor {labels[i]}" if i < sensors else labels[i]
+        coords = ", ".join(f"{v:.4g}" for v in places[i])
+        parts.append(f"along +{'xyz'[axis]} at {where} ({coords}{unit_text})")
+    return f"add a reference {' and one '.join(parts)}: " + (
+        f"condition {cond:.3g}" if rank == 10 else f"rank {rank} of 10"
+    )
+
+
+def _participation_text(participation: Array | None, frequencies: Array | None) -> str:
+    """Whether the references excite every rigid-body mode (empty without a body on mounts)."""
+    if participation is None or frequencies is None:
+        return ""
+    k = int(np.argmin(participation))
+    if participation[k] < PARTICIPATION_MIN:
+        return (
+            f"; rigid-body mode {k + 1} ({frequencies[k]:.3g} Hz) is not excited "
+            f"(participation {participation[k]:.1%} < {PARTICIPATION_MIN:.0%})"
+        )
+    return f"; every rigid-body mode is excited (least: mode {k + 1}, {participation[k]:.0%})"
