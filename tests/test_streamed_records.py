@@ -1,4 +1,4 @@
-"""Records read block by block and decimated as they arrive (io/streamed_records.py)."""
+"""Records read block by block and decimated as they arrive (io/records/streamed.py)."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ import pytest
 from rigidid import api
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, channel_energy, decimate
 from rigidid.errors import InputError
-from rigidid.io import streamed_records
-from rigidid.io.binary_records import write_binary
 from rigidid.io.records import read_record, write_record
-from rigidid.io.streamed_records import read_record_streamed
+from rigidid.io.records import streamed as streamed_records
+from rigidid.io.records.binary import write_binary
+from rigidid.io.records.streamed import read_record_streamed
 
 from .tolerances import STREAMED_DECIMATION, STREAMED_VS_WHOLE_FREQUENCY
 
@@ -244,7 +244,7 @@ def test_named_binary_records_are_read_in_row_blocks(
     """.npz and .h5 records stream in blocks to the same record, in the data/channels or one-array-per-sensor layout."""
     if suffix == ".h5":
         pytest.importorskip("h5py")
-    from rigidid.io.binary_records import named_blocks
+    from rigidid.io.records.binary import named_blocks
 
     folder, ids, paths = engine
     data, dt = read_record(paths[0], ids)

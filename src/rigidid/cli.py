@@ -521,7 +521,7 @@ def _identify(
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
     src = _source(layout, inputs)
-    # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
+    # record files are read in blocks and decimated as they arrive (io/records/streamed.py) unless a later step
     # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
     raw_needed = resample > 0
     files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
@@ -740,7 +740,7 @@ def modes(
         if output == "-" and json_path == "-":
             raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
         _check_outputs({"--output": output, "--json": json_path})
-        # record files are read in blocks and decimated as they arrive (io/streamed_records.py)
+        # record files are read in blocks and decimated as they arrive (io/records/streamed.py)
         streamed = bool(records) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
         if streamed:
             from rigidid import api

@@ -1,6 +1,6 @@
 """The refit's data read from record files in row blocks (the second pass of ``identify --records``).
 
-The modal estimate (the first pass, :mod:`rigidid.io.streamed_records`) gives each
+The modal estimate (the first pass, :mod:`rigidid.io.records.streamed`) gives each
 impact's onset and free-decay start in the files' rows and its decimation factor.
 This pass reads every record file again, a block of rows at a time, and builds what
 :func:`rigidid.core.timedomain.refine.prepare_decays` builds from whole records:
@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.timedomain.preprocess import Impact
-from rigidid.io.streamed_records import open_source
+from rigidid.io.records.streamed import open_source
 from rigidid.progress import ProgressCallback
 
 if TYPE_CHECKING:
@@ -149,7 +149,7 @@ def locate_impacts(
     record; the rows outside the window are bounded by their blocks' maxima, as
     :func:`~rigidid.core.timedomain.preprocess.impact_from_blocks` does.
     """
-    from rigidid.io.records import layout_ids
+    from rigidid.io.records.read import layout_ids
 
     found = []
     for path, impact in zip(paths, near, strict=True):
@@ -238,7 +238,7 @@ def read_prepared_decays(
         Records too short for the refinement (or for the fit's filter).
     """
     from rigidid.core.timedomain.refine import MAX_ROWS, PreparedDecays, cut_decays, fit_factor, pretrigger_sigma
-    from rigidid.io.records import layout_ids
+    from rigidid.io.records.read import layout_ids
 
     files = [Path(p) for p in paths]
     p = len(sensor_ids)

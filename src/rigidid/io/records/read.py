@@ -24,10 +24,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
 from rigidid.io.atomic import atomic_path
-from rigidid.io.binary_records import BINARY_SUFFIXES
-from rigidid.io.columns import column as _column
-from rigidid.io.columns import column_order
-from rigidid.io.columns import row as _where
+from rigidid.io.records.binary import BINARY_SUFFIXES
+from rigidid.io.records.columns import column as _column
+from rigidid.io.records.columns import column_order
+from rigidid.io.records.columns import row as _where
 
 __all__ = [
     "DECAY_RATIO",
@@ -131,11 +131,11 @@ def _check_decay(data: Array, line_of: Callable[[int], int], src: str, energy: A
 
 
 def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array, float]:
-    """A binary record (layouts in :mod:`rigidid.io.binary_records`), checked like a CSV one.
+    """A binary record (layouts in :mod:`rigidid.io.records.binary`), checked like a CSV one.
 
     Row numbers in messages count samples from 1.
     """
-    from rigidid.io.binary_records import read_binary
+    from rigidid.io.records.binary import read_binary
 
     raw = read_binary(path)
     order = column_order(raw.names, raw.data.shape[1], wanted, src, raw.field)
@@ -149,7 +149,7 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
 
 
 def is_binary_record(path: Path, src: str) -> bool:
-    """Whether the suffix names a binary record (:mod:`rigidid.io.binary_records`) rather than CSV.
+    """Whether the suffix names a binary record (:mod:`rigidid.io.records.binary`) rather than CSV.
 
     Raises
     ------
@@ -209,10 +209,10 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     Notes
     -----
     The suffix chooses the reader: ``.npy``, ``.npz``, ``.mat``, ``.h5`` and
-    ``.hdf5`` are binary records (:mod:`rigidid.io.binary_records`, row
+    ``.hdf5`` are binary records (:mod:`rigidid.io.records.binary`, row
     numbers then count samples from 1); anything else is CSV, parsed in
     chunks by pandas' C engine into one preallocated array
-    (:mod:`rigidid.io.csv_records`: ``;``/tab separators, decimal comma,
+    (:mod:`rigidid.io.records.csv`: ``;``/tab separators, decimal comma,
     ``Time (s)`` headers, force/trigger columns left out with a
     :class:`~rigidid.errors.NonSensorColumnWarning`), so memory is the result
     plus one chunk. Blank lines are skipped (but counted in row numbers).
@@ -222,7 +222,7 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     p = Path(path)
     if is_binary_record(p, src):
         return _read_binary_record(p, wanted, src)
-    from rigidid.io.csv_records import read_csv_columns
+    from rigidid.io.records.csv import read_csv_columns
 
     raw = read_csv_columns(p, wanted)
     n = raw.time.shape[0]

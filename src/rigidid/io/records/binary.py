@@ -14,7 +14,7 @@ The layouts (also in ``docs/FORMATS.md``):
     floats; mode shapes compare channels.
 ``.tdms``
     One group of channels named by sensor id, plus optionally ``time``;
-    else the channels' ``wf_increment`` (:mod:`rigidid.io.tdms_records`).
+    else the channels' ``wf_increment`` (:mod:`rigidid.io.records.tdms`).
 ``.npz``, ``.mat``, ``.h5``/``.hdf5``
     Named arrays (``.h5``: datasets at the root of the file), either
 
@@ -338,7 +338,7 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
     if not p.is_file():
         return None
     if suffix in (".npz", ".h5", ".hdf5", ".mat"):
-        from rigidid.io.array_streams import open_blocks
+        from rigidid.io.records.arrays import open_blocks
 
         opened = open_blocks(p, rows)
         if opened is None:
@@ -348,7 +348,7 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
     if suffix == ".wav":
         return _wav_blocks(p, rows)
     if suffix == ".tdms":
-        from rigidid.io.tdms_records import open_tdms
+        from rigidid.io.records.tdms import open_tdms
 
         try:
             names, n, dt, parts = open_tdms(p, rows)
@@ -405,7 +405,7 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
         rate, data = _wav(p, src, mmap=False)
         return RawRecord(None, _wav_floats(data), None, 1.0 / rate, "channels")
     if suffix == ".tdms":
-        from rigidid.io.tdms_records import open_tdms
+        from rigidid.io.records.tdms import open_tdms
 
         names, _, dt, parts = open_tdms(p, 1 << 16)
         pieces = list(parts)
@@ -415,7 +415,7 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     if suffix == ".mat":
         from scipy.io import loadmat
 
-        from rigidid.io.array_streams import is_mat73, mat73_fields
+        from rigidid.io.records.arrays import is_mat73, mat73_fields
 
         if is_mat73(p):  # MATLAB v7.3 is HDF5
             try:

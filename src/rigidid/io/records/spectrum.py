@@ -25,7 +25,7 @@ Array = NDArray[np.float64]
 def _record_power(path: Path, wanted: list[str], n: int, window: Array, progress: ProgressCallback | None) -> Array:
     """Sum over channels of the mean of ``|rfft((x_s - mean) w)|^2`` over every Welch segment of one file."""
     from rigidid.core.timedomain.preprocess import segment_power
-    from rigidid.io.streamed_records import open_source
+    from rigidid.io.records.streamed import open_source
 
     step = n - n // 2
     source = open_source(path, wanted, progress)
@@ -85,7 +85,7 @@ def summed_spectrum_streamed(
         A record shorter than `segment` rows (the whole-record routine then
         shortens the segment: read such records whole).
     """
-    from rigidid.io.records import layout_ids
+    from rigidid.io.records.read import layout_ids
 
     n = int(segment)
     k = np.arange(n)

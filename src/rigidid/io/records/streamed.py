@@ -44,9 +44,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError
-from rigidid.io.columns import column as _column
-from rigidid.io.columns import column_order
-from rigidid.io.columns import row as _where
+from rigidid.io.records.columns import column as _column
+from rigidid.io.records.columns import column_order
+from rigidid.io.records.columns import row as _where
 from rigidid.progress import ProgressCallback
 
 READ_CONTENT_ROWS = 1 << 18
@@ -144,7 +144,7 @@ class _Source:
 
 def open_source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
     """A record file's row blocks (CSV or binary, by its suffix), its sensor columns in the order of `wanted`."""
-    from rigidid.io.records import is_binary_record
+    from rigidid.io.records.read import is_binary_record
 
     src = str(path)
     if is_binary_record(path, src):
@@ -153,7 +153,7 @@ def open_source(path: Path, wanted: list[str], progress: ProgressCallback | None
 
 
 def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.csv_records import CsvHead, csv_blocks
+    from rigidid.io.records.csv import CsvHead, csv_blocks
 
     gen = csv_blocks(path, wanted, progress)
     head = next(gen)
@@ -168,7 +168,7 @@ def _csv_source(path: Path, wanted: list[str], progress: ProgressCallback | None
 
 
 def _binary_source(path: Path, wanted: list[str], src: str, progress: ProgressCallback | None) -> _Source:
-    from rigidid.io.binary_records import named_blocks, npy_blocks, read_binary
+    from rigidid.io.records.binary import named_blocks, npy_blocks, read_binary
 
     if path.suffix.lower() == ".npy" and path.is_file():
         found = npy_blocks(path, _BLOCK)
@@ -264,7 +264,7 @@ class _TimeCheck:
         self.allowed: float | None = None
 
     def add(self, t: Array) -> None:
-        from rigidid.io.records import TIME_TOLERANCE, _resolution
+        from rigidid.io.records.read import TIME_TOLERANCE, _resolution
 
         if t.shape[0] == 0:
             return
@@ -491,7 +491,7 @@ def read_record_streamed(
         row and column; and a record too short for `factor`.
     """
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, Decimator, channel_energy
-    from rigidid.io.records import MIN_ROWS, _check_decay, layout_ids
+    from rigidid.io.records.read import MIN_ROWS, _check_decay, layout_ids
 
     src = str(path)
     wanted = layout_ids(sensor_ids, src)

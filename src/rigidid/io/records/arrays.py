@@ -1,6 +1,6 @@
 """Named arrays of ``.npz``, ``.mat`` (v5 and v7.3) and ``.h5`` files read in row blocks.
 
-The record layouts are those of :mod:`rigidid.io.binary_records`: ``data``
+The record layouts are those of :mod:`rigidid.io.records.binary`: ``data``
 plus ``channels``, or one 1-D array per sensor id; ``time`` or a scalar
 ``dt``/``sample_rate``. This module finds where each array's values sit and
 reads them a block of samples at a time, so the memory held is one block,
@@ -558,7 +558,7 @@ def _h5_record(path: Path, rows: int, mat73: bool) -> tuple[_Plan, Iterator[Any]
         extra = {k: v for k, v in fh.attrs.items() if k in ("dt", "sample_rate")}
         if "data" in datasets:
             extra.update({k: v for k, v in datasets["data"].attrs.items() if k in ("dt", "sample_rate")})
-    from rigidid.io.binary_records import _names
+    from rigidid.io.records.binary import _names
 
     def small(key: str) -> Any:
         return _mat73_value(fh, datasets[key]) if mat73 else datasets[key][()]
@@ -623,7 +623,7 @@ def open_blocks(path: Path, rows: int) -> tuple[_Plan, Iterator[Any]] | None:
 
     else:
         return None
-    from rigidid.io.binary_records import _names
+    from rigidid.io.records.binary import _names
 
     shapes = {k: a.shape for k, a in arrays.items()}
     if suffix == ".mat":

@@ -51,10 +51,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError, NonSensorColumnWarning
-from rigidid.io.columns import NON_SENSOR_PREFIXES, match_columns
-from rigidid.io.columns import column as _column
-from rigidid.io.columns import row as _where
 from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
+from rigidid.io.records.columns import NON_SENSOR_PREFIXES, match_columns
+from rigidid.io.records.columns import column as _column
+from rigidid.io.records.columns import row as _where
 from rigidid.progress import ProgressCallback
 
 __all__ = [
