@@ -1761,8 +1761,7 @@ def refine_records(
     """
 
     from rigidid.core.timedomain.refine import refine_prepared
-    from rigidid.io.records import layout_ids
-    from rigidid.io.records.streamed import open_source
+    from rigidid.io.records import layout_ids, open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]
@@ -1826,9 +1825,8 @@ def records_spectrum(
         (:func:`rigidid.io.records.spectrum.summed_spectrum_streamed`); the
         records read whole when one is shorter than a Welch segment (4096 rows).
     """
-    from rigidid.io.records import layout_ids
+    from rigidid.io.records import layout_ids, open_source
     from rigidid.io.records.spectrum import summed_spectrum_streamed
-    from rigidid.io.records.streamed import open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]

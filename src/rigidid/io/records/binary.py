@@ -50,14 +50,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
+from rigidid.io.records.columns import RESERVED_FIELDS, channel_names
 
 __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_blocks", "read_binary", "write_binary"]
 
 Array = NDArray[np.float64]
 
 BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav", ".tdms")
-
-_RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 
 
 @dataclass(frozen=True)
@@ -104,20 +103,6 @@ def _scalar(value: Any, src: str, name: str) -> float:
     return number
 
 
-def _names(value: Any, src: str) -> list[str]:
-    arr = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
-    if arr.dtype.kind in "SU" and arr.ndim == 2:  # MATLAB char matrix: one name per row
-        return ["".join(str(c) for c in row).strip() for row in arr]
-    out = []
-    for item in np.ravel(arr):
-        if isinstance(item, np.ndarray):  # MATLAB cell array element
-            item = item.item() if item.size == 1 else "".join(str(c) for c in np.ravel(item))
-        if isinstance(item, bytes):
-            item = item.decode("utf-8", errors="replace")
-        out.append(str(item).strip())
-    return out
-
-
 def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> RawRecord:
     """A record from named arrays (npz, mat, h5 root)."""
     time: Array | None = None
@@ -145,7 +130,7 @@ def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> Ra
             raise InputError(
                 "'data' needs 'channels', the names of its columns", source=src, location=_field("channels")
             )
-        names = _names(fields["channels"], src)
+        names = channel_names(fields["channels"])
         if len(names) != data.shape[1]:
             if len(names) == data.shape[0] and data.shape[1] != len(names):
                 data = data.T  # channels x samples, as MATLAB users often store it
@@ -155,7 +140,7 @@ def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> Ra
                 )
         field = _field("data")
     else:
-        names = [k for k in fields if k not in _RESERVED and not k.startswith("__")]
+        names = [k for k in fields if k not in RESERVED_FIELDS and not k.startswith("__")]
         if not names:
             raise InputError("no channels: give 'data' and 'channels', or one array per sensor id", source=src)
         columns = []

@@ -14,9 +14,8 @@ whole or not at all.
 
 from __future__ import annotations
 
-import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -24,110 +23,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
 from rigidid.io.atomic import atomic_path
-from rigidid.io.records.binary import BINARY_SUFFIXES
-from rigidid.io.records.columns import column as _column
+from rigidid.io.records.checks import MIN_ROWS, check_record, layout_ids
 from rigidid.io.records.columns import column_order
 from rigidid.io.records.columns import row as _where
+from rigidid.io.records.sources import is_binary_record
 
-__all__ = [
-    "DECAY_RATIO",
-    "MIN_ROWS",
-    "TIME_TOLERANCE",
-    "read_record",
-    "write_record",
-]
+__all__ = ["read_record", "write_record"]
 
 Array = NDArray[np.float64]
-
-TIME_TOLERANCE = 0.01
-"""Largest relative deviation of a time step from the mean sample interval.
-
-The mean interval is ``(t_last - t_first) / (n - 1)``. When the time column is
-written with few digits, the rounding (half a unit of the last digit of the
-last row's time, twice) is allowed on top."""
-
-DECAY_RATIO = 0.5
-"""A record decays when, after its energy peak, the RMS of the last 10 % of the
-samples is below this fraction of the RMS of the first 10 % (channels scaled
-by their peak value, then summed)."""
-
-MIN_ROWS = 16
-"""Fewest data rows a record may have."""
-
-
-
-def _resolution(token: str) -> float:
-    """Unit of the last digit of a number as written (``"0.125"`` -> 0.001, ``"1.5e-3"`` -> 1e-4)."""
-    text = token.strip().lower()
-    exponent = 0
-    if "e" in text:
-        text, _, exp = text.partition("e")
-        try:
-            exponent = int(exp)
-        except ValueError:
-            return 0.0
-    decimals = len(text.partition(".")[2]) if "." in text else 0
-    return float(10.0 ** (exponent - decimals))
-
-
-def _check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callable[[], list[str]], src: str) -> float:
-    n = time.shape[0]
-    dt: float = float(time[-1] - time[0]) / (n - 1)
-    if not dt > 0.0:
-        raise InputError("time does not increase from the first to the last row", source=src, location=_column("time"))
-    steps = np.diff(time)
-    typical = float(np.median(steps))
-    deviation = np.abs(steps - typical)
-    tolerance = TIME_TOLERANCE * typical
-    bad = np.flatnonzero(deviation > tolerance)
-    if bad.size:
-        # allow the rounding of the digits written (two roundings of half a unit each)
-        resolution = min((_resolution(token) for token in time_tokens()), default=0.0)
-        if resolution > 0.5 * typical:
-            raise InputError(
-                f"time is written with too few digits (to {resolution:g} s) for the sample interval {typical:.6g} s",
-                source=src,
-                location=_column("time"),
-            )
-        allowed = max(tolerance, resolution) * (1.0 + 1e-6)
-        bad = np.flatnonzero((deviation > allowed) & (np.abs(steps - dt) > allowed))
-    if bad.size:
-        k = int(bad[0])
-        raise InputError(
-            f"time step {steps[k]:.6g} s differs from the sample interval {typical:.6g} s by more than "
-            f"{100 * TIME_TOLERANCE:g} % (time must be uniformly sampled and increasing)",
-            source=src,
-            location=_where(line_of(k + 1)),
-        )
-    return dt
-
-
-def _check_decay(data: Array, line_of: Callable[[int], int], src: str, energy: Array | None = None) -> Array:
-    """Raise unless the record decays after its energy peak; return its ``channel_energy``."""
-    from rigidid.core.timedomain.preprocess import channel_energy
-
-    if energy is None:
-        energy = channel_energy(data)
-    peak = int(np.argmax(energy))
-    after = energy[peak:]
-    k = after.shape[0] // 10
-    if k < 2:
-        raise InputError(
-            f"the largest sample is at the end of the record ({after.shape[0]} samples follow it): no free decay",
-            source=src,
-            location=_where(line_of(peak)),
-        )
-    head = math.sqrt(float(np.mean(after[:k])))
-    tail = math.sqrt(float(np.mean(after[-k:])))
-    if not tail < DECAY_RATIO * head:
-        first, last = line_of(data.shape[0] - k), line_of(data.shape[0] - 1)
-        raise InputError(
-            f"the signal does not decay: after the peak (row {line_of(peak)}) the RMS of the last 10 % of the "
-            f"samples is {100 * tail / head:.0f} % of that of the first 10 % (must be below {100 * DECAY_RATIO:g} %)",
-            source=src,
-            location=f"rows {first}-{last}",
-        )
-    return energy
 
 
 def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array, float]:
@@ -144,35 +47,9 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
     if n < MIN_ROWS:
         raise InputError(f"{n} samples; a record needs at least {MIN_ROWS}", source=src, location=raw.field)
     time: Array = raw.time if raw.time is not None else np.arange(n, dtype=float) * float(raw.dt or 0.0)
-    data, dt = _validate(data, time, lambda k: (k if k >= 0 else n + k) + 1, list, src, wanted)
+    data, dt = check_record(data, time, lambda k: (k if k >= 0 else n + k) + 1, list, src, wanted)
     return data, (float(raw.dt) if raw.time is None and raw.dt is not None else dt)
 
-
-def is_binary_record(path: Path, src: str) -> bool:
-    """Whether the suffix names a binary record (:mod:`rigidid.io.records.binary`) rather than CSV.
-
-    Raises
-    ------
-    InputError
-        A universal file (``.uff``/``.unv``): its records are read with its own geometry,
-        as the test's first argument, not beside a layout.json.
-    """
-    suffix = path.suffix.lower()
-    if suffix in (".uff", ".unv"):
-        raise InputError(
-            "a universal file is not a record beside a layout: give it as the test itself, in place of "
-            "layout.json (its dataset 58 records and geometry are read together)",
-            source=src,
-        )
-    return suffix in BINARY_SUFFIXES
-
-
-def layout_ids(sensor_ids: Sequence[str], src: str) -> list[str]:
-    """The layout's sensor ids as strings, the column names a record must have; refused when one repeats."""
-    wanted = [str(s) for s in sensor_ids]
-    if len(set(wanted)) != len(wanted):
-        raise InputError("the layout has a sensor id twice", source=src)
-    return wanted
 
 
 def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tuple[Array, float]:
@@ -229,34 +106,8 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
     if n < MIN_ROWS:
         last = raw.line_of(n - 1) if n else 1
         raise InputError(f"{n} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(last))
-    return _validate(raw.data, raw.time, raw.line_of, raw.time_tokens, src, wanted)
+    return check_record(raw.data, raw.time, raw.line_of, raw.time_tokens, src, wanted)
 
-
-def _validate(
-    data: Array,
-    time: Array,
-    line_of: Callable[[int], int],
-    time_tokens: Callable[[], list[str]],
-    src: str,
-    wanted: list[str],
-) -> tuple[Array, float]:
-    """The checks every record passes whatever its format: finite, uniform time, no dead channel, decay."""
-    if not np.isfinite(time).all() or not np.isfinite(data).all():
-        finite = np.isfinite(data)
-        bad_rows = np.flatnonzero(~np.isfinite(time) | ~finite.all(axis=1))
-        k = int(bad_rows[0])
-        name = "time" if not np.isfinite(time[k]) else wanted[int(np.argmin(finite[k]))]
-        raise InputError("a value is NaN or infinite", source=src, location=f"{_where(line_of(k))}, {_column(name)}")
-    dt = _check_time(time, line_of, time_tokens, src)
-    peaks = np.zeros(data.shape[1])
-    step = max(1, (1 << 16) // max(1, data.shape[1]))
-    for start in range(0, data.shape[0], step):
-        np.maximum(peaks, np.max(np.abs(data[start : start + step]), axis=0), out=peaks)
-    for i, name in enumerate(wanted):
-        if not peaks[i] > 0.0:
-            raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
-    _check_decay(data, line_of, src)
-    return data, dt
 
 
 def write_record(
