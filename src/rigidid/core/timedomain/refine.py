@@ -365,7 +365,7 @@ def prepare_decays(
     -----
     The pre-trigger is ``r[:onset - 2]``; its level per channel is the
     RMS about each record's mean, scaled by the fit filter's noise gain
-    (:func:`pretrigger_sigma`). :mod:`rigidid.io.refit_records` builds the same
+    (:func:`pretrigger_sigma`). :mod:`rigidid.io.records.refit` builds the same
     from record files read in row blocks.
     """
     p = records[0].shape[1]
