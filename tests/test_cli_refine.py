@@ -153,7 +153,7 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
     from rigidid import api
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     layout = api.load_layout(FOUR / "layout.json")
     modes, estimate = api.estimate_rigid_modes(layout, long_records)
     start = api.identify(layout, modes)
@@ -185,7 +185,7 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
     _patch(monkeypatch, "STREAM_REFIT_VALUES", 10**12)
     whole = CliRunner().invoke(app, args)
@@ -234,7 +234,7 @@ def test_report_records_never_holds_the_raw_records(
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
     seen: list[int] = []
     real = api.records_spectrum

@@ -125,3 +125,20 @@ def test_a_cost_that_cannot_be_evaluated_is_refused_not_taken() -> None:
                               residuals=T.size, decrement=0.05)  # fmt: skip
     assert out.converged[0]
     np.testing.assert_allclose(out.x[0], TRUTH, atol=1e-8)
+
+
+def test_a_parameter_the_data_do_not_determine_does_not_stop_the_fit() -> None:
+    # a fifth parameter the residual does not depend on (a mode the impacts do not excite): its
+    # column of J is zero, J^T J singular; Marquardt's scaling must stay regular and the fit
+    # reach the minimum of the others, the undetermined one left where it started
+    y = _model(TRUTH)[None]
+    normal, cost = _problem(y)
+
+    def normal5(x: np.ndarray, index: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        c, g, h = normal(x[:, :4], index)
+        return c, np.pad(g, ((0, 0), (0, 1))), np.pad(h, ((0, 0), (0, 1), (0, 1)))
+
+    out = levenberg_marquardt(normal5, lambda x, i: cost(x[:, :4], i), np.append(FAR, 0.7)[None],
+                              max_evaluations=400, residuals=T.size, decrement=0.05)  # fmt: skip
+    assert out.converged[0]
+    np.testing.assert_allclose(out.x[0], [*TRUTH, 0.7], atol=1e-9)
