@@ -29,6 +29,12 @@ GOLDEN_REL = 1e-10
 magnitude in its array (scalars: of themselves; diagnostics: of 1). Observed: below 1e-14
 on the three samples (tests/test_samples.py)."""
 
+STANDARD_ERROR_REL = 1e-6
+"""Golden comparison of the default standard errors (expected.json ``standard_errors``),
+relative to the larger of their own scale and the figure they qualify: they are statistics
+(two digits matter), and on the exact samples they scale with a rounding-level shape noise
+measured from the rigid-body fit. Observed: identical run to run on one machine."""
+
 BATCH_REL = 3e-14
 """A batch of tests through the kernel against the same tests one by one (both are
 rigidid.core.estimator), relative to the largest entry of each quantity. Observed: below

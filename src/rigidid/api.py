@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid import api_checks
 from rigidid.core.identify import Identification, Method
 from rigidid.core.identify import identify as identify_core
 from rigidid.core.selection import rigid_fit_residuals, select_rigid_modes
@@ -32,6 +33,7 @@ from rigidid.progress import no_progress
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import ScaledBody
+    from rigidid.core.linearised import StandardErrors
     from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import LayoutReport, Prediction, ReferenceReport, SensorPlan
@@ -115,6 +117,11 @@ class IdentifyResult:
         column ``scaling`` ``modal_a``, written by ``rigidid modes --frf``):
         the mass, CG, inertia, stiffness and damping in absolute units from the
         scaled modes (:func:`rigidid.core.frfmodes.body_from_scaled_shapes`).
+    standard_errors : StandardErrors or None
+        Linearised standard errors of the structured route's answer, computed
+        by default (:func:`rigidid.core.linearised.standard_errors`).
+    torque_roll_axis_std_deg : float or None
+        Angular standard error of the torque roll axis (:func:`with_mounts`).
     """
 
     identification: Identification
@@ -135,6 +142,8 @@ class IdentifyResult:
     torque_roll_axis: TorqueRollAxis | None = None
     mount_model: MountModelFit | None = None
     scaled: ScaledBody | None = None
+    standard_errors: StandardErrors | None = None
+    torque_roll_axis_std_deg: float | None = None
 
 
 @dataclass(frozen=True)
@@ -199,6 +208,9 @@ class Mounts:
         Rates along each mount's axes (force units come from the presentation).
     nominal : ndarray, shape (n, 3) or None
         The file's nominal rates along the same axes, when every mount gives them.
+    stiffness_std, damping_std : ndarray, shape (n, 3) or None
+        Linearised standard errors of the rates (units of `rates`, scaled by the
+        mass when known), when the identification has standard errors.
     """
 
     ids: tuple[str, ...]
@@ -206,6 +218,8 @@ class Mounts:
     rates: MountRates
     nominal: NDArray[np.float64] | None = None
     groups: tuple[str | None, ...] | None = None
+    stiffness_std: NDArray[np.float64] | None = None
+    damping_std: NDArray[np.float64] | None = None
 
 
 def load_layout(path: PathLike) -> LayoutFile:
@@ -259,6 +273,7 @@ def _choose_modes(
     wanted: Sequence[int] | None,
     source: str | None,
     fewest: int = 6,
+    suggest_mounts: bool = False,
 ) -> tuple[tuple[int, ...], Selection, dict[int, float] | None]:
     if wanted is not None:
         labels = tuple(int(m) for m in wanted)
@@ -273,7 +288,10 @@ def _choose_modes(
         return labels, "given", None
     n = len(modes.labels)
     if n < fewest:
-        raise InputError(f"{n} modes given; the six rigid-body modes are needed", source=source)
+        hint = ""
+        if n == 5 and fewest == 6 and suggest_mounts:
+            hint = "; the mount model fits five (--method mounts, with --mounts)"
+        raise InputError(f"{n} modes given; the six rigid-body modes are needed{hint}", source=source)
     if n <= 6:
         return modes.labels, "all", None
     if transformation.shape[0] <= 6:
@@ -360,33 +378,40 @@ def identify(
         raise InputError("the mount model needs the mounts (a mounts.json or body.json)", source="mounts")
     if method == "mounts" and uncertainty:
         raise InputError("Monte Carlo intervals are computed for the structured method only", source="uncertainty")
-    labels, selection, residuals = _choose_modes(table, t, modes_used, source, 5 if method == "mounts" else 6)
+    labels, selection, residuals = _choose_modes(
+        table, t, modes_used, source, 5 if method == "mounts" else 6, suggest_mounts=mounts is not None
+    )
     used = table.subset(labels)
     notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
     fit = None
+    errors = None
     if method == "mounts":
         assert mounts is not None
         result, fit = _mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
     else:
-        result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+        levels = api_checks.noise_levels(noise, positions, directions, used.shapes)
+        weighted = levels if method == "structured" else None
+        result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method, noise=weighted)
     result = _check_result(result, labels, lay.units.length, notes)
+    if method == "structured":
+        errors = api_checks.standard_errors_of(result, positions, directions, poles, used.shapes, levels)
+        units = {"length": lay.units.length, "mass": lay.units.mass}
+        assumed = positions.shape[0] <= 6 and not (isinstance(noise, Mapping) and "shape" in noise)
+        result = api_checks.checked(
+            result, errors, (positions, directions, poles, used.shapes), levels, units, assumed=assumed
+        )
     intervals = None
     if uncertainty:
-        from rigidid.core.noise import estimate_noise
         from rigidid.core.uncertainty import propagate
 
-        if isinstance(noise, Mapping) or noise is None:
-            levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
-        else:
-            levels = noise
         step = progress or no_progress
         task = f"{uncertainty} Monte Carlo draws"
         step(task, 0, uncertainty)
         intervals = propagate(
             positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed,
-            progress=lambda _, done, total: step(task, done, total),
+            progress=lambda _, done, total: step(task, done, total), weighted=True,
         )  # fmt: skip
     return IdentifyResult(
         identification=result,
@@ -403,6 +428,7 @@ def identify(
         layout_name=lay.name,
         mount_model=fit,
         scaled=_scaled_body(used, poles, positions, directions),
+        standard_errors=errors,
     )
 
 
@@ -485,10 +511,18 @@ def _check_result(result: Identification, labels: Sequence[int], length: str, no
     bad = inertia_not_positive(result.inertia_per_mass)
     if bad is not None:
         moments = ", ".join(f"{v:.4g}" for v in bad.principal_moments_per_mass)
+        observability = result.diagnostics.inertia_observability
+        cause = (
+            "check that these are the six rigid-body modes and that the layout matches the test"
+            if observability >= 0.1
+            else f"the supports couple rotations to translations only weakly (inertia observability "
+            f"{observability:.2g}, typically 0.1-0.3), so noise in the modes can make it so; the mount model "
+            "(--method mounts with --mounts) keeps the inertia positive definite, or measure with the supports "
+            "further from the CG's height"
+        )
         raise IdentificationError(
             f"modes {', '.join(str(m) for m in labels)} determine no rigid body: the inertia tensor they give is "
-            f"not positive definite (principal moments per mass {moments} {length}^2); check that these are the "
-            "six rigid-body modes and that the layout matches the test"
+            f"not positive definite (principal moments per mass {moments} {length}^2); {cause}"
         )
     if not notes:
         return result
@@ -1466,9 +1500,15 @@ def _mount_model(
         except IdentificationError:
             free = None
     start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
-    ident, model = identify_mount_model(
-        positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
-    )
+    try:
+        ident, model = identify_mount_model(
+            positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
+        )
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise IdentificationError(
+            f"the mount model cannot be fitted to these modes ({exc}): check that mounts.json lists every support "
+            "at its position, in the layout's axes and units"
+        ) from exc
     length = layout_frame(positions).scale
     residual = eigen_residual(
         poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length
@@ -1525,9 +1565,18 @@ def with_mounts(
                 for k, m in enumerate(spec.mounts)
             ])  # fmt: skip
         ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
-        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups))
+        k_std, c_std = None, None
+        if result.standard_errors is not None:
+            k_std, c_std = api_checks.rate_errors(
+                result.standard_errors, positions, rates.axes, groups, (rates.stiffness, rates.damping)
+            )
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups, k_std, c_std))
     if torque_axis is not None:
-        out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
+        tra = torque_roll_axis(ident.inertia_per_mass, torque_axis)
+        tra_std = None
+        if result.standard_errors is not None:
+            tra_std = api_checks.roll_axis_error(result.standard_errors, torque_axis, tra.direction)
+        out = replace(out, torque_roll_axis=tra, torque_roll_axis_std_deg=tra_std)
     return out
 
 
@@ -1701,7 +1750,9 @@ def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResul
         stiffness_per_mass=refinement.stiffness_per_mass,
         damping_per_mass=refinement.damping_per_mass,
     )
-    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+    return replace(
+        result, identification=refined, record_bound=record_bound(refinement, ident.mass), standard_errors=None
+    )
 
 
 STREAM_REFIT_VALUES = 16 * 150_000

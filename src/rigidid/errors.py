@@ -111,3 +111,11 @@ class ElasticModeWarning(RigididWarning):
 
 class RefinementWarning(RigididWarning):
     """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""
+
+
+class ModelMisfitWarning(RigididWarning):
+    """The rigid-body model explains the modes only to several times the stated noise (chi-square misfit)."""
+
+
+class UnitsWarning(RigididWarning):
+    """The data imply an implausible body (density, size): the units or the layout are probably wrong."""

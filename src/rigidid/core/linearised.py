@@ -34,7 +34,7 @@ References
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,24 +44,30 @@ from rigidid.core.noise import NoiseLevels, tilt_directions
 from rigidid.core.statespace import modal_from_poles
 
 __all__ = [
+    "ACCEPTABLE_MISFIT",
     "STEP",
     "Linearised",
+    "StandardErrors",
+    "misfit_parts",
     "noise_directions",
     "principal_axis_deviation",
     "residual_weights",
     "spread",
+    "standard_errors",
 ]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
 
-STEP = 1e-3
-"""Central-difference step, in standard deviations of each noise source."""
+STEP = 1e-5
+"""Central-difference step: the relative move of each quantity (frequency, damping ratio, a
+mode's RMS reading, the layout's RMS radius; radians for tilts), whatever its noise level, so
+that derivatives stay exact to rounding when a level is tiny (exact data) or large."""
 
 
 @dataclass(frozen=True)
 class Directions:
-    """The data moved by ``+STEP`` and ``-STEP`` standard deviations along each noise direction.
+    """The data moved by ``+step`` and ``-step`` along each noise direction.
 
     Attributes
     ----------
@@ -69,12 +75,15 @@ class Directions:
     poles : ndarray of complex, shape (2 k, 6)
     shapes : ndarray of complex, shape (2 k, p, 6)
         Rows ``0..k-1`` moved forwards, ``k..2k-1`` backwards.
+    sigma : ndarray, shape (k,)
+        Standard deviation of each direction's noise in units of its move.
     """
 
     positions: Array
     directions: Array
     poles: CArray
     shapes: CArray
+    sigma: Array
 
 
 def _poles_from(f: Array, z: Array) -> CArray:
@@ -83,8 +92,11 @@ def _poles_from(f: Array, z: Array) -> CArray:
     return result
 
 
-def _shape_moves(positions: Array, directions: Array, shapes: CArray, level: float) -> CArray:
-    """Shape moves (12 per mode, 72 in all) carrying the rigid-body part of the shape noise: (72, p, 6)."""
+def _shape_moves(positions: Array, directions: Array, shapes: CArray, step: float) -> CArray:
+    """Shape moves (12 per mode, 72 in all) along the rigid-body part of the shape noise: (72, p, 6).
+
+    Each moves one mode by `step` of its RMS reading along ``U e_i`` or ``1j U e_i``.
+    """
     from rigidid.core.geometry import local_sensor_matrix
 
     u = np.linalg.svd(local_sensor_matrix(positions, directions), full_matrices=False)[0]  # (p, 6)
@@ -95,7 +107,7 @@ def _shape_moves(positions: Array, directions: Array, shapes: CArray, level: flo
     for k in range(6):
         for part in (1.0, 1j):
             for i in range(6):
-                moves[row, :, k] = part * u[:, i] * level * rms[k] / np.sqrt(2.0)
+                moves[row, :, k] = part * u[:, i] * step * rms[k]
                 row += 1
     return moves
 
@@ -103,7 +115,7 @@ def _shape_moves(positions: Array, directions: Array, shapes: CArray, level: flo
 def noise_directions(
     positions: Array, directions: Array, poles: CArray, shapes: CArray, noise: NoiseLevels, *, step: float = STEP
 ) -> Directions:
-    """The test's data moved along every noise direction of `noise`, by ``+-step`` standard deviations.
+    """The test's data moved along every noise direction of `noise`, by ``+-step`` (relative).
 
     Parameters
     ----------
@@ -116,7 +128,7 @@ def noise_directions(
     noise : NoiseLevels
         Standard deviations; sources at zero get no direction.
     step : float
-        Size of the move in standard deviations.
+        Relative size of the moves.
 
     Returns
     -------
@@ -124,14 +136,21 @@ def noise_directions(
     """
     p = positions.shape[0]
     f, z = modal_from_poles(poles)
+    radius = float(np.sqrt(np.mean(np.sum((positions - positions.mean(axis=0)) ** 2, axis=1))))
     moves_lam: list[CArray] = []
     moves_psi: list[CArray] = []
     moves_pos: list[Array] = []
     moves_dir: list[Array] = []
+    sigma: list[float] = []
 
     def add(
-        lam: CArray | None = None, psi: CArray | None = None, pos: Array | None = None, dirs: Array | None = None
+        level: float,
+        lam: CArray | None = None,
+        psi: CArray | None = None,
+        pos: Array | None = None,
+        dirs: Array | None = None,
     ) -> None:
+        sigma.append(level / step)
         moves_lam.append(np.zeros((1, 6), dtype=complex) if lam is None else lam[None] - poles[None])
         moves_psi.append(np.zeros((1, p, 6), dtype=complex) if psi is None else psi[None])
         moves_pos.append(np.zeros((1, p, 3)) if pos is None else pos[None])
@@ -140,19 +159,19 @@ def noise_directions(
     for k in range(6):
         unit = np.eye(6)[k]
         if noise.frequency > 0.0:
-            add(lam=_poles_from(f * (1.0 + step * noise.frequency * unit), z))
+            add(noise.frequency, lam=_poles_from(f * (1.0 + step * unit), z))
         if noise.damping > 0.0 and z[k] > 0.0:
-            add(lam=_poles_from(f, np.clip(z * (1.0 + step * noise.damping * unit), 0.0, 0.999)))
+            add(noise.damping, lam=_poles_from(f, np.clip(z * (1.0 + step * unit), 0.0, 0.999)))
     if noise.shape > 0.0:
-        for move in _shape_moves(positions, directions, shapes, step * noise.shape):
-            add(psi=move)
+        # real and imaginary parts each carry shape / sqrt(2) of the RMS reading
+        for move in _shape_moves(positions, directions, shapes, step):
+            add(noise.shape / np.sqrt(2.0), psi=move)
     if noise.position > 0.0:
         for i in range(p * 3):
-            add(pos=(step * noise.position * np.eye(p * 3)[i]).reshape(p, 3))
+            add(noise.position / radius, pos=(step * radius * np.eye(p * 3)[i]).reshape(p, 3))
     if noise.angle_deg > 0.0:
         for i in range(p * 3):
-            rot = (np.deg2rad(step * noise.angle_deg) * np.eye(p * 3)[i]).reshape(p, 3)
-            add(dirs=tilt_directions(directions, rot))
+            add(np.deg2rad(noise.angle_deg), dirs=tilt_directions(directions, (step * np.eye(p * 3)[i]).reshape(p, 3)))
     d_lam, d_psi = np.concatenate(moves_lam), np.concatenate(moves_psi)
     d_pos, d_dir = np.concatenate(moves_pos), np.concatenate(moves_dir)
     k_all = d_lam.shape[0]
@@ -162,6 +181,7 @@ def noise_directions(
         directions=both([directions + d_dir, directions - d_dir]),
         poles=both([poles + d_lam, poles - d_lam]).reshape(2 * k_all, 6),
         shapes=both([shapes + d_psi, shapes - d_psi]),
+        sigma=np.asarray(sigma, dtype=float),
     )
 
 
@@ -175,15 +195,15 @@ class Linearised:
         The estimate from the data as measured (a batch of one).
     moved : Estimates
         ``2 k`` estimates: ``k`` moved forwards, then ``k`` backwards.
-    step : float
-        The move, in standard deviations.
+    sigma : ndarray, shape (k,)
+        Standard deviation of each direction's noise in units of its move.
     noise : NoiseLevels
         The levels the moves were scaled by.
     """
 
     base: Estimates
     moved: Estimates
-    step: float
+    sigma: Array
     noise: NoiseLevels
 
     @property
@@ -202,7 +222,7 @@ class Linearised:
         """
         values = np.asarray(figure(self.moved), dtype=float)
         k = values.shape[0] // 2
-        d: Array = (values[:k] - values[k:]) / (2.0 * self.step)
+        d: Array = (values[:k] - values[k:]) * (self.sigma / 2.0).reshape(-1, *([1] * (values.ndim - 1)))
         ok = self.moved.ok[:k] & self.moved.ok[k:]
         d[~ok] = 0.0
         return d
@@ -251,7 +271,7 @@ def spread(
         held fixed at the estimate's: its own dependence on the data moves the
         estimate only to second order.
     step : float
-        Central-difference step in standard deviations.
+        Relative central-difference step (:data:`STEP`).
 
     Returns
     -------
@@ -278,7 +298,7 @@ def spread(
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     base = Estimates(*(getattr(all_est, n)[:1] for n in names))
     rest = Estimates(*(getattr(all_est, n)[1:] for n in names))
-    return Linearised(base, rest, step, noise)
+    return Linearised(base, rest, moved.sigma, noise)
 
 
 def principal_axis_deviation(reference: Array) -> Callable[[Estimates], Array]:
@@ -362,6 +382,25 @@ def residual_weights(
     with ``30 - 9 = 21`` degrees of freedom when the model and the noise levels
     are right.
     """
+    d = _residual_responses(positions, directions, poles, shapes, noise, cg, inertia_params)
+    if d is None:
+        return None
+    ev, vec = np.linalg.eigh(d.T @ d)
+    ev = np.maximum(ev, 1e-10 * max(float(ev[-1]), 1e-300))
+    result: Array = (vec / np.sqrt(ev)).T
+    return result
+
+
+def _residual_responses(
+    positions: Array,
+    directions: Array,
+    poles: CArray,
+    shapes: CArray,
+    noise: NoiseLevels,
+    cg: Array,
+    inertia_params: Array,
+) -> Array | None:
+    """Response (k, 30) of the eq. (18) residuals at a fixed CG and ``J / m`` to each noise direction."""
     from rigidid.core.estimator import eq18_residuals, prepare
 
     levels = NoiseLevels(frequency=noise.frequency, damping=noise.damping, shape=noise.shape)
@@ -380,9 +419,230 @@ def residual_weights(
     q = prep.stiffness[1:] * (ratio**2)[:, None, None]
     p = prep.damping[1:] * ratio[:, None, None]
     k = q.shape[0] // 2
-    dq, dp = (q[:k] - q[k:]) / (2.0 * STEP), (p[:k] - p[k:]) / (2.0 * STEP)
-    d = eq18_residuals(dq, dp, np.broadcast_to(cg, (k, 3)), np.broadcast_to(inertia_params, (k, 6)))
-    ev, vec = np.linalg.eigh(d.T @ d)
-    ev = np.maximum(ev, 1e-10 * max(float(ev[-1]), 1e-300))
-    result: Array = (vec / np.sqrt(ev)).T
+    half = (moved.sigma / 2.0)[:, None, None]
+    dq, dp = (q[:k] - q[k:]) * half, (p[:k] - p[k:]) * half
+    result: Array = eq18_residuals(dq, dp, np.broadcast_to(cg, (k, 3)), np.broadcast_to(inertia_params, (k, 6)))
     return result
+
+
+def misfit_parts(
+    positions: Array,
+    directions: Array,
+    poles: CArray,
+    shapes: CArray,
+    noise: NoiseLevels,
+    center_of_gravity: Array,
+    inertia_per_mass: Array,
+) -> tuple[float, float] | None:
+    """Misfit of the stiffness and of the damping equations of eq. (18) of [1], each in noise units.
+
+    Parameters
+    ----------
+    positions, directions : ndarray, shape (p, 3)
+        Sensor locations (length) and unit measuring axes.
+    poles : ndarray of complex, shape (6,)
+        Poles of the six rigid-body modes (rad/s).
+    shapes : ndarray of complex, shape (p, 6)
+        Mode shapes as the sensors read them.
+    noise : NoiseLevels
+        Frequency, damping and shape levels.
+    center_of_gravity : ndarray, shape (3,)
+        The estimate's CG (length, the layout's axes).
+    inertia_per_mass : ndarray, shape (3, 3)
+        The estimate's ``J / m`` (length^2).
+
+    Returns
+    -------
+    (float, float) or None
+        ``r_Q^T Sigma_Q^+ r_Q`` and ``r_P^T Sigma_P^+ r_P``: chi-square-like
+        (15 equations each) misfits of the stiffness and damping equations at
+        the estimate, each against its own noise covariance; None when the
+        noise is zero. The larger one says which part of the data the rigid
+        model misses.
+    """
+    from rigidid.core.estimator import eq18_residuals, prepare
+
+    prep = prepare(positions[None], directions[None], poles[None], shapes[None])
+    if not prep.ok[0]:
+        return None
+    scale = float(prep.scale[0])
+    g = (np.asarray(center_of_gravity, dtype=float) - prep.centre[0]) / scale
+    j = np.asarray(inertia_per_mass, dtype=float) / scale**2
+    params = np.array([j[0, 0], j[1, 1], j[2, 2], j[0, 1], j[0, 2], j[1, 2]])
+    d = _residual_responses(positions, directions, poles, shapes, noise, g, params)
+    if d is None:
+        return None
+    r = eq18_residuals(prep.stiffness, prep.damping, g[None], params[None])[0]
+    parts = []
+    for block in (slice(0, 15), slice(15, 30)):
+        cov = d[:, block].T @ d[:, block]
+        parts.append(float(r[block] @ np.linalg.pinv(cov, rcond=1e-10, hermitian=True) @ r[block]))
+    return parts[0], parts[1]
+
+
+ACCEPTABLE_MISFIT = 4.0
+"""Misfit per degree of freedom above which the noise weights are not trusted: the
+unweighted (fixed-weight) estimate is reported, with standard errors scaled up."""
+
+
+@dataclass(frozen=True)
+class StandardErrors:
+    """Linearised standard errors of an identification, in the units of its figures.
+
+    Attributes
+    ----------
+    center_of_gravity : ndarray, shape (3,)
+        Length.
+    inertia : ndarray, shape (3, 3)
+        Of the inertia tensor (mass length^2), or of ``J / m`` (length^2) when `per_mass`.
+    principal_moments : ndarray, shape (3,)
+        Ascending, as `inertia`.
+    principal_axes_deg : ndarray, shape (3,)
+        Angular standard error of each principal axis (degrees).
+    stiffness, damping : ndarray, shape (6, 6)
+        Of ``K`` and ``C`` at the CG (or per mass).
+    per_mass : bool
+        True without a mass.
+    noise : NoiseLevels
+        The levels propagated.
+    misfit : float or None
+        Chi-square misfit of eq. (18) in noise units (``None``: not computed).
+    misfit_dof : int
+        Its degrees of freedom.
+    inflation : float
+        ``sqrt(max(1, misfit / misfit_dof))``: every standard error is scaled by it,
+        so that a misfit above the noise widens the intervals instead of hiding.
+    weighted : bool
+        Whether the estimate is the noise-weighted one.
+    failed : int
+        Moved estimates that failed (their responses count as zero).
+    linearised : Linearised
+        The responses, for the standard error of any other figure (:meth:`std`).
+    mass : float or None
+        The mass the absolute figures were scaled by.
+    """
+
+    center_of_gravity: Array
+    inertia: Array
+    principal_moments: Array
+    principal_axes_deg: Array
+    stiffness: Array
+    damping: Array
+    per_mass: bool
+    noise: NoiseLevels
+    misfit: float | None
+    misfit_dof: int
+    inflation: float
+    weighted: bool
+    failed: int
+    linearised: Linearised
+    mass: float | None
+
+    def std(self, figure: Callable[[Estimates], Array], value: Array | None = None) -> Array:
+        """Standard error of a figure of per-mass estimates, inflated, and scaled by the mass when known.
+
+        Parameters
+        ----------
+        figure : callable
+            As :meth:`Linearised.std`; per-mass quantities (rates per mass, ...).
+        value : ndarray, optional
+            The figure's per-mass value at the estimate: with a mass, the mass
+            noise adds ``value * mass * noise.mass`` in quadrature and the result
+            is in absolute units. Without `value`, the figure is taken as
+            mass-free (lengths, angles).
+        """
+        sd = self.inflation * self.linearised.std(figure)
+        if value is None or self.mass is None:
+            return sd
+        result: Array = np.sqrt((self.mass * sd) ** 2 + (np.asarray(value) * self.mass * self.noise.mass) ** 2)
+        return result
+
+
+def _moments(est: Estimates) -> Array:
+    j = 0.5 * (est.inertia_per_mass + np.swapaxes(est.inertia_per_mass, 1, 2))
+    ok = np.all(np.isfinite(j), axis=(1, 2))
+    out = np.full((j.shape[0], 3), np.nan)
+    out[ok] = np.linalg.eigvalsh(j[ok])
+    return out
+
+
+def standard_errors(
+    positions: Array,
+    directions: Array,
+    poles: CArray,
+    shapes: CArray,
+    *,
+    inertia_per_mass: Array,
+    mass: float | None,
+    noise: NoiseLevels,
+    weights: Array | None,
+    misfit: float | None,
+    misfit_dof: int = 21,
+    damping_weight: float = DAMPING_WEIGHT,
+) -> StandardErrors:
+    """Linearised standard errors of the kernel's estimate (see :func:`spread`).
+
+    Parameters
+    ----------
+    positions, directions : ndarray, shape (p, 3)
+        Sensor locations (length) and unit measuring axes.
+    poles : ndarray of complex, shape (6,)
+        Poles of the six rigid-body modes (rad/s).
+    shapes : ndarray of complex, shape (p, 6)
+        Mode shapes as the sensors read them.
+    inertia_per_mass : ndarray, shape (3, 3)
+        The estimate's ``J / m`` (for the principal axes).
+    mass : float or None
+        Mass; None for per-mass standard errors.
+    noise : NoiseLevels
+        Standard deviations of the measurement errors.
+    weights : ndarray, shape (30, 30), or None
+        The whitening the estimate was computed with (None: fixed weights).
+    misfit : float or None
+        Chi-square misfit of the noise-weighted fit, for the inflation.
+    misfit_dof : int
+        Its degrees of freedom.
+    damping_weight : float
+        The fixed weight, when `weights` is None.
+
+    Returns
+    -------
+    StandardErrors
+    """
+    lin = spread(positions, directions, poles, shapes, noise, damping_weight=damping_weight, weights=weights)
+    inflation = 1.0 if misfit is None or misfit_dof <= 0 else float(np.sqrt(max(1.0, misfit / misfit_dof)))
+    axes = np.linalg.eigh(0.5 * (inertia_per_mass + inertia_per_mass.T))[1]
+    turn = lin.std(principal_axis_deviation(axes))  # (3 axes, 3 components)
+    base = lin.base
+    out = StandardErrors(
+        center_of_gravity=np.zeros(3),
+        inertia=np.zeros((3, 3)),
+        principal_moments=np.zeros(3),
+        principal_axes_deg=np.rad2deg(inflation * np.sqrt(np.sum(turn**2, axis=1))),
+        stiffness=np.zeros((6, 6)),
+        damping=np.zeros((6, 6)),
+        per_mass=mass is None,
+        noise=noise,
+        misfit=misfit,
+        misfit_dof=misfit_dof if misfit is not None else 0,
+        inflation=inflation,
+        weighted=weights is not None,
+        failed=lin.failed,
+        linearised=lin,
+        mass=mass,
+    )
+    figures = {
+        "inertia": (lambda e: e.inertia_per_mass, base.inertia_per_mass[0]),
+        "principal_moments": (_moments, _moments(base)[0]),
+        "stiffness": (lambda e: e.stiffness_per_mass, base.stiffness_per_mass[0]),
+        "damping": (lambda e: e.damping_per_mass, base.damping_per_mass[0]),
+    }
+    values = {name: out.std(fn, value) for name, (fn, value) in figures.items()}
+    return replace(
+        out,
+        center_of_gravity=out.std(lambda e: e.center_of_gravity),
+        inertia=values["inertia"],
+        principal_moments=values["principal_moments"],
+        stiffness=values["stiffness"],
+        damping=values["damping"],
+    )

@@ -34,11 +34,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ADEQUATE_P",
+    "FEASIBLE_FLOOR",
     "MountModel",
     "MountModelPrediction",
     "MountRates",
     "TorqueRollAxis",
     "eigen_residual",
+    "feasible_inertia",
     "fit_mount_model",
     "group_matrix",
     "identify_mount_model",
@@ -472,6 +474,41 @@ def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> 
     return np.stack(cols, axis=1)
 
 
+FEASIBLE_FLOOR = 0.05
+"""Smallest principal moment of a start inertia, as a fraction of the mean of their moduli."""
+
+
+def feasible_inertia(inertia: ArrayLike) -> Array:
+    """The nearest positive definite inertia with every principal moment at least a floor.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (3, 3)
+        A start inertia (per mass), perhaps indefinite (a noisy free route's answer).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Symmetric part, principal moments raised to at least :data:`FEASIBLE_FLOOR` times
+        the mean of their moduli, axes kept; ``0.3 I`` when not finite or zero. A start
+        the mount model's Cholesky parameterisation can always take.
+
+    Examples
+    --------
+    >>> np.linalg.eigvalsh(feasible_inertia(np.diag([-1.0, 2.0, 5.0]))).round(6).tolist()
+    [0.133333, 2.0, 5.0]
+    """
+    j = np.asarray(inertia, dtype=float)
+    if j.shape != (3, 3) or not np.all(np.isfinite(j)):
+        return 0.3 * np.eye(3)
+    w, v = np.linalg.eigh(0.5 * (j + j.T))
+    floor = FEASIBLE_FLOOR * float(np.mean(np.abs(w)))
+    if not floor > 0.0:
+        return 0.3 * np.eye(3)
+    result: Array = (v * np.maximum(w, floor)) @ v.T
+    return 0.5 * (result + result.T)
+
+
 def _inertia(params: Array) -> Array:
     lower = np.zeros((3, 3))
     lower[np.tril_indices(3)] = params
@@ -689,7 +726,7 @@ def fit_mount_model(
     else:
         g0 = frame.to_local(np.asarray(start[0], dtype=float))
         j0 = np.asarray(start[1], dtype=float) / length**2
-    chol = np.linalg.cholesky(0.5 * (j0 + j0.T) + 1e-9 * np.eye(3))
+    chol = np.linalg.cholesky(feasible_inertia(j0))
     x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
