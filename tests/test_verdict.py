@@ -12,6 +12,7 @@ import pytest
 from rigidid import api
 from rigidid.errors import IdentificationError, InputError, ModelMisfitWarning, UnitsWarning
 from rigidid.jsonout import result_to_dict
+from rigidid.models import BodyFile
 
 from .conftest import SAMPLES
 
@@ -31,8 +32,9 @@ def test_standard_errors_are_there_by_default_with_the_json_keys() -> None:
                              torque_axis=[1.0, 0.0, 0.0])  # fmt: skip
     err = result_to_dict(result)["standard_errors"]
     assert err["method"] == "linearised" and err["weighted"] is True
-    for key in ("center_of_gravity", "inertia_tensor", "principal_moments", "principal_axes_deg",
-                "stiffness_matrix", "damping_matrix", "mounts", "torque_roll_axis_deg", "misfit", "inflation"):  # fmt: skip
+    keys = ("center_of_gravity", "inertia_tensor", "principal_moments", "principal_axes_deg", "stiffness_matrix",
+            "damping_matrix", "mounts", "torque_roll_axis_deg", "misfit", "inflation")  # fmt: skip
+    for key in keys:
         assert key in err, key
     assert len(err["mounts"]) == 4 and all(np.all(np.asarray(m["stiffness"]) > 0.0) for m in err["mounts"])
     assert np.all(np.asarray(err["stiffness_matrix"]) >= 0.0)
@@ -56,7 +58,7 @@ def test_noise_far_below_the_misfit_is_an_error(tmp_path: Path) -> None:
 
     arrays = api.load_arrays(FOUR / "layout.json", FOUR / "modes.csv")
     table = api.load_modes(FOUR / "modes.csv", api.load_layout(FOUR / "layout.json"))
-    body = api.body_from_file(api.BodyFile.model_validate_json((FOUR / "body.json").read_text()))
+    body = api.body_from_file(BodyFile.model_validate_json((FOUR / "body.json").read_text()))
     noisy = add_noise(body_modes(body, arrays.positions, arrays.directions), shape=0.03,
                       rng=np.random.default_rng(1))  # fmt: skip
     noisy_table = ModeTable(table.labels, table.frequency_hz, table.damping_ratio, table.sensor_ids, noisy.shapes)

@@ -103,7 +103,7 @@ def test_mount_model_recovers_an_exact_body_from_five_modes() -> None:
 
 def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     """An unmodelled support (a hose) is flagged by the F test; the mounts alone pass (exact modes)."""
-    from rigidid import api
+    from rigidid.api.mounts import mount_model
 
     body, where, axes, _ = _body(4)
     hidden = Body(body.mass, body.center_of_gravity, body.inertia_tensor,
@@ -112,7 +112,7 @@ def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
     for truth, adequate in ((body, True), (hidden, False)):
         modes = body_modes(truth, pos, dirs)
-        _, fit = api._mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
+        _, fit = mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
         assert fit.verdict is adequate, (fit.residual, fit.free_residual)
 
 
@@ -201,13 +201,13 @@ def test_mount_model_starts_from_an_indefinite_inertia() -> None:
     """A noisy free route can hand the mount model an indefinite inertia: it must still fit (issue 22)."""
     from rigidid.core.mounts import feasible_inertia, identify_mount_model
 
-    body, where, axes, rates = _body(4)
+    body, where, axes, _rates = _body(4)
     pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
     dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
     modes = body_modes(body, pos, dirs)
     bad = np.diag([-0.01, 0.04, 0.06])  # J / m with a negative principal moment
     start = (body.center_of_gravity + 0.01, bad)
-    ident, model = identify_mount_model(pos, dirs, modes.poles, modes.shapes, where, axes, mass=body.mass, start=start)
+    ident, _model = identify_mount_model(pos, dirs, modes.poles, modes.shapes, where, axes, mass=body.mass, start=start)
     np.testing.assert_allclose(ident.center_of_gravity, body.center_of_gravity, atol=MOUNT_RATES_REL)
     assert ident.inertia_tensor is not None
     np.testing.assert_allclose(ident.inertia_tensor, body.inertia_tensor, atol=MOUNT_RATES_REL * 3.0)

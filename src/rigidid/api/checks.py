@@ -1,7 +1,7 @@
 """Every answer checks itself: default standard errors, the misfit's verdict and plausibility checks.
 
 The workflow half of issue 22 (the numbers are in :mod:`rigidid.core.linearised` and
-:mod:`rigidid.core.checks`): :func:`identify` of :mod:`rigidid.api` calls these on the
+:mod:`rigidid.core.checks`): :func:`rigidid.api.identify` calls these on the
 structured route's answer; :func:`rigidid.api.with_mounts` adds the rates' and the torque
 roll axis' standard errors.
 """
