@@ -62,6 +62,7 @@ def standard_errors_of(
         errors = standard_errors(
             positions, directions, poles, shapes, inertia_per_mass=ident.inertia_per_mass, mass=ident.mass,
             noise=levels, weights=diag.residual_weights, misfit=diag.misfit, misfit_dof=diag.misfit_dof,
+            center_of_gravity=ident.center_of_gravity,
         )  # fmt: skip
     except (np.linalg.LinAlgError, ValueError):
         return None
@@ -159,6 +160,8 @@ def verdict(
     levels_text = (
         f"frequency {_pct(levels.frequency)}, damping ratio {_pct(levels.damping)}, shape {_pct(levels.shape)}"
     )
+    if misfit <= MISFIT_WARN or (assumed and misfit <= UNEXPLAINED_MISFIT * dof):
+        return []
     parts = misfit_parts(
         positions, directions, poles, shapes, levels, ident.center_of_gravity, ident.inertia_per_mass
     )

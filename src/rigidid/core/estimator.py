@@ -256,7 +256,7 @@ class _VarPro:
     """
 
     def __init__(self, mats: Array, weights: Array, white: Array | None = None):
-        # mats: (B, n, 6, 6); weights: (n,); white: (B, 15 n, 15 n) or None
+        # mats: (B, n, 6, 6); weights: (n,); white: (15 n, 15 n) shared, (B, 15 n, 15 n) or None
         self.white = white
         if white is not None:
             weights = np.ones_like(weights)
@@ -275,7 +275,7 @@ class _VarPro:
         """The same problem restricted to some tests."""
         out = object.__new__(_VarPro)
         out.w = self.w
-        out.white = None if self.white is None else self.white[index]
+        out.white = self.white if self.white is None or self.white.ndim == 2 else self.white[index]
         for name in ("x11", "x12", "x21", "x22", "a12", "n12"):
             setattr(out, name, getattr(self, name)[index])
         return out
@@ -469,7 +469,7 @@ def _problem(stiffness: Array, damping: Array | None, damping_weight: float, wei
     if weights is not None:
         if damping is None:
             raise ValueError("residual weights need the damping matrices")
-        white = np.broadcast_to(weights, (stiffness.shape[0], 30, 30))
+        white = np.asarray(weights, dtype=float)
         return _VarPro(np.stack([stiffness, damping], axis=1), np.array([1.0, 1.0]), white)
     if damping is not None and damping_weight > 0.0:
         return _VarPro(np.stack([stiffness, damping], axis=1), np.array([1.0, damping_weight]))
@@ -514,6 +514,7 @@ def solve_cg(
     damping: Array | None = None,
     damping_weight: float = DAMPING_WEIGHT,
     weights: Array | None = None,
+    start: Array | None = None,
 ) -> tuple[Array, Array, Array]:
     """CG and inertia per mass from the whole of eq. (18) of [1], for a stack of tests.
 
@@ -533,6 +534,9 @@ def solve_cg(
         the inverse covariance of the residuals under the measurement noise
         (:func:`rigidid.core.linearised.residual_weights`). Replaces
         `damping_weight`; needs `damping`.
+    start : ndarray, shape (B, 3), optional
+        One start per test (a nearby solution, e.g. for small changes of the
+        data) instead of the two default starts.
 
     Returns
     -------
@@ -573,6 +577,11 @@ def solve_cg(
     """
     b = stiffness.shape[0]
     problem = _problem(stiffness, damping, damping_weight, weights)
+    if start is not None:
+        g, cost = _levenberg_marquardt(problem, np.asarray(start, dtype=float).reshape(b, 3).copy())
+        g, cost = _polish(problem, g, cost)
+        _, j, *_ = problem.evaluate(g)
+        return g, inertia_from_params(j), cost
     starts = np.concatenate([_eq36_start(stiffness), np.zeros((b, 3))])
     both = problem.take(np.concatenate([np.arange(b), np.arange(b)]))
     g_all, cost_all = _levenberg_marquardt(both, starts)
@@ -687,8 +696,11 @@ class Estimates(_Statuses):
         return good
 
 
-def _estimate_chunk(prepared: Prepared, damping_weight: float, weights: Array | None = None) -> Estimates:
-    g, j, _ = solve_cg(prepared.stiffness, prepared.damping, damping_weight, weights)
+def _estimate_chunk(
+    prepared: Prepared, damping_weight: float, weights: Array | None = None, start: Array | None = None
+) -> Estimates:
+    g0 = None if start is None else (start[None, :] - prepared.centre) / prepared.scale[:, None]
+    g, j, _ = solve_cg(prepared.stiffness, prepared.damping, damping_weight, weights, g0)
     k = _sym(at_cg(prepared.stiffness, g, j))
     c = _sym(at_cg(prepared.damping, g, j))
     scale, omega = prepared.scale, prepared.omega
@@ -721,6 +733,7 @@ def estimate(
     damping_weight: float = DAMPING_WEIGHT,
     weights: Array | None = None,
     progress: Callable[[str, float, float | None], None] | None = None,
+    start: Array | None = None,
 ) -> Estimates:
     """Identify a stack of tests: :func:`prepare`, :func:`solve_cg`, :func:`at_cg`, in chunks.
 
@@ -741,6 +754,9 @@ def estimate(
         replaces `damping_weight`.
     progress : callable, optional
         ``progress("identifying", done, total)`` after each chunk of tests.
+    start : ndarray, shape (3,), optional
+        A CG (length, the layout's axes) near every test's, to start from
+        instead of the two default starts (for small changes of one test).
 
     Returns
     -------
@@ -757,7 +773,7 @@ def estimate(
             parts.append(Estimates(np.full((b, 3), np.nan), np.full((b, 3, 3), np.nan), nan6, nan6.copy(),
                                    prepared.status))  # fmt: skip
             continue
-        parts.append(_estimate_chunk(prepared, damping_weight, weights))
+        parts.append(_estimate_chunk(prepared, damping_weight, weights, start))
         if progress is not None:
             progress("identifying", min(i + _CHUNK, positions.shape[0]), positions.shape[0])
     if len(parts) == 1:

@@ -251,6 +251,7 @@ def spread(
     damping_weight: float = DAMPING_WEIGHT,
     weights: Array | None = None,
     step: float = STEP,
+    start: Array | None = None,
 ) -> Linearised:
     """The kernel's first-order response to each source of measurement noise.
 
@@ -272,6 +273,9 @@ def spread(
         estimate only to second order.
     step : float
         Relative central-difference step (:data:`STEP`).
+    start : ndarray, shape (3,), optional
+        The estimate's CG (length): every moved test starts there (faster, and
+        the same local solution).
 
     Returns
     -------
@@ -294,6 +298,7 @@ def spread(
         batch([shapes[None], moved.shapes]),
         damping_weight=damping_weight,
         weights=weights,
+        start=start,
     )
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     base = Estimates(*(getattr(all_est, n)[:1] for n in names))
@@ -579,6 +584,7 @@ def standard_errors(
     misfit: float | None,
     misfit_dof: int = 21,
     damping_weight: float = DAMPING_WEIGHT,
+    center_of_gravity: Array | None = None,
 ) -> StandardErrors:
     """Linearised standard errors of the kernel's estimate (see :func:`spread`).
 
@@ -604,12 +610,17 @@ def standard_errors(
         Its degrees of freedom.
     damping_weight : float
         The fixed weight, when `weights` is None.
+    center_of_gravity : ndarray, shape (3,), optional
+        The estimate's CG, where the moved estimates start (:func:`spread`).
 
     Returns
     -------
     StandardErrors
     """
-    lin = spread(positions, directions, poles, shapes, noise, damping_weight=damping_weight, weights=weights)
+    lin = spread(
+        positions, directions, poles, shapes, noise, damping_weight=damping_weight, weights=weights,
+        start=center_of_gravity,
+    )  # fmt: skip
     inflation = 1.0 if misfit is None or misfit_dof <= 0 else float(np.sqrt(max(1.0, misfit / misfit_dof)))
     axes = np.linalg.eigh(0.5 * (inertia_per_mass + inertia_per_mass.T))[1]
     turn = lin.std(principal_axis_deviation(axes))  # (3 axes, 3 components)
