@@ -5,7 +5,7 @@ state-space form, no rigidid code), identified by ``rigidid.api.identify`` as a 
 (mass in the layout, default noise levels, warnings recorded).
 
 - ``matrix``: the regime matrix of the modes route and the mount routes: inertia
-  observability (the mounts' height offset from the CG scaled by 0.05-1.5), shape noise
+  observability (the mounts' height offset from the CG scaled by 0.3-2.5: observability 0.02-0.3), shape noise
   0.3 / 1 / 3 % (frequency 0.1 %, damping ratio 5 % throughout), 6 / 12 / 32 sensors, three
   mounts (one turned 35 deg) or four (turned -10 to 35 deg), a mounts.json with groups and
   one that misses a support. Per draw: "silently wrong" = exit 0 (no error), no warning, and
@@ -140,12 +140,12 @@ def worst_z(out: dict[str, Any], truth: dict[str, np.ndarray]) -> float:
 
 def cells() -> list[dict[str, Any]]:
     out = []
-    for observe in (0.05, 0.3, 1.5):
+    for observe in (2.5, 1.0, 0.3):
         for shape in (0.003, 0.01, 0.03):
             for sensors in (6, 12, 32):
                 out.append({"observe": observe, "shape": shape, "sensors": sensors, "mounts": 3})
     for extra in ({"mounts": 4}, {"mounts": 3, "groups": True}, {"mounts": 3, "missing": True}):
-        for observe in (0.05, 1.5):
+        for observe in (2.5, 0.3):
             out.append({"observe": observe, "shape": 0.01, "sensors": 12, **extra})
     return out
 

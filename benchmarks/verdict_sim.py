@@ -101,9 +101,7 @@ def layout(count: int, rng: np.random.Generator | None = None) -> tuple[np.ndarr
     """`count` sensors (6, 12 or 32) on a 0.6 x 0.5 x 0.4 m box: positions and unit directions."""
     corners = np.array([[x, y, z] for x in (0.3, -0.3) for y in (0.25, -0.25) for z in (0.2, -0.2)])
     if count == 6:
-        pos = corners[[0, 0, 3, 5, 6, 6]]
-        dirs = np.eye(3)[[0, 1, 2, 2, 0, 1]]
-        return pos + 1e-9 * np.arange(6)[:, None], dirs
+        return corners[[0, 3, 5, 6, 1, 2]], np.eye(3)[[2, 0, 1, 2, 0, 1]]
     if count == 12:
         pos = np.repeat(corners[[0, 3, 5, 6]], 3, axis=0)
         return pos, np.tile(np.eye(3), (4, 1))

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from rigidid.core.estimator import Estimates
     from rigidid.core.identify import Identification
     from rigidid.core.linearised import StandardErrors
+    from rigidid.core.mounts import MountRates
     from rigidid.core.noise import NoiseLevels
 
 __all__ = [
@@ -27,6 +28,7 @@ __all__ = [
     "noise_levels",
     "plausibility",
     "rate_errors",
+    "rates_verdict",
     "roll_axis_error",
     "standard_errors_of",
     "verdict",
@@ -269,3 +271,42 @@ def checked(
         return ident
     diag = ident.diagnostics
     return replace(ident, diagnostics=replace(diag, warnings=(*diag.warnings, *(t for _, t in found))))
+
+
+def _chi2_quantile(dof: int, z: float = 3.09) -> float:
+    """Wilson-Hilferty approximation of the chi-square quantile (z = 3.09: 0.999)."""
+    a = 2.0 / (9.0 * max(dof, 1))
+    return float(max(dof, 1) * (1.0 - a + z * np.sqrt(a)) ** 3)
+
+
+def rates_verdict(
+    errors: StandardErrors | None, ident: Identification, positions: Array, rates: MountRates
+) -> list[tuple[type[Warning], str]]:
+    """Warnings about per-mount rates: a split that is not unique, rates at zero, mounts that miss the stiffness."""
+    from rigidid.core.mounts import split_misfit
+    from rigidid.errors import PhysicalPlausibilityWarning
+
+    if not rates.unique:
+        return [(PhysicalPlausibilityWarning, f"the per-mount rates are {rates.statement}")]
+    found: list[tuple[type[Warning], str]] = []
+    at_zero = np.argwhere(rates.stiffness <= 0.0)
+    if at_zero.size:
+        names = ", ".join(f"mount {m + 1} axis {a + 1}" for m, a in at_zero)
+        found.append((PhysicalPlausibilityWarning, (
+            f"the stiffness rate of {names} came out zero (the fit's bound): the mounts do not split the "
+            "identified stiffness as positive springs, so the rates and their standard errors are not to be trusted; "
+            "check the mounts' positions and axes in mounts.json, or fix known rates"
+        )))  # fmt: skip
+    if errors is None:
+        return found
+    iu = np.triu_indices(6)
+    cov = errors.inflation**2 * errors.linearised.covariance(lambda e: e.stiffness_per_mass[:, iu[0], iu[1]])
+    chi2, dof = split_misfit(ident.stiffness_per_mass, cov, ident.center_of_gravity, positions, rates.axes)
+    if dof > 0 and chi2 > _chi2_quantile(dof):
+        found.append((PhysicalPlausibilityWarning, (
+            f"the mounts in mounts.json do not explain the identified stiffness: it misses their best fit by "
+            f"{np.sqrt(chi2 / dof):.2g} times its standard errors (chi-square {chi2:.3g} on {dof} degrees of "
+            "freedom): a support missing from mounts.json (a hose, a cable, a torque rod) or a mount's position "
+            "or axes wrong; the per-mount rates are not to be trusted"
+        )))  # fmt: skip
+    return found

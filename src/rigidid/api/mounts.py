@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -71,6 +72,15 @@ def with_mounts(
             k_std, c_std = checks.rate_errors(
                 result.standard_errors, positions, rates.axes, groups, (rates.stiffness, rates.damping)
             )
+            k_std = np.where(rates.stiffness > 0.0, k_std, np.nan) if rates.unique else np.full_like(k_std, np.nan)
+        found = checks.rates_verdict(result.standard_errors, ident, positions, rates)
+        for category, text in found:
+            warnings.warn(text, category, stacklevel=2)
+        if found:
+            diag = out.identification.diagnostics
+            texts = tuple(t for _, t in found if t not in diag.warnings)
+            out = replace(out, identification=replace(out.identification, diagnostics=replace(
+                diag, warnings=(*diag.warnings, *texts))))  # fmt: skip
         out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups, k_std, c_std))
     if torque_axis is not None:
         tra = torque_roll_axis(ident.inertia_per_mass, torque_axis)
