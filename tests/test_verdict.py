@@ -10,7 +10,12 @@ import numpy as np
 import pytest
 
 from rigidid import api
-from rigidid.errors import IdentificationError, InputError, ModelMisfitWarning, UnitsWarning
+from rigidid.errors import (
+    IdentificationError,
+    InputError,
+    ModelMisfitWarning,
+    UnitsWarning,
+)
 from rigidid.jsonout import result_to_dict
 from rigidid.models import BodyFile
 
@@ -79,3 +84,41 @@ def test_five_modes_with_mounts_point_to_the_mount_model(tmp_path: Path) -> None
     five = table.subset(table.labels[:5])
     with pytest.raises(InputError, match="--method mounts"):
         api.identify(FOUR / "layout.json", five, mounts=FOUR / "mounts.json")
+
+
+def _four_mounts_with_hose(tmp_path: Path, hose: float) -> Path:
+    """modes.csv of the four-mounts body with an extra support (a hose) that mounts.json does not list."""
+    from rigidid.core.simulate import Mount, add_noise, body_modes
+    from rigidid.io.files import ModeTable
+
+    arrays = api.load_arrays(FOUR / "layout.json", FOUR / "modes.csv")
+    body = api.body_from_file(BodyFile.model_validate_json((FOUR / "body.json").read_text()))
+    if hose > 0.0:
+        from dataclasses import replace
+
+        extra = Mount.from_values([0.0, 0.3, 0.2], [hose, hose, hose], [0.0, 0.0, 0.0])
+        body = replace(body, mounts=(*body.mounts, extra))
+    modes = add_noise(body_modes(body, arrays.positions, arrays.directions), shape=0.002, frequency=2e-4,
+                      damping=0.01, rng=np.random.default_rng(3))  # fmt: skip
+    f, z = np.abs(modes.poles) / (2 * np.pi), -modes.poles.real / np.abs(modes.poles)
+    return ModeTable(tuple(range(1, 7)), f, z, arrays.sensor_ids, modes.shapes)  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize("hose", [0.0, 2e4])
+def test_a_support_missing_from_mounts_json_is_named(tmp_path: Path, hose: float) -> None:
+    """A hose at 10-20 % of a mount's rates, not in mounts.json: named; without it, no such warning."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        result = api.identify(FOUR / "layout.json", _four_mounts_with_hose(tmp_path, hose))  # type: ignore[arg-type]
+        out = api.with_mounts(result, FOUR / "mounts.json")
+    named = [str(w.message) for w in seen if "support missing from mounts.json" in str(w.message)]
+    assert len(named) == (1 if hose else 0), [str(w.message) for w in seen]
+    assert out.mounts is not None and out.mounts.stiffness_std is not None
+
+
+def test_the_papers_negative_damping_is_explained_by_its_standard_error() -> None:
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        api.identify(SAMPLES / "paper-1994" / "layout.json", SAMPLES / "paper-1994" / "modes.csv")
+    texts = [str(w.message) for w in seen]
+    assert any("within" in t and "standard errors of zero" in t for t in texts), texts
