@@ -8,6 +8,7 @@ roll axis' standard errors.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -21,11 +22,14 @@ if TYPE_CHECKING:
     from rigidid.core.linearised import StandardErrors
     from rigidid.core.mounts import MountRates
     from rigidid.core.noise import NoiseLevels
+    from rigidid.results import IdentifyResult
 
 __all__ = [
+    "about_the_answer",
     "checked",
     "damping_meaning",
     "noise_levels",
+    "pass_on",
     "plausibility",
     "rate_errors",
     "rates_verdict",
@@ -257,7 +261,6 @@ def checked(
     assumed: bool = False,
 ) -> Identification:
     """`ident` with the verdict, the damping's meaning and the plausibility findings warned and in its diagnostics."""
-    import warnings
 
     positions, directions, poles, shapes = arrays
     found = [
@@ -310,3 +313,36 @@ def rates_verdict(
             "or axes wrong; the per-mount rates are not to be trusted"
         )))  # fmt: skip
     return found
+
+
+def pass_on(held: Sequence[warnings.WarningMessage]) -> None:
+    """Issue warnings that were held back, as they were."""
+    for w in held:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def about_the_answer(
+    result: IdentifyResult, held: Sequence[warnings.WarningMessage], *, replaced: bool
+) -> IdentifyResult:
+    """Warnings that describe the reported answer once a refinement may have replaced the structured one.
+
+    When `replaced`, the held findings about the structured start (physical plausibility,
+    misfit) are dropped, from the output and from the diagnostics, and the refined answer's
+    own physical checks are issued instead; the other held warnings pass on unchanged.
+    """
+    from rigidid.core.identify import physical_checks
+    from rigidid.errors import ModelMisfitWarning, PhysicalPlausibilityWarning
+
+    about_start = (PhysicalPlausibilityWarning, ModelMisfitWarning)
+    if not replaced:
+        pass_on(held)
+        return result
+    pass_on([w for w in held if not issubclass(w.category, about_start)])
+    dropped = {str(w.message) for w in held if issubclass(w.category, about_start)}
+    ident = result.identification
+    found = physical_checks(ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass)
+    for text in found:
+        warnings.warn(text, PhysicalPlausibilityWarning, stacklevel=3)
+    kept = tuple(t for t in ident.diagnostics.warnings if t not in dropped)
+    diag = replace(ident.diagnostics, warnings=(*kept, *(t for t in found if t not in kept)))
+    return replace(result, identification=replace(ident, diagnostics=diag))

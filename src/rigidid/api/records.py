@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -10,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api import checks
 from rigidid.api.identification import identify, suspect_mode, with_warnings
 from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
 from rigidid.core.selection import rigid_fit_residuals
@@ -709,14 +711,24 @@ def identify_test(
     if spectrum and paths:  # after the estimation, which checked the files
         with named_source(src):
             summed = records_spectrum(paths, data.layout)
-    with named_source(src):
+    refining = refine and estimate is not None and method == "structured"
+    with named_source(src), warnings.catch_warnings(record=True) as held:
+        warnings.simplefilter("always")
         result = identify(data.layout, modes, progress=progress, **identify_options)
-    if refine and estimate is not None and method == "structured":
-        with named_source(src), noted(notes, RefinementWarning):
-            if paths is not None:
-                result = refine_records(result, paths, data.layout, estimate, progress=progress)
-            else:
-                result = with_refinement(result, data.records, estimate, progress=progress)
+    if not refining:
+        checks.pass_on(held)
+    else:
+        assert estimate is not None
+        try:
+            with named_source(src), noted(notes, RefinementWarning):
+                if paths is not None:
+                    result = refine_records(result, paths, data.layout, estimate, progress=progress)
+                else:
+                    result = with_refinement(result, data.records, estimate, progress=progress)
+        except BaseException:
+            checks.pass_on(held)
+            raise
+        result = checks.about_the_answer(result, held, replaced=result.record_bound is not None)
     result = with_warnings(result, notes)
     if resample:
         if not records:
