@@ -31,7 +31,8 @@ on the three samples (tests/test_samples.py)."""
 
 STANDARD_ERROR_REL = 1e-6
 """Golden comparison of the default standard errors (expected.json ``standard_errors``),
-relative to the larger of their own scale and the figure they qualify: they are statistics
+relative to the larger of their own scale and the figure they qualify (1 for angles, misfit
+and levels): they are statistics
 (two digits matter), and on the exact samples they scale with a rounding-level shape noise
 measured from the rigid-body fit. Observed: identical run to run on one machine."""
 
