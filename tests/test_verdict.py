@@ -74,7 +74,7 @@ def test_noise_far_below_the_misfit_is_an_error(tmp_path: Path) -> None:
             api.identify(FOUR / "layout.json", noisy_table, noise=quiet)
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        api.identify(FOUR / "layout.json", noisy_table, noise={"frequency": 1e-7, "damping": 1e-7, "shape": 0.01})
+        api.identify(FOUR / "layout.json", noisy_table, noise={"frequency": 1e-7, "damping": 1e-7, "shape": 0.003})
     misfit = [str(w.message) for w in seen if w.category is ModelMisfitWarning]
     assert len(misfit) == 1 and "times the noise levels" in misfit[0], [str(w.message) for w in seen]
 

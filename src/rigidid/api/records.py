@@ -714,9 +714,14 @@ def identify_test(
         with named_source(src):
             summed = records_spectrum(paths, data.layout)
     refining = refine and estimate is not None and method == "structured"
-    with named_source(src), warnings.catch_warnings(record=True) as held:
-        warnings.simplefilter("always")
-        result = identify(data.layout, modes, progress=progress, **identify_options)
+    held: list[warnings.WarningMessage] = []
+    try:
+        with named_source(src), warnings.catch_warnings(record=True) as held:
+            warnings.simplefilter("always")
+            result = identify(data.layout, modes, progress=progress, **identify_options)
+    except BaseException:  # the warnings first, then the error they led to
+        checks.pass_on(held)
+        raise
     if not refining:
         checks.pass_on(held)
     else:
