@@ -29,12 +29,12 @@ GOLDEN_REL = 1e-10
 magnitude in its array (scalars: of themselves; diagnostics: of 1). Observed: below 1e-14
 on the three samples (tests/test_samples.py)."""
 
-STANDARD_ERROR_REL = 1e-6
-"""Golden comparison of the default standard errors (expected.json ``standard_errors``),
-relative to the larger of their own scale and the figure they qualify (1 for angles, misfit
-and levels): they are statistics
-(two digits matter), and on the exact samples they scale with a rounding-level shape noise
-measured from the rigid-body fit. Observed: identical run to run on one machine."""
+STANDARD_ERROR_REL = 0.02
+"""Golden comparison of the default standard errors (expected.json ``standard_errors``): two
+significant digits of each group's largest value, floored at 1e-6 of the figure it qualifies
+(1e-4 for angles and other keys without one): on the exact samples they scale with a
+rounding-level shape noise. Observed: 0.5 % changes when the optimiser's stopping rule changed
+(tests/test_samples.py)."""
 
 BATCH_REL = 3e-14
 """A batch of tests through the kernel against the same tests one by one (both are
@@ -128,6 +128,11 @@ projected residual, relative; they differ by the term Kaufman drops (small near 
 REFINE_EXACT_REL = 1e-4
 """Output-error refinement from records with 1e-6 noise: inertia per mass relative to its largest entry,
 CG relative to half a metre (observed about 1e-6)."""
+
+REFINE_NOISE_FREE_ABS = 1e-9
+"""CG error (m) of the record refit on noise-free records, stopped by the optimiser's rounding
+floor (rigidid.core.optimize.ROUNDING_FLOOR). Observed 2.2e-11 (tests/core/test_refine.py); the
+margin is wide because where round-off stops the fit depends on the CPU."""
 
 FRF_UFF_ASCII_REL = 1.5e-12
 """FRFs through an ASCII UFF 58 (values 4E20.12, 13 digits) and back, relative to each value
