@@ -141,3 +141,11 @@ def noted(into: list[str], *categories: type[Warning]) -> Iterator[None]:
         if issubclass(w.category, categories) and str(w.message) not in into:
             into.append(str(w.message))
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+class ModelMisfitWarning(RigididWarning):
+    """The rigid-body model explains the modes only to several times the stated noise (chi-square misfit)."""
+
+
+class UnitsWarning(RigididWarning):
+    """The data imply an implausible body (density, size): the units or the layout are probably wrong."""

@@ -45,6 +45,7 @@ __all__ = [
     "result_to_dict",
     "scaled_modes_to_dict",
     "sensor_plan_to_dict",
+    "standard_errors_to_dict",
     "uncertainty_to_dict",
 ]
 
@@ -169,6 +170,8 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         out.update(scaled_modes_to_dict(result.scaled, ident.mass))
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
+    if result.standard_errors is not None:
+        out["standard_errors"] = standard_errors_to_dict(result, force_unit)
     if result.record_spread is not None:
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
     if result.record_bound is not None:
@@ -342,6 +345,55 @@ def uncertainty_to_dict(result: Uncertainty) -> dict[str, Any]:
         "seed": result.seed,
         "noise": noise_to_dict(result.noise),
     }
+
+
+def standard_errors_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
+    """JSON form of the default linearised standard errors (:func:`rigidid.core.linearised.standard_errors`).
+
+    Returns
+    -------
+    dict
+        ``method`` (``"linearised"``), ``weighted``, ``noise``, ``misfit``,
+        ``misfit_dof``, ``inflation``, ``failed``, and the standard errors of
+        ``center_of_gravity``, ``inertia_tensor``, ``principal_moments``,
+        ``principal_axes_deg``, ``stiffness_matrix``, ``damping_matrix`` (names as
+        the result's: ``_per_mass`` keys without a mass), with ``mounts``
+        (``stiffness``, ``damping`` per mount, in the units of the result's
+        ``mounts``) and ``torque_roll_axis_deg`` when those were computed.
+    """
+    from rigidid.units import force_units
+
+    err = result.standard_errors
+    assert err is not None
+    per = err.per_mass
+    out: dict[str, Any] = {
+        "method": "linearised",
+        "weighted": err.weighted,
+        "noise": noise_to_dict(err.noise),
+        "misfit": err.misfit,
+        "misfit_dof": err.misfit_dof,
+        "inflation": err.inflation,
+        "failed": err.failed,
+        "center_of_gravity": _vec(err.center_of_gravity),
+        ("inertia_per_mass" if per else "inertia_tensor"): _rows(err.inertia),
+        ("principal_moments_per_mass" if per else "principal_moments"): _vec(err.principal_moments),
+        "principal_axes_deg": _vec(err.principal_axes_deg),
+        ("stiffness_per_mass" if per else "stiffness_matrix"): _rows(err.stiffness),
+        ("damping_per_mass" if per else "damping_matrix"): _rows(err.damping),
+    }
+    m = result.mounts
+    if m is not None and m.stiffness_std is not None:
+        factor = 1.0
+        if result.identification.mass is not None:
+            factor = force_units(result.units["length"], result.units["mass"], force_unit).factor
+        damp = m.damping_std if m.damping_std is not None else np.full_like(m.stiffness_std, np.nan)
+        out["mounts"] = [
+            {"id": m.ids[k], "stiffness": _vec(factor * m.stiffness_std[k]), "damping": _plain(factor * damp[k])}
+            for k in range(len(m.ids))
+        ]
+    if result.torque_roll_axis_std_deg is not None:
+        out["torque_roll_axis_deg"] = result.torque_roll_axis_std_deg
+    return out
 
 
 def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:

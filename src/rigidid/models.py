@@ -285,6 +285,32 @@ class Interval(_Strict):
     ci95: Any
 
 
+class StandardErrorMount(_Strict):
+    """Standard errors of one mount's rates (units of the result's ``mounts``)."""
+
+    id: str
+    stiffness: list[float]
+    damping: list[float | None]
+
+
+class StandardErrorsResult(BaseModel):
+    """Default linearised standard errors; quantity keys as the result's (``_per_mass`` without a mass)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, defer_build=True)
+
+    method: Literal["linearised"]
+    weighted: bool = Field(description="whether the estimate is the noise-weighted one")
+    noise: dict[str, float] = Field(description="the standard deviations propagated")
+    misfit: float | None = Field(description="chi-square misfit of eq. (18) in noise units, null if not computed")
+    misfit_dof: int
+    inflation: float = Field(description="sqrt(max(1, misfit / misfit_dof)); every standard error is scaled by it")
+    failed: int
+    center_of_gravity: list[float]
+    principal_axes_deg: list[float]
+    mounts: list[StandardErrorMount] | None = None
+    torque_roll_axis_deg: float | None = None
+
+
 class UncertaintyResult(BaseModel):
     """Uncertainty intervals (``identify --uncertainty N``); quantity keys end in ``_per_mass`` without a mass."""
 
@@ -376,6 +402,9 @@ class ResultFile(_Strict):
     energy_distribution: EnergyDistribution
     diagnostics: Diagnostics
     uncertainty: UncertaintyResult | None = None
+    standard_errors: StandardErrorsResult | None = Field(
+        default=None, description="default linearised standard errors of the structured route's figures"
+    )
     uncertainty_records: RecordSpreadResult | None = None
     uncertainty_records_crb: RecordBoundResult | None = Field(
         default=None, description="with --records and --refine: Cramér-Rao bound at the output-error fit"

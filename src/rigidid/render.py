@@ -243,6 +243,8 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
         tables.append(_interval_table(result, unc, title, caption, force_unit))
+    if result.standard_errors is not None and result.uncertainty is None:
+        tables.append(_standard_error_table(result, force_unit))
     if result.record_spread is not None:
         spread = result.record_spread
         title = (
@@ -259,6 +261,39 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
         )
         tables.append(_interval_table(result, bound, title, caption, force_unit))
     return tables
+
+
+def _standard_error_table(result: IdentifyResult, force_unit: str | None) -> Table:
+    """The default linearised standard errors, as the interval table (estimate +- 1.96 std)."""
+    from types import SimpleNamespace
+
+    from rigidid.core.uncertainty import IntervalEstimate
+
+    err = result.standard_errors
+    assert err is not None
+    ident = result.identification
+    scale = 1.0 if ident.mass is None else ident.mass
+
+    def interval(value: NDArray[np.float64], std: NDArray[np.float64]) -> IntervalEstimate:
+        return IntervalEstimate(value, std, value - 1.96 * std, value + 1.96 * std)
+
+    unc = SimpleNamespace(
+        per_mass=err.per_mass,
+        center_of_gravity=interval(ident.center_of_gravity, err.center_of_gravity),
+        inertia=interval(scale * ident.inertia_per_mass, err.inertia),
+        principal_moments=interval(scale * ident.principal_moments_per_mass, err.principal_moments),
+        stiffness_diagonal=interval(scale * np.diag(ident.stiffness_per_mass), np.diag(err.stiffness)),
+    )
+    axes = ", ".join(f"{v:.2g}" for v in err.principal_axes_deg)
+    caption = _noise_caption(noise_to_dict(err.noise), result.units["length"])
+    caption += f"; principal axes +- {axes} deg (1 std)"
+    if result.torque_roll_axis_std_deg is not None:
+        caption += f"; torque roll axis +- {result.torque_roll_axis_std_deg:.2g} deg"
+    if err.misfit is not None:
+        caption += f"; misfit {err.misfit:.3g} on {err.misfit_dof} degrees of freedom"
+        caption += f" (std scaled by {err.inflation:.3g})" if err.inflation > 1.0 else ""
+    title = "Standard errors (linearised at the estimate, 95 % intervals; --uncertainty N for Monte Carlo)"
+    return _interval_table(result, unc, title, caption, force_unit)
 
 
 def _modes_table(result: IdentifyResult) -> Table:

@@ -4,6 +4,7 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -12,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api import checks
 from rigidid.api.identification import identify, suspect_mode, with_warnings
 from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
 from rigidid.core.selection import rigid_fit_residuals
@@ -428,7 +430,9 @@ def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResul
         stiffness_per_mass=refinement.stiffness_per_mass,
         damping_per_mass=refinement.damping_per_mass,
     )
-    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+    return replace(
+        result, identification=refined, record_bound=record_bound(refinement, ident.mass), standard_errors=None
+    )
 
 
 STREAM_REFIT_VALUES = 16 * 150_000
@@ -707,14 +711,29 @@ def identify_test(
     if spectrum and paths:  # after the estimation, which checked the files
         with named_source(src):
             summed = records_spectrum(paths, data.layout)
-    with named_source(src):
-        result = identify(data.layout, modes, progress=progress, **identify_options)
-    if refine and estimate is not None and method == "structured":
-        with named_source(src), noted(notes, RefinementWarning):
-            if paths is not None:
-                result = refine_records(result, paths, data.layout, estimate, progress=progress)
-            else:
-                result = with_refinement(result, data.records, estimate, progress=progress)
+    refining = refine and estimate is not None and method == "structured"
+    held: list[warnings.WarningMessage] = []
+    try:
+        with named_source(src), warnings.catch_warnings(record=True) as held:
+            warnings.simplefilter("always")
+            result = identify(data.layout, modes, progress=progress, **identify_options)
+    except BaseException:  # the warnings first, then the error they led to
+        checks.pass_on(held)
+        raise
+    if not refining:
+        checks.pass_on(held)
+    else:
+        assert estimate is not None
+        try:
+            with named_source(src), noted(notes, RefinementWarning):
+                if paths is not None:
+                    result = refine_records(result, paths, data.layout, estimate, progress=progress)
+                else:
+                    result = with_refinement(result, data.records, estimate, progress=progress)
+        except BaseException:
+            checks.pass_on(held)
+            raise
+        result = checks.about_the_answer(result, held, replaced=result.record_bound is not None)
     result = with_warnings(result, notes)
     if resample:
         if not records:

@@ -34,16 +34,19 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ADEQUATE_P",
+    "FEASIBLE_FLOOR",
     "MountModel",
     "MountModelPrediction",
     "MountRates",
     "TorqueRollAxis",
     "eigen_residual",
+    "feasible_inertia",
     "fit_mount_model",
     "group_matrix",
     "identify_mount_model",
     "mount_rates",
     "predict_mount_model",
+    "split_misfit",
     "split_uniqueness",
     "torque_roll_axis",
 ]
@@ -472,6 +475,41 @@ def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> 
     return np.stack(cols, axis=1)
 
 
+FEASIBLE_FLOOR = 0.05
+"""Smallest principal moment of a start inertia, as a fraction of the mean of their moduli."""
+
+
+def feasible_inertia(inertia: ArrayLike) -> Array:
+    """The nearest positive definite inertia with every principal moment at least a floor.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (3, 3)
+        A start inertia (per mass), perhaps indefinite (a noisy free route's answer).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Symmetric part, principal moments raised to at least :data:`FEASIBLE_FLOOR` times
+        the mean of their moduli, axes kept; ``0.3 I`` when not finite or zero. A start
+        the mount model's Cholesky parameterisation can always take.
+
+    Examples
+    --------
+    >>> np.linalg.eigvalsh(feasible_inertia(np.diag([-1.0, 2.0, 5.0]))).round(6).tolist()
+    [0.133333, 2.0, 5.0]
+    """
+    j = np.asarray(inertia, dtype=float)
+    if j.shape != (3, 3) or not np.all(np.isfinite(j)):
+        return 0.3 * np.eye(3)
+    w, v = np.linalg.eigh(0.5 * (j + j.T))
+    floor = FEASIBLE_FLOOR * float(np.mean(np.abs(w)))
+    if not floor > 0.0:
+        return 0.3 * np.eye(3)
+    result: Array = (v * np.maximum(w, floor)) @ v.T
+    return 0.5 * (result + result.T)
+
+
 def _inertia(params: Array) -> Array:
     lower = np.zeros((3, 3))
     lower[np.tril_indices(3)] = params
@@ -689,7 +727,7 @@ def fit_mount_model(
     else:
         g0 = frame.to_local(np.asarray(start[0], dtype=float))
         j0 = np.asarray(start[1], dtype=float) / length**2
-    chol = np.linalg.cholesky(0.5 * (j0 + j0.T) + 1e-9 * np.eye(3))
+    chol = np.linalg.cholesky(feasible_inertia(j0))
     x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
@@ -739,6 +777,61 @@ def fit_mount_model(
         p_value=None if f_result is None else f_result[2],
         cost=cost,
     )
+
+
+def split_misfit(
+    stiffness: ArrayLike, covariance: ArrayLike, center_of_gravity: ArrayLike, positions: ArrayLike, axes: ArrayLike
+) -> tuple[float, int]:
+    """How well point mounts explain a 6x6 stiffness, in noise units: a chi-square and its degrees of freedom.
+
+    Parameters
+    ----------
+    stiffness : array_like, shape (6, 6)
+        ``K`` at the CG (any units, per mass allowed).
+    covariance : array_like, shape (21, 21)
+        Covariance of its 21 upper entries (``numpy.triu_indices(6)`` order).
+    center_of_gravity : array_like, shape (3,)
+        The reference point of `stiffness`.
+    positions : array_like, shape (n, 3)
+        Where the mounts act.
+    axes : array_like, shape (n, 3, 3)
+        Their principal axes (columns).
+
+    Returns
+    -------
+    chi2 : float
+        ``min_r (k - A r)^T C^+ (k - A r)`` over unconstrained rates ``r`` (three
+        per mount, eq. (31)'s support matrices summed), ``k`` the upper entries.
+    dof : int
+        ``21 - rank(A)``.
+
+    Notes
+    -----
+    A support missing from the list (a hose, a torque rod) or a mount placed
+    wrong leaves a misfit far above its degrees of freedom; the noise alone gives
+    a chi-square with `dof` degrees of freedom (linearised).
+    """
+    k = np.asarray(stiffness, dtype=float)
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    u = np.asarray(axes, dtype=float).reshape(-1, 3, 3)
+    offsets = pos - np.asarray(center_of_gravity, dtype=float).reshape(3)
+    iu = np.triu_indices(6)
+    cols = []
+    for m in range(pos.shape[0]):
+        for a in range(3):
+            unit = np.zeros((pos.shape[0], 3))
+            unit[m, a] = 1.0
+            cols.append(_support_matrix(unit, offsets, u)[iu])
+    design = np.stack(cols, axis=1)
+    cov = np.asarray(covariance, dtype=float)
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    keep = w > 1e-12 * max(float(w[-1]), 1e-300)
+    white = (v[:, keep] / np.sqrt(w[keep])).T
+    a_w, k_w = white @ design, white @ k[iu]
+    rates, *_ = np.linalg.lstsq(a_w, k_w, rcond=None)
+    rank = int(np.linalg.matrix_rank(a_w))
+    resid = k_w - a_w @ rates
+    return float(resid @ resid), int(np.sum(keep)) - rank
 
 
 def _support_matrix(rates: Array, offsets: Array, axes: Array) -> Array:
