@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigidid import api
-from rigidid.api_frf import identify_massline
+from rigidid.api import identify_massline
 from rigidid.compare import compare_results
 from rigidid.jsonout import result_to_dict
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rigidid import api
-from rigidid.api_frf import simulate_frf
+from rigidid.api import simulate_frf
 from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
 from rigidid.io.files import ModeTable, layout_arrays, modes_csv_text
 from rigidid.io.frf import frf_csv_text, frf_uff_bytes, load_references, reference_arrays
