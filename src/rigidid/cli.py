@@ -199,6 +199,7 @@ _FLAGS = {
     "geometry": "--geometry",
     "rtol": "--rtol",
     "sigma": "--sigma",
+    "records": "--records",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
@@ -687,7 +688,7 @@ def simulate(
         impacts = [_parse_impact(text) for text in impact] if impact else None
         if mounts is not None:
             body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
-        with named_source(str(body)):
+        with named_source(str(mounts if mounts is not None else body)):
             table = api.simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
                 seed=seed,

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.api.identification import identify, suspect_mode, with_warnings
-from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
+from rigidid.api.load import UFF_SUFFIXES, check_uff_options, input_source, load_layout, load_records, load_test
 from rigidid.core.selection import rigid_fit_residuals
 from rigidid.errors import InputError
 from rigidid.io import files
@@ -681,6 +681,7 @@ def identify_test(
     modal = modal or ModalOptions()
     method = identify_options.get("method", "structured")
     src = input_source(layout, inputs)
+    check_uff_options(layout, units, geometry)
     files_in = records and bool(inputs) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     streamed = files_in and not resample
     data = TestData(load_layout(layout)) if streamed else load_test(
@@ -759,6 +760,7 @@ def estimate_records_modes(
     """
     from rigidid.errors import named_source
 
+    check_uff_options(layout, units, geometry)
     streamed = bool(records) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     data = TestData(load_layout(layout)) if streamed else load_test(
         layout, records, records=True, units=units, geometry=geometry
