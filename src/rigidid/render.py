@@ -153,23 +153,25 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
     """Per-mount rates along each mount's axes, and the torque roll axis, when asked for."""
     from rich.table import Table
 
-    from rigidid.jsonout import mounts_to_dict
+    from rigidid.units import rate_units
 
     tables = []
     if result.mounts is not None:
-        data = mounts_to_dict(result, force_unit)
-        units = data["units"]
+        mounts = result.mounts
+        rates = mounts.rates
+        per_mass = result.identification.mass is None
+        factor, k_unit, c_unit = rate_units(result.units["length"], result.units["mass"], force_unit, per_mass=per_mass)
         table = Table(
-            title=f"Mounts: rates along their axes (stiffness {units['stiffness']}, damping {units['damping']})",
-            caption=f"fit residual {data['stiffness_residual']:.2e} of |K|; {data['statement']}",
+            title=f"Mounts: rates along their axes (stiffness {k_unit}, damping {c_unit})",
+            caption=f"fit residual {rates.stiffness_residual:.2e} of |K|; {rates.statement}",
             title_justify="left",
             caption_justify="left",
         )
         for name in ("mount", "k1", "k2", "k3", "c1", "c2", "c3"):
             table.add_column(name, justify="right")
-        for m in data["mounts"]:
-            damping = [_fmt(v) if v is not None else "-" for v in m["damping"]]
-            table.add_row(m["id"], *(_fmt(v) for v in m["stiffness"]), *damping)
+        for k, name in enumerate(mounts.ids):
+            damping = ["-"] * 3 if rates.damping is None else [_fmt(factor * v) for v in rates.damping[k]]
+            table.add_row(name, *(_fmt(factor * v) for v in rates.stiffness[k]), *damping)
         tables.append(table)
     if result.mount_model is not None:
         fit = result.mount_model

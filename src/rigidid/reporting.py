@@ -40,7 +40,7 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,9 +61,14 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from rigidid.core.identify import Identification
+    from rigidid.core.mounts import TorqueRollAxis
+    from rigidid.core.record_spread import RecordSpread
+    from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.timedomain.stabilisation import OrderPoles
+    from rigidid.core.uncertainty import Uncertainty
+    from rigidid.results import Mounts, TestInfo
 
-__all__ = ["FIGURE_NAMES", "render_report", "save_pngs"]
+__all__ = ["FIGURE_NAMES", "identified_mount_labels", "render_report", "save_pngs", "stiffness_labels"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -78,6 +83,9 @@ _AXIS_COLOURS = ("#2e8b57", "#d68910", "#7d3c98")
 _MOUNT_COLOUR = "#333333"
 _ROLL_COLOUR = "#e67e22"
 _MODE_COLOUR = "#c0392b"
+
+Intervals: TypeAlias = "Uncertainty | RecordSpread | RecordBound"
+"""The typed intervals a report shows: Monte Carlo, record segments, the refit's Cramér-Rao bound."""
 
 Stabilisation = Sequence["tuple[int, ArrayLike, ArrayLike] | OrderPoles"]
 """``[(order, frequency_hz (n,), stable (n,) bool), ...]`` or ``OrderPoles``: one entry per model order."""
@@ -659,6 +667,20 @@ figcaption { color: #4a5663; font-size: 13px; margin-top: 4px; }
 .warn { background: #fff4e0; border-left: 4px solid #d68910; padding: 6px 12px; margin: 6px 0; }
 .flex { display: flex; flex-wrap: wrap; gap: 28px; align-items: flex-start; }
 details summary { cursor: pointer; color: #1f5fa8; }
+table.test th { text-align: left; background: none; border: none; padding: 1px 14px 1px 0; color: #4a5663; }
+table.test td { text-align: left; border: none; padding: 1px 0; white-space: pre-wrap; }
+@media print {
+  @page { size: A4; margin: 14mm 12mm; }
+  body { max-width: none; margin: 0; padding: 0; font-size: 9.5pt; color: #000; }
+  h1 { font-size: 16pt; } h2 { font-size: 12.5pt; margin-top: 14pt; break-after: avoid; }
+  h3 { font-size: 10.5pt; break-after: avoid; }
+  table, figure, .warn { break-inside: avoid; }
+  th, td { padding: 2px 6px; }
+  caption, figcaption { font-size: 8.5pt; }
+  figure img { max-width: 100%; border: none; }
+  details > summary { display: none; }
+  .flex { gap: 12pt; }
+}
 """
 
 
@@ -691,78 +713,97 @@ def _figure_html(png: bytes, alt: str, caption: str) -> str:
     )
 
 
-def _uncertainty_html(uncertainty: Mapping[str, Any], length: str, mass: str) -> str:
-    unit_of = {
-        "center_of_gravity": length,
-        "inertia_tensor": f"{mass}·{length}²",
-        "inertia_per_mass": f"{length}²",
-        "principal_moments": f"{mass}·{length}²",
-        "principal_moments_per_mass": f"{length}²",
-    }
-    rows: list[list[str]] = []
-    for name, entry in uncertainty.items():
-        if not isinstance(entry, Mapping) or "estimate" not in entry:
-            continue
-        est = np.asarray(_float_array(entry.get("estimate")), dtype=float)
-        std = np.asarray(_float_array(entry.get("std")), dtype=float)
-        ci = np.asarray(_float_array(entry.get("ci95")), dtype=float)
-        if std.shape != est.shape or ci.shape != (*est.shape, 2):
-            raise InputError(
-                "estimate, std and ci95 (pairs) do not match in shape", source="uncertainty", location=str(name)
-            )
-        labels = _component_labels(str(name), est.shape)
-        unit = unit_of.get(str(name), "")
-        if str(name).startswith(("stiffness_diagonal", "damping_diagonal")):
-            per_mass = str(name).endswith("_per_mass")
-            blocks = _block_units(length, None if per_mass else mass, 2 if str(name).startswith("stiff") else 1)
-        first = True
-        for index, label in zip(np.ndindex(est.shape), labels, strict=True):
-            if est.shape == (3, 3) and index[0] > index[1]:
-                continue  # symmetric tensor: the upper triangle says it all
-            if str(name).startswith(("stiffness_diagonal", "damping_diagonal")):
-                unit = blocks[0] if index[0] < 3 else blocks[2]
-            rows.append(
-                [
-                    _esc(str(name).replace("_", " ")) if first else "",
-                    _esc(label),
-                    _esc(unit),
-                    _num(float(est[index])),
-                    _num(float(std[index]), 3),
-                    f"{_num(float(ci[index][0]))} … {_num(float(ci[index][1]))}",
-                ]
-            )
-            first = False
-    extra = []
-    for key in ("method", "segments", "used", "draws", "failed", "implausible", "seed"):
-        if key in uncertainty and not isinstance(uncertainty[key], Mapping):
-            extra.append(f"{key}: {uncertainty[key]}")
-    noise = uncertainty.get("noise")
-    if isinstance(noise, Mapping):
-        extra.append("noise: " + ", ".join(f"{k} {v}" for k, v in noise.items()))
-    caption = "; ".join(extra) if extra else None
-    return _table(
-        ["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption, label_cols=3
+def _percent(v: float) -> str:
+    return f"{_num(100.0 * v, 3)} %"
+
+
+def _interval_caption(source: Uncertainty | RecordSpread | RecordBound, length: str) -> tuple[str, str]:
+    """A heading and a caption (in words and formatted numbers) saying where the intervals come from."""
+    from rigidid.core.record_spread import RecordSpread
+    from rigidid.core.uncertainty import Uncertainty
+
+    if isinstance(source, Uncertainty):
+        n = source.noise
+        noise = (
+            f"frequency {_percent(n.frequency)}, damping {_percent(n.damping)}, shape {_percent(n.shape)} of each "
+            f"mode's RMS, position {_num(n.position, 3)} {length}, angle {_num(n.angle_deg, 3)}°"
+        )
+        seed = "" if source.seed is None else f", seed {source.seed}"
+        return "Monte Carlo", (
+            f"{source.draws} draws of the measurement errors ({source.failed} failed, {source.implausible} "
+            f"implausible{seed}); standard deviations assumed: {noise}. Interval: 2.5 and 97.5 percentiles."
+        )
+    if isinstance(source, RecordSpread):
+        return "record segments", (
+            f"{source.used} of {source.segments} interleaved segments of the records identified apart; the "
+            f"spread of their estimates over √{source.used}; interval with Student's t. Measurement noise only."
+        )
+    cost = _num(source.normalised_cost, 3)
+    return "Cramér-Rao bound on the records", (
+        f"the refit on the records (output error): standard errors from its {source.variance_from} covariance, "
+        f"noise from the {source.noise_from}, normalised cost {cost} (about 1 at a good fit); "
+        f"interval: estimate ± 1.96 standard errors."
     )
 
 
-def _float_array(value: Any) -> Any:
-    if isinstance(value, list | tuple):
-        return [_float_array(v) for v in value]
-    return math.nan if value is None else value
+def _uncertainty_rows(
+    source: Uncertainty | RecordSpread | RecordBound, length: str, mass: str, force_unit: str | None
+) -> list[list[str]]:
+    """One row per component, in the units of the tables above (force units for K and C)."""
+    from rigidid.units import force_units
+
+    per_mass = source.per_mass
+    inertia_unit = f"{length}²" if per_mass else f"{mass}·{length}²"
+    quantities: list[tuple[str, Any, list[str], list[str], float]] = [
+        ("centre of gravity", source.center_of_gravity, ["x", "y", "z"], [length] * 3, 1.0),
+        ("inertia tensor" + (" per mass" if per_mass else ""), source.inertia,
+         [f"{a}{b}" for a in "xyz" for b in "xyz"], [inertia_unit] * 9, 1.0),
+        ("principal moments" + (" per mass" if per_mass else ""), source.principal_moments, ["1", "2", "3"],
+         [inertia_unit] * 3, 1.0),
+    ]  # fmt: skip
+    diagonals = [("stiffness", source.stiffness_diagonal, 2)]
+    damping = getattr(source, "damping_diagonal", None)
+    if damping is not None:
+        diagonals.append(("damping", damping, 1))
+    for name, interval, power in diagonals:
+        if per_mass:
+            t, _, r = _block_units(length, None, power)
+            factor, label = 1.0, f"{name} diagonal per mass"
+        else:
+            fu = force_units(length, mass, force_unit)
+            spelt = fu.stiffness if power == 2 else fu.damping
+            t, r, factor, label = spelt["translation"], spelt["rotation"], fu.factor, f"{name} diagonal"
+        quantities.append((label, interval, list(DOF_LABELS), [t] * 3 + [r] * 3, factor))
+    rows: list[list[str]] = []
+    for name, interval, labels, units, factor in quantities:
+        est, std = factor * np.asarray(interval.estimate), factor * np.asarray(interval.std)
+        low, high = factor * np.asarray(interval.low), factor * np.asarray(interval.high)
+        for k, index in enumerate(np.ndindex(est.shape)):
+            if est.shape == (3, 3) and index[0] > index[1]:
+                continue  # symmetric tensor: the upper triangle says it all
+            rows.append([
+                _esc(name) if k == 0 else "", _esc(labels[k]), _esc(units[k]), _num(float(est[index])),
+                _num(float(std[index]), 3), f"{_num(float(low[index]))} … {_num(float(high[index]))}",
+            ])  # fmt: skip
+    return rows
 
 
-def _component_labels(name: str, shape: tuple[int, ...]) -> list[str]:
-    if shape == (3,) and name.startswith("center"):
-        return ["x", "y", "z"]
-    if shape == (3,):
-        return ["1", "2", "3"]
-    if shape == (6,):
-        return list(DOF_LABELS)
-    if shape == (3, 3):
-        return [f"{a}{b}" for a in "xyz" for b in "xyz"]
-    if shape == ():
-        return [""]
-    return [str(list(i)) for i in np.ndindex(shape)]
+def _uncertainty_html(
+    sources: Sequence[Uncertainty | RecordSpread | RecordBound], length: str, mass: str, force_unit: str | None
+) -> str:
+    """One table per source of intervals, in the units of the result tables, with a caption in words."""
+    parts = []
+    for source in sources:
+        heading, caption = _interval_caption(source, length)
+        if not np.asarray(source.center_of_gravity.estimate).shape == (3,):
+            raise InputError("the intervals of the CG are not three numbers", source="uncertainty")
+        rows = _uncertainty_rows(source, length, mass, force_unit)
+        parts.append(f"<h3>{_esc(heading)}</h3>")
+        parts.append(
+            _table(["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption,
+                   label_cols=3)
+        )  # fmt: skip
+    return "\n".join(parts)
 
 
 def render_report(
@@ -774,7 +815,7 @@ def render_report(
     *,
     mounts: Sequence[ArrayLike] | None = None,
     stabilisation: Stabilisation | None = None,
-    uncertainty: Mapping[str, Any] | None = None,
+    uncertainty: Intervals | Sequence[Intervals] | None = None,
     title: str = "rigidid report",
     mode_labels: Sequence[int] | None = None,
     inputs: Sequence[str] = (),
@@ -783,8 +824,9 @@ def render_report(
     spectrum: tuple[ArrayLike, ArrayLike] | None = None,
     created: str | None = None,
     progress: ProgressCallback | None = None,
-    identified_mounts: Mapping[str, Any] | None = None,
-    torque_roll_axis: Mapping[str, Any] | None = None,
+    identified_mounts: Mounts | None = None,
+    torque_roll_axis: TorqueRollAxis | None = None,
+    test: TestInfo | None = None,
 ) -> str:
     """One self-contained HTML document reporting an identification.
 
@@ -809,12 +851,11 @@ def render_report(
         stable ones. Objects with ``order``, ``poles`` (rad/s) and
         ``stable`` attributes (``OrderPoles`` of
         :mod:`rigidid.core.timedomain.stabilisation`) are accepted as well.
-    uncertainty : mapping, optional
-        ``{quantity: {"estimate": [...], "std": [...], "ci95": [[low,
-        high], ...]}}`` (the form of
-        :func:`rigidid.jsonout.uncertainty_to_dict`: arrays of any
-        shape, ``ci95`` with a last axis of 2, None for NaN); other keys
-        (``draws``, ``failed``, ``noise`` ...) are shown as a caption.
+    uncertainty : Uncertainty, RecordSpread or RecordBound, or a sequence of them, optional
+        Intervals of the identified quantities (Monte Carlo, record segments, the
+        refit's Cramér-Rao bound): one table each, in the units of the result
+        tables (stiffness and damping in force units with a mass), with a
+        caption saying where they come from.
     title : str
         Heading and ``<title>`` of the document.
     mode_labels : sequence of int, optional
@@ -834,14 +875,15 @@ def render_report(
         Date and time shown under the title (default: now, UTC).
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
-    identified_mounts : mapping, optional
-        Per-mount rates identified from the test, in the form of
-        :func:`rigidid.jsonout.mounts_to_dict` (``units``, ``mounts`` with ``id``,
-        ``position``, ``axes``, ``stiffness``, ``damping``...): drawn at the mounts
-        (positions from here, replacing `mounts` and `mount_stiffness`) and tabled.
-    torque_roll_axis : mapping, optional
-        ``{"direction", "torque_axis", "angle_to_torque_deg", "angle_to_principal_deg"}``
-        (the result JSON's ``torque_roll_axis``): drawn through the CG and tabled.
+    identified_mounts : Mounts, optional
+        Per-mount rates identified from the test (``IdentifyResult.mounts``): drawn at
+        the mounts (positions from here, replacing `mounts` and `mount_stiffness`)
+        and tabled in force units (per unit mass without a mass).
+    torque_roll_axis : TorqueRollAxis, optional
+        Drawn through the CG and tabled.
+    test : TestInfo, optional
+        The test's id, specimen, date, operator and notes (the layout's ``test``
+        block), shown under the title.
 
     Returns
     -------
@@ -861,14 +903,20 @@ def render_report(
     """
     length, mass_unit = _units(units)
     if identified_mounts is not None:
-        mounts = [m["position"] for m in identified_mounts["mounts"]]
+        mounts = list(identified_mounts.positions)
     pos, dirs, ids, mount_pos = _as_arrays(positions, directions, sensor_ids, mounts)
-    uncertainty_table = None if uncertainty is None else _uncertainty_html(uncertainty, length, mass_unit)
+    sources = [] if uncertainty is None else list(uncertainty) if isinstance(uncertainty, Sequence) else [uncertainty]
+    uncertainty_table = _uncertainty_html(sources, length, mass_unit, force_unit) if sources else None
     ident = identification
     table = _decoupling(ident, mode_labels)
-    mount_labels = _mount_labels(mount_stiffness, length, mass_unit, force_unit)
-    drawn_labels = mount_labels if identified_mounts is None else identified_mount_labels(identified_mounts)
-    roll = None if torque_roll_axis is None else torque_roll_axis["direction"]
+    mount_labels = stiffness_labels(mount_stiffness, length, mass_unit, force_unit)
+    has_mass = ident.mass is not None
+    drawn_labels = (
+        mount_labels
+        if identified_mounts is None
+        else identified_mount_labels(identified_mounts, units, has_mass=has_mass, force_unit=force_unit)
+    )
+    roll = None if torque_roll_axis is None else torque_roll_axis.direction
     figures = _figures(
         ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=drawn_labels,
         spectrum=spectrum, progress=progress, roll_axis=roll,
@@ -876,13 +924,14 @@ def render_report(
     pngs = {name: _png(fig) for name, fig in figures.items()}
     parts = [
         _head_html(title, ident, ids, length, mass_unit, inputs, created),
+        _test_html(test),
         *(f'<div class="warn">⚠ {_esc(message)}</div>' for message in ident.diagnostics.warnings),
         _mass_properties_html(ident, length, mass_unit),
         _modes_html(ident, table),
         _supports_html(ident, length, mass_unit, force_unit),
         _decoupling_html(table, pngs["decoupling"]),
         _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, [] if identified_mounts else mount_labels),
-        _identified_mounts_html(identified_mounts, torque_roll_axis, length),
+        _identified_mounts_html(identified_mounts, torque_roll_axis, units, has_mass, force_unit),
         "<h2>Mode shapes</h2>",
         _figure_html(
             pngs["modes"],
@@ -935,6 +984,16 @@ def _head_html(
             files,
         ]
     )
+
+
+def _test_html(test: TestInfo | None) -> str:
+    """The test block under the title: id, specimen, date, operator, notes (what is given)."""
+    if test is None:
+        return ""
+    fields = [("test", test.id), ("specimen", test.specimen), ("date of measurement", test.date),
+              ("operator", test.operator), ("notes", test.notes)]  # fmt: skip
+    rows = "".join(f"<tr><th>{_esc(k)}</th><td>{_esc(v)}</td></tr>" for k, v in fields if v)
+    return f'<table class="test">{rows}</table>' if rows else ""
 
 
 def _mass_properties_html(ident: Identification, length: str, mass_unit: str) -> str:
@@ -1061,52 +1120,85 @@ def _decoupling_html(table: _Decoupling, png: bytes) -> str:
     return "\n".join(parts)
 
 
-def identified_mount_labels(identified: Mapping[str, Any]) -> list[str]:
-    """``front-left: k 180/160/420 N/mm`` per mount: its identified rates along its own axes."""
-    unit = identified["units"]["stiffness"]
+def _rate_units(units: Mapping[str, str], has_mass: bool, force_unit: str | None) -> tuple[float, str, str]:
+    """Factor from the rates' units (mass/s², mass/s) to the tables', and the stiffness and damping units."""
+    from rigidid.units import rate_units
+
+    length, mass = _units(units)
+    factor, k_unit, c_unit = rate_units(length, mass, force_unit, per_mass=not has_mass)
+    return factor, k_unit.replace("^2", "²"), c_unit
+
+
+def identified_mount_labels(
+    identified: Mounts, units: Mapping[str, str], *, has_mass: bool = True, force_unit: str | None = None
+) -> list[str]:
+    """``front-left: k 180/160/420 N/mm`` per mount: its identified rates along its own axes.
+
+    Parameters
+    ----------
+    identified : Mounts
+        ``IdentifyResult.mounts``.
+    units : mapping
+        ``{"length", "mass"}`` of the layout.
+    has_mass : bool
+        Whether the identification knows the mass (else the rates are per unit mass).
+    force_unit : str, optional
+        As for :func:`render_report`.
+    """
+    factor, unit, _ = _rate_units(units, has_mass, force_unit)
     return [
-        f"{m['id']}: k " + "/".join(_num(float(v), 3) for v in m["stiffness"]) + f" {unit}"
-        for m in identified["mounts"]
+        f"{name}: k " + "/".join(_num(float(v), 3) for v in factor * identified.rates.stiffness[k]) + f" {unit}"
+        for k, name in enumerate(identified.ids)
     ]
 
 
-def _triple(values: Sequence[Any] | None) -> str:
-    return "-" if values is None else " / ".join("-" if v is None else _num(float(v), 4) for v in values)
+def _triple(values: ArrayLike | None, factor: float = 1.0) -> str:
+    if values is None:
+        return "-"
+    return " / ".join(_num(factor * float(v), 4) for v in np.asarray(values, dtype=float))
 
 
-def _identified_mounts_html(identified: Mapping[str, Any] | None, roll: Mapping[str, Any] | None, length: str) -> str:
+def _identified_mounts_html(
+    identified: Mounts | None, roll: TorqueRollAxis | None, units: Mapping[str, str], has_mass: bool,
+    force_unit: str | None,
+) -> str:  # fmt: skip
     """The identified per-mount rates and the torque roll axis, as tables (empty without either)."""
     parts: list[str] = []
+    length = _units(units)[0]
     if identified is not None:
-        units = identified["units"]
+        factor, k_unit, c_unit = _rate_units(units, has_mass, force_unit)
+        rates = identified.rates
+        damping = rates.damping
+        rows = [
+            [_esc(name), _triple(identified.positions[k]),
+             "; ".join(_direction_text(rates.axes[k][:, a]) for a in range(3)),
+             _triple(rates.stiffness[k], factor), "-" if damping is None else _triple(damping[k], factor),
+             "-" if identified.nominal is None else _triple(identified.nominal[k], factor),
+             _esc((identified.groups[k] if identified.groups else None) or "-")]
+            for k, name in enumerate(identified.ids)
+        ]  # fmt: skip
         parts += ["<h2>Mounts (identified)</h2>", _table(
-            ["mount", f"position [{length}]", "axes (rows)", f"stiffness [{units['stiffness']}]",
-             f"damping [{units['damping']}]", "nominal stiffness", "group"],
-            [[_esc(m["id"]), _triple(m["position"]),
-              "; ".join(_direction_text(np.asarray(a, dtype=float)) for a in m["axes"]),
-              _triple(m["stiffness"]), _triple(m["damping"]), _triple(m.get("nominal_stiffness")),
-              _esc(m.get("group") or "-")]
-             for m in identified["mounts"]],
+            ["mount", f"position [{length}]", "axes", f"stiffness [{k_unit}]", f"damping [{c_unit}]",
+             "nominal stiffness", "group"], rows,
             caption=f"rates along each mount's axes, fitted to the identified stiffness and damping at the CG; "
-            f"residual |K - K_mounts| / |K| = {_num(float(identified['stiffness_residual']), 3)}; "
-            f"{identified['statement']}",
+            f"residual |K - K_mounts| / |K| = {_residual(float(rates.stiffness_residual))}; {rates.statement}",
         )]  # fmt: skip
     if roll is not None:
         parts += ["<h2>Torque roll axis</h2>", _table(
             ["torque axis", "roll axis (J⁻¹t)", "angle to torque axis [°]", "angles to principal axes 1/2/3 [°]"],
-            [[_esc(_direction_text(np.asarray(roll["torque_axis"], dtype=float))),
-              _esc(_direction_text(np.asarray(roll["direction"], dtype=float))),
-              _num(float(roll["angle_to_torque_deg"]), 3), _triple(roll["angle_to_principal_deg"])]],
+            [[_esc(_direction_text(np.asarray(roll.torque_axis, dtype=float))),
+              _esc(_direction_text(np.asarray(roll.direction, dtype=float))),
+              _num(float(roll.angle_to_torque_deg), 3), _triple(roll.angle_to_principal_deg)]],
             caption="the axis through the CG the free body starts to turn about under a pure torque about the "
             "torque axis (dashed orange in the layout figure)",
         )]  # fmt: skip
     return "\n".join(parts)
 
 
-def _mount_labels(
+def stiffness_labels(
     stiffness: Sequence[ArrayLike] | None, length: str, mass_unit: str, force_unit: str | None
 ) -> list[str]:
-    """``k 180/160/420 N/mm`` per mount: the diagonal of its stiffness in the force unit."""
+    """``k 180/160/420 N/mm`` per mount: the diagonal of its stiffness (mass/s², 3x3) in the force unit."""
     if not stiffness:
         return []
     from rigidid.units import force_units

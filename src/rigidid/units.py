@@ -36,6 +36,7 @@ __all__ = [
     "diagonal_units",
     "force_factor",
     "force_units",
+    "rate_units",
 ]
 
 G0 = 9.80665
@@ -180,3 +181,26 @@ def diagonal_units(length: str, mass: str, force: str | None = None) -> tuple[tu
     arm = ("ft" if length == "ft" else "in") if f == "lbf" else "m"
     rotation = KG_PER_MASS[mass] * M_PER_LENGTH[length] ** 2 / (N_PER_FORCE[f] * M_PER_LENGTH[arm])
     return (f"{f}/{length}", translation), (f"{f} {arm}/rad", rotation)
+
+
+def rate_units(length: str, mass: str, force: str | None = None, *, per_mass: bool = False) -> tuple[float, str, str]:
+    """Factor and units of mount rates: from ``mass/s^2`` and ``mass/s`` to ``N/mm`` and ``N s/mm``.
+
+    Parameters
+    ----------
+    length, mass : str
+        Units of the layout.
+    force : str, optional
+        ``N``, ``kN`` or ``lbf`` (default :func:`default_force_unit`).
+    per_mass : bool
+        Rates per unit mass (no mass known): factor 1, units ``1/s^2`` and ``1/s``.
+
+    Returns
+    -------
+    float, str, str
+        The factor and the stiffness and damping units.
+    """
+    if per_mass:
+        return 1.0, "1/s^2 (per mass)", "1/s (per mass)"
+    fu = force_units(length, mass, force)
+    return fu.factor, f"{fu.force}/{length}", f"{fu.force} s/{length}"
