@@ -6,6 +6,7 @@ import ast
 import json
 import re
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -100,3 +101,46 @@ def test_presentation_imports_no_private_names() -> None:
                 assert not private, f"{path}: from {node.module} import {private}"
     source = (ROOT / "src/rigidid/api/reports.py").read_text()
     assert "result_to_dict" not in source and "mounts_to_dict" not in source
+
+
+def _layout_figure_of(result: api.IdentifyResult) -> object:
+    from rigidid.reporting import (
+        _layout_figure,  # the figure itself, to measure its texts
+        identified_mount_labels,
+    )
+
+    assert result.mounts is not None
+    labels = identified_mount_labels(result.mounts, result.units)
+    return _layout_figure(
+        result.identification, result.positions, result.directions, list(result.sensor_ids),
+        result.units["length"], result.units["mass"], result.mounts.positions, labels,
+        None if result.torque_roll_axis is None else result.torque_roll_axis.direction,
+    )  # fmt: skip
+
+
+def test_layout_labels_do_not_overlap_and_are_legible_at_800_px() -> None:
+    """In every 2D view no two labels overlap and none sits on a marker; every text is >= 9 px at 800 px wide."""
+    from matplotlib.text import Annotation
+
+    identified = api.identify(CASE / "layout.json", CASE / "modes.csv")
+    result = api.with_mounts(identified, CASE / "mounts.json", torque_axis=(0.0, 1.0, 0.0))
+    fig: Any = _layout_figure_of(result)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    scale = 800.0 / fig.bbox.width  # the page shows the figure 800 px wide
+    projections = [ax for ax in fig.axes if ax.name == "rectilinear" and "view" in ax.get_title()]
+    assert len(projections) == 3
+    for ax in projections:
+        labels = [t for t in ax.texts if isinstance(t, Annotation) and t.get_text()]
+        boxes = [t.get_window_extent(renderer) for t in labels]
+        names = [t.get_text() for t in labels]
+        assert {"CG", "M1", "M2", "M3"} <= set(names)
+        for i in range(len(boxes)):
+            for j in range(i):
+                assert not boxes[i].overlaps(boxes[j]), (names[i], names[j], ax.get_title())
+        for t, box in zip(labels, boxes, strict=True):
+            assert box.height * scale >= 9.0, (t.get_text(), box.height * scale)
+    for text in fig.findobj(lambda a: hasattr(a, "get_fontsize") and hasattr(a, "get_text")):
+        if text.get_text().strip() and text.get_visible():
+            px = text.get_fontsize() * fig.dpi / 72.0 * scale
+            assert px >= 7.5, (text.get_text(), px)  # tick labels included

@@ -215,20 +215,21 @@ def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
     ax3.scatter(*pos.T, color=_SENSOR_COLOUR, s=28, depthshade=False)
     ax3.quiver(*pos.T, *(scene.arrow * scene.directions).T, color=_SENSOR_COLOUR, lw=1.6, arrow_length_ratio=0.3)
     for p, text in scene.labels:
-        ax3.text(*(p + 0.025 * scene.size), text, fontsize=9, color=_SENSOR_COLOUR)
+        ax3.text(*(p + 0.025 * scene.size), text, fontsize=10, color=_SENSOR_COLOUR)
     ax3.scatter(*g, color=_CG_COLOUR, s=120, marker="*", depthshade=False, zorder=5)
-    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * scene.size])), "CG", fontsize=10, color=_CG_COLOUR, fontweight="bold")
+    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * scene.size])), "CG", fontsize=12, color=_CG_COLOUR, fontweight="bold")
     for k in range(3):
         ax3.quiver(*g, *(scene.tips[k] - g), color=_AXIS_COLOURS[k], lw=2.2, arrow_length_ratio=0.15)
         ax3.text(*scene.tips[k], f" {k + 1}", fontsize=11, color=_AXIS_COLOURS[k], fontweight="bold")
     if scene.mounts.size:
         ax3.scatter(*scene.mounts.T, color=_MOUNT_COLOUR, marker="^", s=60, depthshade=False)
-        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
-            ax3.text(*(m - np.array([0.0, 0.0, 0.05 * scene.size])), text, fontsize=8, color=_MOUNT_COLOUR)
+        for k, m in enumerate(scene.mounts):
+            ax3.text(*(m - np.array([0.0, 0.0, 0.05 * scene.size])), _mount_tag(k), fontsize=11,
+                     color=_MOUNT_COLOUR, fontweight="bold")  # fmt: skip
     if scene.roll_axis is not None:
         ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
         ax3.plot(*ends.T, color=_ROLL_COLOUR, lw=2.0, ls="--")
-        ax3.text(*ends[1], " torque roll axis", fontsize=9, color=_ROLL_COLOUR)
+        ax3.text(*ends[1], " torque roll axis", fontsize=10, color=_ROLL_COLOUR)
     _equal_3d(ax3, everything, zoom=1.2)
     ax3.set_xlabel(f"x [{length}]")
     ax3.set_ylabel(f"y [{length}]")
@@ -236,7 +237,9 @@ def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
     ax3.view_init(elev=18, azim=-60)
 
 
-def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tuple[Array, Array], length: str) -> None:
+def _projection(
+    ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tuple[Array, Array], length: str
+) -> tuple[list[Any], Array]:
     """One orthographic view onto the plane of axes `a` and `b`, at the shared scale `limits` (centre, half)."""
     pos, dirs, g, arrow = scene.positions, scene.directions, scene.g, scene.arrow
     ring = pos[scene.outline]
@@ -256,8 +259,7 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
             ax.scatter([p[a]], [p[b]], s=130, facecolors="none", edgecolors=_SENSOR_COLOUR, zorder=2)
             if float(towards @ d) < 0.0:
                 ax.scatter([p[a]], [p[b]], s=60, marker="x", color=_SENSOR_COLOUR, zorder=4)
-    for p, text in scene.labels:
-        ax.annotate(text, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=9, color=_SENSOR_COLOUR)
+    labels: list[Any] = []  # placed afterwards, in this order of priority (_place_labels)
     for k in range(3):
         tip = scene.tips[k]
         if np.hypot(tip[a] - g[a], tip[b] - g[b]) > 0.05 * float(np.linalg.norm(tip - g)):
@@ -268,31 +270,28 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
                 arrowprops={"arrowstyle": "-|>", "color": _AXIS_COLOURS[k], "lw": 2.0},
                 zorder=4,
             )
-            ax.annotate(
-                str(k + 1),
-                (tip[a], tip[b]),
-                xytext=(3, 3),
-                textcoords="offset points",
-                fontsize=11,
-                color=_AXIS_COLOURS[k],
-                fontweight="bold",
-            )
+            labels.append(ax.annotate(
+                str(k + 1), (tip[a], tip[b]), xytext=(3, 3), textcoords="offset points", fontsize=12,
+                color=_AXIS_COLOURS[k], fontweight="bold",
+            ))  # fmt: skip
     ax.scatter([g[a]], [g[b]], color=_CG_COLOUR, marker="*", s=180, zorder=5)
-    ax.annotate(
-        "CG",
-        (g[a], g[b]),
-        xytext=(7, -14),
-        textcoords="offset points",
-        fontsize=10,
-        color=_CG_COLOUR,
+    labels.insert(0, ax.annotate(
+        "CG", (g[a], g[b]), xytext=(7, -14), textcoords="offset points", fontsize=12, color=_CG_COLOUR,
         fontweight="bold",
-    )
+    ))  # fmt: skip
     if scene.mounts.size:
         ax.scatter(scene.mounts[:, a], scene.mounts[:, b], color=_MOUNT_COLOUR, marker="^", s=60, zorder=2)
-        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
+        for k, m in enumerate(scene.mounts):
+            labels.append(ax.annotate(
+                _mount_tag(k), (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=11,
+                color=_MOUNT_COLOUR, fontweight="bold",
+            ))  # fmt: skip
+    for p, text in scene.labels:
+        labels.append(
             ax.annotate(
-                text, (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=8, color=_MOUNT_COLOUR
+                text, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=10, color=_SENSOR_COLOUR
             )
+        )
     if scene.roll_axis is not None:
         ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
         ax.plot(ends[:, a], ends[:, b], color=_ROLL_COLOUR, lw=1.6, ls="--", zorder=2)
@@ -303,7 +302,50 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
     ax.set_xlabel(f"{'xyz'[a]} [{length}]")
     ax.set_ylabel(f"{'xyz'[b]} [{length}]")
     ax.grid(True, color="#e3e7ec", lw=0.8)
-    ax.set_title(title, fontsize=11)
+    ax.set_title(title, fontsize=12)
+    points = np.vstack([pos[:, [a, b]], g[None, [a, b]], scene.mounts.reshape(-1, 3)[:, [a, b]]])
+    return labels, points
+
+
+def _mount_tag(k: int) -> str:
+    """The short name of mount `k` on the figures (``M1``...); its rates are listed beside the figure."""
+    return f"M{k + 1}"
+
+
+_LABEL_SPOTS = (
+    ((6, 6), "left", "bottom"), ((6, -6), "left", "top"), ((-6, 6), "right", "bottom"), ((-6, -6), "right", "top"),
+    ((0, 12), "center", "bottom"), ((0, -12), "center", "top"), ((14, 0), "left", "center"),
+    ((-14, 0), "right", "center"), ((8, 20), "left", "bottom"), ((-8, 20), "right", "bottom"),
+    ((8, -20), "left", "top"), ((-8, -20), "right", "top"), ((0, 30), "center", "bottom"),
+    ((0, -30), "center", "top"),
+)  # fmt: skip
+"""Where a label may sit beside its point (offset in points, alignment), tried in this order."""
+
+
+def _place_labels(ax: Any, labels: Sequence[Any], points: Array, renderer: Any) -> int:
+    """Move each label to the first spot beside its point that overlaps no label placed before and no marker.
+
+    Labels come in order of priority; a label with no free spot keeps the first one. Returns how many
+    labels found no free spot (0 when none overlap).
+    """
+    from matplotlib.transforms import Bbox
+
+    marker = 5.0 * renderer.points_to_pixels(1.0)  # half the size of a marker, in pixels
+    taken = [Bbox.from_extents(x - marker, y - marker, x + marker, y + marker)
+             for x, y in ax.transData.transform(points)]  # fmt: skip
+    crowded = 0
+    for label in labels:
+        for offset, ha, va in (*_LABEL_SPOTS, _LABEL_SPOTS[0]):
+            label.xyann = offset
+            label.set_horizontalalignment(ha)
+            label.set_verticalalignment(va)
+            box = label.get_window_extent(renderer).expanded(1.04, 1.08)
+            if not any(box.overlaps(other) for other in taken):
+                break
+        else:
+            crowded += 1
+        taken.append(label.get_window_extent(renderer))
+    return crowded
 
 
 def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, length: str) -> None:
@@ -321,17 +363,18 @@ def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, len
         *(Line2D([], [], color=_AXIS_COLOURS[k], lw=2.2, label=f"principal axis {k + 1}") for k in range(3)),
     ]  # fmt: skip
     if scene.mounts.size:
-        label = "mount (stiffness per axis)" if scene.mount_labels else "mount"
-        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label=label))
+        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label="mount M1, M2, ..."))
     if scene.roll_axis is not None:
         handles.append(Line2D([], [], color=_ROLL_COLOUR, lw=2.0, ls="--", label="torque roll axis (J⁻¹t, CG)"))
-    notes.legend(handles=handles, loc="upper left", fontsize=10, frameon=False)
+    notes.legend(handles=handles, loc="upper left", fontsize=11, frameon=False)
+    mounts = "".join(f"\n  {_mount_tag(k)} {text}" for k, text in enumerate(scene.mount_labels[: len(scene.mounts)]))
     text = (
         f"CG = ({', '.join(_num(float(v), 4) for v in scene.g)}) {length}\n"
         f"principal moments [{moment_unit}]:\n  "
         + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
+        + (f"\nmounts:{mounts}" if mounts else "")
     )
-    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=10, va="bottom", family="DejaVu Sans")
+    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=11, va="bottom", family="DejaVu Sans")
 
 
 def _unit(v: ArrayLike) -> Array:
@@ -389,11 +432,16 @@ def _layout_figure(
     top = fig.add_subplot(grid[1, 0])
     front = fig.add_subplot(grid[2, 0], sharex=top)
     side = fig.add_subplot(grid[2, 1], sharey=front)
-    for ax, (a, b), label in ((top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"),
-                              (side, (1, 2), "side view (y-z)")):  # fmt: skip
-        _projection(ax, scene, a, b, label, (centre, half), length)
+    views = [(ax, *_projection(ax, scene, a, b, label, (centre, half), length))
+             for ax, (a, b), label in ((top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"),
+                                       (side, (1, 2), "side view (y-z)"))]  # fmt: skip
     _layout_key(fig.add_subplot(grid[1, 1]), scene, moments, moment_unit, length)
-    fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=12)
+    fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=13)
+    fig.draw_without_rendering()  # the constrained layout fixes the axes, then the labels are placed
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]  # the Agg canvas of _new_figure
+    for ax, labels, points in views:
+        _place_labels(ax, labels, points, renderer)
+    fig.set_layout_engine("none")  # keep the axes where the labels were placed
     return fig
 
 
@@ -462,10 +510,10 @@ def _modes_figure(ident: Identification, positions: Array, length: str, table: _
         title = _mode_title(
             table.labels[k], float(table.frequency_hz[k]), float(table.damping_ratio[k]), table.plain[k]
         )
-        ax.set_title(title, fontsize=10)
-        ax.set_xlabel(f"x [{length}]", fontsize=8, labelpad=-2)
-        ax.set_ylabel(f"y [{length}]", fontsize=8, labelpad=-2)
-        ax.set_zlabel(f"z [{length}]", fontsize=8, labelpad=-2)
+        ax.set_title(title, fontsize=12)
+        ax.set_xlabel(f"x [{length}]", fontsize=10, labelpad=-2)
+        ax.set_ylabel(f"y [{length}]", fontsize=10, labelpad=-2)
+        ax.set_zlabel(f"z [{length}]", fontsize=10, labelpad=-2)
         ax.tick_params(labelsize=7, pad=0)
         ax.view_init(elev=22, azim=-60)
     fig.suptitle(
