@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from rigidid import api
-from rigidid.compare import compare_files, compare_results, parse_tolerances
+from rigidid.api import compare as compare_files
+from rigidid.compare import compare_results, parse_tolerances
 from rigidid.compare_render import comparison_junit
 from rigidid.errors import InputError
 from rigidid.jsonout import result_to_dict

@@ -1075,12 +1075,13 @@ def compare(
 ) -> None:
     """Compare a result with a reference figure by figure; exit 1 on a regression, 2 on bad input."""
     with _reported():
-        from rigidid.compare import compare_files, parse_tolerances
+        from rigidid import api
+        from rigidid.compare import parse_tolerances
         from rigidid.compare_render import comparison_junit, comparison_table, figure_verdict
         from rigidid.io.atomic import write_text_atomic
 
         _check_outputs({"--junit": junit})
-        comparison = compare_files(result, reference, rtol=parse_tolerances(rtol), sigma=sigma)
+        comparison = api.compare(result, reference, rtol=parse_tolerances(rtol), sigma=sigma)
         _console().print(comparison_table(comparison))
         if junit is not None:
             write_text_atomic(junit, comparison_junit(comparison))

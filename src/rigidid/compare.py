@@ -11,18 +11,15 @@ radius of gyration, a matrix against its largest entry (the stiffness and dampin
 matrices block by block: translation, rotation, and their geometric mean for the
 coupling blocks, whose units are the mean's).
 
-Nothing here prints or writes; :mod:`rigidid.compare_render` makes the table and the
-JUnit XML.
+Nothing here reads, prints or writes: :func:`rigidid.api.compare` reads the two files,
+:mod:`rigidid.compare_render` makes the table and the JUnit XML.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -35,7 +32,6 @@ __all__ = [
     "Comparison",
     "EntryCheck",
     "FigureCheck",
-    "compare_files",
     "compare_results",
     "parse_tolerances",
 ]
@@ -144,7 +140,7 @@ class Comparison:
     sigma : float
         The number of combined standard errors an entry may differ by (0: none).
     result, reference : str
-        Names of the two results (file names from :func:`compare_files`).
+        Names of the two results (file names from :func:`rigidid.api.compare`).
     skipped : tuple of str
         Figures of the result the reference does not hold (not compared).
     """
@@ -189,53 +185,6 @@ def parse_tolerances(text: str) -> dict[str, float]:
             raise InputError(f"{part!r} is not a relative tolerance (a number >= 0, or FIGURE=NUMBER)", source="rtol")
         out[name] = number
     return out
-
-
-def _read_result(path: Path) -> dict[str, Any]:
-    """A result JSON of ``rigidid identify``, checked to be one."""
-    from rigidid.limits import MAX_JSON_BYTES
-
-    src = str(path)
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read(MAX_JSON_BYTES + 1)
-    except OSError as exc:
-        raise InputError(exc.strerror or str(exc), source=src) from None
-    if len(raw) > MAX_JSON_BYTES:
-        raise InputError(f"larger than {MAX_JSON_BYTES} bytes", source=src)
-    try:
-        data = json.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise InputError("not UTF-8 text: not a result JSON", source=src) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"invalid JSON: {exc.msg}", source=src, location=f"line {exc.lineno}") from None
-    except RecursionError:
-        raise InputError("nested too deeply to be a result JSON", source=src) from None
-    if not isinstance(data, dict) or "center_of_gravity" not in data or not isinstance(data.get("units"), dict):
-        raise InputError(
-            "not a result JSON of `rigidid identify` (no center_of_gravity and units); "
-            "write one with `rigidid identify ... --json FILE`",
-            source=src,
-        )
-    return data
-
-
-def compare_files(
-    result: str | os.PathLike[str],
-    reference: str | os.PathLike[str],
-    *,
-    rtol: float | Mapping[str, float] = DEFAULT_RTOL,
-    sigma: float = 0.0,
-) -> Comparison:
-    """Compare two result JSON files (``rigidid identify --json``); see :func:`compare_results`.
-
-    Raises
-    ------
-    InputError
-        A file that cannot be read, is not a result JSON, or is in other units than the other.
-    """
-    a, b = _read_result(Path(result)), _read_result(Path(reference))
-    return compare_results(a, b, rtol=rtol, sigma=sigma, names=(str(result), str(reference)))
 
 
 def compare_results(
