@@ -95,3 +95,15 @@ def test_the_modes_file_is_not_json(tmp_path: Path) -> None:
     (tmp_path / "table.json").write_text(json.dumps({"a": 1})[1:])
     with pytest.raises(InputError, match="invalid JSON"):
         load_json(tmp_path / "table.json")
+
+
+@pytest.mark.parametrize(
+    ("option", "flag"),
+    [(("--no-refine",), "--no-refine"), (("--band", "2", "40"), "--band"), (("--max-order", "30"), "--max-order"),
+     (("--n-modes", "7"), "--n-modes"), (("--decimate", "2"), "--decimate")],
+)  # fmt: skip
+def test_record_options_with_modes_are_refused(
+    capsys: pytest.CaptureFixture[str], option: tuple[str, ...], flag: str
+) -> None:
+    message = _error(capsys, "identify", CASE / "layout.json", CASE / "modes.csv", *option)
+    assert message.startswith(f"rigidid: error: {flag}: ") and "records only (--records)" in message

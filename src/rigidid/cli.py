@@ -200,6 +200,9 @@ _FLAGS = {
     "rtol": "--rtol",
     "sigma": "--sigma",
     "records": "--records",
+    "refine": "--no-refine",
+    "n_modes": "--n-modes",
+    "decimate": "--decimate",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
