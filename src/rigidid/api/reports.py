@@ -1,4 +1,4 @@
-"""The HTML report of an identification and its figures as PNG files (``rigidid report``)."""
+"""The HTML report and the PNG figures of an identification (matplotlib is imported only here, on use)."""
 
 from __future__ import annotations
 
