@@ -12,8 +12,12 @@ from rigidid.cli.common import EXIT_IDENTIFICATION, check_outputs, make_console,
 
 
 def compare(
-    result: Annotated[Path, typer.Argument(help="The result JSON to check (identify --json).", show_default=False)],
-    reference: Annotated[Path, typer.Argument(help="The reference result JSON.", show_default=False)],
+    result: Annotated[
+        Path, typer.Argument(metavar="RESULT", help="The result JSON to check (identify --json).", show_default=False)
+    ],
+    reference: Annotated[
+        Path, typer.Argument(metavar="REFERENCE", help="The reference result JSON.", show_default=False)
+    ],
     rtol: Annotated[
         str,
         typer.Option(
