@@ -99,8 +99,9 @@ def test_presentation_imports_no_private_names() -> None:
             if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("rigidid"):
                 private = [a.name for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
                 assert not private, f"{path}: from {node.module} import {private}"
-    source = (ROOT / "src/rigidid/api/reports.py").read_text()
-    assert "result_to_dict" not in source and "mounts_to_dict" not in source
+    for path in ("src/rigidid/api/reports.py", "src/rigidid/reporting.py", "src/rigidid/render.py"):
+        source = (ROOT / path).read_text()
+        assert "_to_dict(" not in source, path  # the typed results, not the JSON forms
 
 
 def _layout_figure_of(result: api.IdentifyResult) -> object:

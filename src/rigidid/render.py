@@ -8,13 +8,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.jsonout import noise_to_dict
 from rigidid.results import IdentifyResult, PlanResult
 
 if TYPE_CHECKING:
     from rich.console import Group
     from rich.table import Table
 
+    from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import ReferenceReport
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.results import MassLineResult
@@ -240,7 +240,7 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
     tables = []
     if result.uncertainty is not None:
         unc = result.uncertainty
-        caption = _noise_caption(noise_to_dict(unc.noise), length)
+        caption = _noise_caption(unc.noise, length)
         caption += f"; {unc.failed} draws failed" if unc.failed else ""
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
@@ -401,16 +401,16 @@ def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str, 
     return table
 
 
-def _noise_caption(noise: dict[str, float], length: str) -> str:
+def _noise_caption(noise: NoiseLevels, length: str) -> str:
     parts = [
-        f"frequency {100 * noise['frequency']:.3g} %",
-        f"damping {100 * noise['damping']:.3g} %",
-        f"shape {100 * noise['shape']:.3g} %",
+        f"frequency {100 * noise.frequency:.3g} %",
+        f"damping {100 * noise.damping:.3g} %",
+        f"shape {100 * noise.shape:.3g} %",
     ]
-    if noise.get("position"):
-        parts.append(f"position {noise['position']:.3g} {length}")
-    if noise.get("angle_deg"):
-        parts.append(f"direction {noise['angle_deg']:.3g} deg")
+    if noise.position:
+        parts.append(f"position {noise.position:.3g} {length}")
+    if noise.angle_deg:
+        parts.append(f"direction {noise.angle_deg:.3g} deg")
     return "standard deviations assumed: " + ", ".join(parts)
 
 
@@ -460,7 +460,7 @@ def plan_tables(plan: PlanResult) -> Group:
         fig = plan.prediction.figures
         pred = Table(
             title="Predicted uncertainty (standard deviation)",
-            caption=_noise_caption(noise_to_dict(plan.prediction.uncertainty.noise), length),
+            caption=_noise_caption(plan.prediction.uncertainty.noise, length),
             title_justify="left",
             caption_justify="left",
         )
