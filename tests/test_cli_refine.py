@@ -32,8 +32,8 @@ def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     folder = tmp_path_factory.mktemp("records")
     out = run(
-        "simulate", FOUR / "body.json", FOUR / "layout.json", "-o", folder / "exact.csv", "--records", folder,
-        "--record-noise", "0.01", "--seed", "3", "--sample-rate", "256", "--duration", "4", "--pretrigger", "0.2",
+        "simulate", FOUR / "body.json", FOUR / "layout.json", "-o", folder / "exact.csv", "--write-records", folder,
+        "--add-record-noise", "0.01", "--seed", "3", "--sample-rate", "256", "--duration", "4", "--pretrigger", "0.2",
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
     return sorted(folder.glob("record-*.csv"))

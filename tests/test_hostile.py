@@ -209,10 +209,10 @@ def test_identify_leaves_a_device_target_a_device(tmp_path: Path) -> None:
         (["identify", "{L}", "{M}", "--mass", "1e308", "--json", "o.json"], "--mass: must be at most 1e+100"),
         (["identify", "{L}", "{M}", "--seed", "-1", "--uncertainty", "5"], "--seed: must be from 0"),
         (["identify", "{L}", "{M}", "--bogus"], "rigidid identify: No such option: --bogus"),
-        (["simulate", "{B}", "{FL}", "--shape-noise", "inf", "-o", "m.csv"], "--shape-noise: must be a finite number"),
-        (["simulate", "{B}", "{FL}", "--records", "rec", "-o", "nodir/m.csv"], "nodir/m.csv: cannot write"),
-        (["simulate", "{B}", "{FL}", "--records", "rec", "--sample-rate", "1e9"], "--sample-rate/--duration:"),
-        (["simulate", "{B}", "{FL}", "--records", "afile"], "afile: is not a folder"),
+        (["simulate", "{B}", "{FL}", "--add-shape-noise", "inf", "-o", "m.csv"], "--add-shape-noise: must be a finite"),
+        (["simulate", "{B}", "{FL}", "--write-records", "rec", "-o", "nodir/m.csv"], "nodir/m.csv: cannot write"),
+        (["simulate", "{B}", "{FL}", "--write-records", "rec", "--sample-rate", "1e9"], "--sample-rate/--duration:"),
+        (["simulate", "{B}", "{FL}", "--write-records", "afile"], "afile: is not a folder"),
         (["report", "{L}", "{M}", "-o", "r.html", "--png", "afile/x"], "afile/x: cannot make the folder"),
         (
             ["report", "{L}", "{M}", "-o", "r.html", "--body", "{B}"],
@@ -236,7 +236,7 @@ def test_cli_refuses_in_one_line_and_writes_nothing(tmp_path: Path, args: list[s
 
 
 def test_records_errors_name_the_option_and_files(tmp_path: Path) -> None:
-    status, _, err = cli(tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--records", "rec",
+    status, _, err = cli(tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--write-records", "rec",
                          "--sample-rate", "128", "--duration", "4", "-o", "m.csv")  # fmt: skip
     assert status == 0, err
     recs = ["rec/record-1.csv", "rec/record-2.csv"]

@@ -242,18 +242,14 @@ def _force_keys(result: IdentifyResult, force_unit: str | None) -> dict[str, Any
 
 def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
     """Per-mount rates in force units (per mass without a mass), with the fit's residual and uniqueness."""
-    from rigidid.units import force_units
+    from rigidid.units import rate_units
 
     assert result.mounts is not None
     m = result.mounts
     rates = m.rates
-    length, mass = result.units["length"], result.units["mass"]
-    if result.identification.mass is None:
-        factor, units = 1.0, {"stiffness": "1/s^2 (per mass)", "damping": "1/s (per mass)"}
-    else:
-        fu = force_units(length, mass, force_unit)
-        factor = fu.factor
-        units = {"stiffness": f"{fu.force}/{length}", "damping": f"{fu.force} s/{length}"}
+    per_mass = result.identification.mass is None
+    factor, k_unit, c_unit = rate_units(result.units["length"], result.units["mass"], force_unit, per_mass=per_mass)
+    units = {"stiffness": k_unit, "damping": c_unit}
     damping = rates.damping if rates.damping is not None else np.full_like(rates.stiffness, np.nan)
     return {
         "units": units,

@@ -107,6 +107,18 @@ class SensorSpec(_Strict):
         return (x / n, y / n, z / n)
 
 
+class TestBlock(_Strict):
+    """``layout.json``'s optional ``test``: what was measured, when and by whom (shown in the report)."""
+
+    __test__ = False  # not a pytest test class
+
+    id: Annotated[str, Field(max_length=200, description="the test's id")] | None = None
+    specimen: Annotated[str, Field(max_length=500, description="what was tested (part, serial number)")] | None = None
+    date: Annotated[str, Field(max_length=100, description="date of the measurement, e.g. 2026-11-26")] | None = None
+    operator: Annotated[str, Field(max_length=200, description="who measured")] | None = None
+    notes: Annotated[str, Field(max_length=5000, description="anything else (set-up, conditions)")] | None = None
+
+
 class LayoutFile(_Strict):
     """``layout.json``: the sensors of a test and, optionally, the body's mass."""
 
@@ -114,6 +126,7 @@ class LayoutFile(_Strict):
     units: Units
     mass: Annotated[float, Field(gt=0.0, description="mass of the body (mass unit)")] | None = None
     sensors: Annotated[list[SensorSpec], Field(min_length=1)]
+    test: TestBlock | None = Field(default=None, description="test metadata for the report (all optional)")
 
     @field_validator("mass")
     @classmethod

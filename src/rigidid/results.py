@@ -61,6 +61,8 @@ class IdentifyResult:
         (:func:`with_record_spread`).
     layout_name : str or None
         The layout's ``name``.
+    test : TestInfo or None
+        The layout's ``test`` block (id, specimen, date, operator, notes), for the report.
     mounts : Mounts or None
         Per-mount rates fitted to the stiffness and damping (:func:`with_mounts`).
     torque_roll_axis : TorqueRollAxis or None
@@ -103,6 +105,34 @@ class IdentifyResult:
     scaled: ScaledBody | None = None
     standard_errors: StandardErrors | None = None
     torque_roll_axis_std_deg: float | None = None
+    test: TestInfo | None = None
+
+
+@dataclass(frozen=True)
+class TestInfo:
+    """What was measured, when and by whom: the layout's optional ``test`` block (each field optional).
+
+    Attributes
+    ----------
+    id, specimen, date, operator, notes : str or None
+        The test's id, the part tested, the date of the measurement, who measured, anything else.
+    """
+
+    __test__ = False  # not a pytest test class
+
+    id: str | None = None
+    specimen: str | None = None
+    date: str | None = None
+    operator: str | None = None
+    notes: str | None = None
+
+    @classmethod
+    def from_layout(cls, layout: LayoutFile) -> TestInfo | None:
+        """The layout's ``test`` block, or None without one."""
+        block = layout.test
+        if block is None:
+            return None
+        return cls(block.id, block.specimen, block.date, block.operator, block.notes)
 
 
 

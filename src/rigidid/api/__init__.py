@@ -10,7 +10,7 @@ that the command line imports only the workflow it runs:
   (:func:`identify_records` is what ``rigidid identify --records`` does)
 - :mod:`rigidid.api.frf`: the FRF routes (modes from FRFs, mass line, simulated FRFs)
 - :mod:`rigidid.api.planning`, :mod:`rigidid.api.simulation`, :mod:`rigidid.api.conversion`,
-  :mod:`rigidid.api.reports`
+  :mod:`rigidid.api.reports`, :mod:`rigidid.api.comparison` (a result against a reference)
 
 The result types live in :mod:`rigidid.results`, below the API and the presentation.
 
@@ -65,6 +65,7 @@ _HOME = {
     "simulate": "rigidid.api.simulation",
     "simulate_records": "rigidid.api.simulation",
     "convert": "rigidid.api.conversion",
+    "compare": "rigidid.api.comparison",
     "report": "rigidid.api.reports",
     "report_pngs": "rigidid.api.reports",
 }
@@ -82,6 +83,7 @@ __all__ = [
     "TestRun",
     "body_from_file",
     "body_with_mounts",
+    "compare",
     "convert",
     "estimate_modes",
     "estimate_records_modes",
@@ -112,6 +114,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from rigidid.api.comparison import compare
     from rigidid.api.conversion import convert
     from rigidid.api.frf import fit_modes_frf, identify_massline, simulate_frf
     from rigidid.api.identification import identify, with_warnings

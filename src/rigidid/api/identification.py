@@ -22,7 +22,7 @@ from rigidid.io import files
 from rigidid.io.files import ModeTable
 from rigidid.models import LayoutFile, MountsFile
 from rigidid.progress import no_progress
-from rigidid.results import IdentifyResult, PathLike, Selection
+from rigidid.results import IdentifyResult, PathLike, Selection, TestInfo
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import ScaledBody
@@ -191,6 +191,7 @@ def identify(
         shapes=used.shapes,
         uncertainty=intervals,
         layout_name=lay.name,
+        test=TestInfo.from_layout(lay),
         mount_model=fit,
         scaled=_scaled_body(used, poles, positions, directions),
         standard_errors=errors,

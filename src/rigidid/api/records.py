@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from rigidid.api import checks
 from rigidid.api.identification import identify, suspect_mode, with_warnings
-from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
+from rigidid.api.load import UFF_SUFFIXES, check_uff_options, input_source, load_layout, load_records, load_test
 from rigidid.core.selection import rigid_fit_residuals
 from rigidid.errors import InputError
 from rigidid.io import files
@@ -612,6 +612,19 @@ class ModalOptions:
     decimate: int | None = None
 
 
+def _refuse_record_options(modal: ModalOptions | None, refine: bool) -> None:
+    """Options of the records route given with modes: refused, naming the first, rather than ignored."""
+    given = modal or ModalOptions()
+    default = ModalOptions()
+    names = {"method": "modal_method", "n_modes": "n_modes", "band": "band", "max_order": "max_order",
+             "decimate": "decimate"}  # fmt: skip
+    for field, name in names.items():
+        if getattr(given, field) != getattr(default, field):
+            raise InputError("applies to impact records only (`records`); the input here is modes", source=name)
+    if not refine:
+        raise InputError("the refit runs on impact records only (`records`); the input here is modes", source="refine")
+
+
 def estimate_test_modes(
     data: TestData,
     modal: ModalOptions,
@@ -685,6 +698,9 @@ def identify_test(
     modal = modal or ModalOptions()
     method = identify_options.get("method", "structured")
     src = input_source(layout, inputs)
+    check_uff_options(layout, units, geometry)
+    if not records:
+        _refuse_record_options(modal, refine)
     files_in = records and bool(inputs) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     streamed = files_in and not resample
     data = TestData(load_layout(layout)) if streamed else load_test(
@@ -778,6 +794,7 @@ def estimate_records_modes(
     """
     from rigidid.errors import named_source
 
+    check_uff_options(layout, units, geometry)
     streamed = bool(records) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     data = TestData(load_layout(layout)) if streamed else load_test(
         layout, records, records=True, units=units, geometry=geometry
