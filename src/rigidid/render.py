@@ -287,7 +287,7 @@ def _standard_error_table(result: IdentifyResult, force_unit: str | None) -> Tab
         stiffness_diagonal=interval(scale * np.diag(ident.stiffness_per_mass), np.diag(err.stiffness)),
     )
     axes = ", ".join(f"{v:.2g}" for v in err.principal_axes_deg)
-    caption = _noise_caption(noise_to_dict(err.noise), result.units["length"])
+    caption = _noise_caption(err.noise, result.units["length"])
     caption += f"; principal axes +- {axes} deg (1 std)"
     if result.torque_roll_axis_std_deg is not None:
         caption += f"; torque roll axis +- {result.torque_roll_axis_std_deg:.2g} deg"
