@@ -2,13 +2,13 @@
 
 The kernel (:func:`rigidid.core.estimator.estimate`) is a smooth function of the
 measured data near a good estimate. Its first-order response to each
-independent source of measurement noise is found by central differences: the
-data are moved by a small fraction of one standard deviation along each noise
-direction, both ways, and identified again as one batch. The standard error of
+independent source of measurement noise is found by forward differences: the
+data are moved by a small relative step along each noise direction and
+identified again, all in one batch. The standard error of
 any figure derived from the estimate (CG, inertia, principal moments and axes,
 ``K``, ``C``, per-mount rates, a torque roll axis) is then the root sum of
 squares of its responses: ``cov = D D^T`` with ``D`` the responses per unit
-standard deviation. This costs one batch of ``2 (12 + 72)`` identifications,
+standard deviation. This costs one batch of ``12 + 72`` identifications,
 whatever the number of sensors, against the thousand of a Monte Carlo run.
 
 Noise directions (independent, unit standard deviation each):
@@ -71,12 +71,14 @@ class Directions:
 
     Attributes
     ----------
-    positions, directions : ndarray, shape (2 k, p, 3)
-    poles : ndarray of complex, shape (2 k, 6)
-    shapes : ndarray of complex, shape (2 k, p, 6)
-        Rows ``0..k-1`` moved forwards, ``k..2k-1`` backwards.
+    positions, directions : ndarray, shape (k or 2 k, p, 3)
+    poles : ndarray of complex, shape (k or 2 k, 6)
+    shapes : ndarray of complex, shape (k or 2 k, p, 6)
+        Rows ``0..k-1`` moved forwards, then (central differences) ``k..2k-1`` backwards.
     sigma : ndarray, shape (k,)
         Standard deviation of each direction's noise in units of its move.
+    central : bool
+        Whether the backward moves are there.
     """
 
     positions: Array
@@ -84,6 +86,7 @@ class Directions:
     poles: CArray
     shapes: CArray
     sigma: Array
+    central: bool = False
 
 
 def _poles_from(f: Array, z: Array) -> CArray:
@@ -113,7 +116,14 @@ def _shape_moves(positions: Array, directions: Array, shapes: CArray, step: floa
 
 
 def noise_directions(
-    positions: Array, directions: Array, poles: CArray, shapes: CArray, noise: NoiseLevels, *, step: float = STEP
+    positions: Array,
+    directions: Array,
+    poles: CArray,
+    shapes: CArray,
+    noise: NoiseLevels,
+    *,
+    step: float = STEP,
+    central: bool = False,
 ) -> Directions:
     """The test's data moved along every noise direction of `noise`, by ``+-step`` (relative).
 
@@ -129,6 +139,9 @@ def noise_directions(
         Standard deviations; sources at zero get no direction.
     step : float
         Relative size of the moves.
+    central : bool
+        Also the backward moves (central differences; forward differences
+        otherwise, exact to about `step` relative, half the cost).
 
     Returns
     -------
@@ -174,14 +187,14 @@ def noise_directions(
             add(np.deg2rad(noise.angle_deg), dirs=tilt_directions(directions, (step * np.eye(p * 3)[i]).reshape(p, 3)))
     d_lam, d_psi = np.concatenate(moves_lam), np.concatenate(moves_psi)
     d_pos, d_dir = np.concatenate(moves_pos), np.concatenate(moves_dir)
-    k_all = d_lam.shape[0]
-    both = np.concatenate
+    signs = (1.0, -1.0) if central else (1.0,)
     return Directions(
-        positions=both([positions + d_pos, positions - d_pos]),
-        directions=both([directions + d_dir, directions - d_dir]),
-        poles=both([poles + d_lam, poles - d_lam]).reshape(2 * k_all, 6),
-        shapes=both([shapes + d_psi, shapes - d_psi]),
+        positions=np.concatenate([positions + s * d_pos for s in signs]),
+        directions=np.concatenate([directions + s * d_dir for s in signs]),
+        poles=np.concatenate([poles + s * d_lam for s in signs]),
+        shapes=np.concatenate([shapes + s * d_psi for s in signs]),
         sigma=np.asarray(sigma, dtype=float),
+        central=central,
     )
 
 
@@ -194,7 +207,7 @@ class Linearised:
     base : Estimates
         The estimate from the data as measured (a batch of one).
     moved : Estimates
-        ``2 k`` estimates: ``k`` moved forwards, then ``k`` backwards.
+        ``k`` estimates moved forwards (then ``k`` backwards with central differences).
     sigma : ndarray, shape (k,)
         Standard deviation of each direction's noise in units of its move.
     noise : NoiseLevels
@@ -221,9 +234,14 @@ class Linearised:
             an array ``(B, ...)``; called once on the moved estimates.
         """
         values = np.asarray(figure(self.moved), dtype=float)
-        k = values.shape[0] // 2
-        d: Array = (values[:k] - values[k:]) * (self.sigma / 2.0).reshape(-1, *([1] * (values.ndim - 1)))
-        ok = self.moved.ok[:k] & self.moved.ok[k:]
+        k = self.sigma.shape[0]
+        shape = (-1, *([1] * (values.ndim - 1)))
+        if values.shape[0] == 2 * k:  # central differences
+            d: Array = (values[:k] - values[k:]) * (self.sigma / 2.0).reshape(shape)
+            ok = self.moved.ok[:k] & self.moved.ok[k:]
+        else:
+            d = (values - np.asarray(figure(self.base), dtype=float)) * self.sigma.reshape(shape)
+            ok = self.moved.ok
         d[~ok] = 0.0
         return d
 
@@ -377,7 +395,7 @@ def residual_weights(
     At a fixed CG and ``J / m`` the residuals are linear in ``Q`` and ``P``
     (eq. (19) of [1]); their response to each noise direction
     (:func:`noise_directions`) follows from the responses of ``Q`` and ``P``,
-    found by central differences through
+    found by forward differences through
     :func:`rigidid.core.estimator.prepare`. Minimising ``|L r|^2`` over the CG
     and ``J / m`` is then the first-order maximum-likelihood fit of the free
     model (CG, ``J``, symmetric ``K`` and ``C``) to the measured poles and
@@ -423,9 +441,9 @@ def _residual_responses(
     ratio = prep.omega[1:] / prep.omega[0]
     q = prep.stiffness[1:] * (ratio**2)[:, None, None]
     p = prep.damping[1:] * ratio[:, None, None]
-    k = q.shape[0] // 2
-    half = (moved.sigma / 2.0)[:, None, None]
-    dq, dp = (q[:k] - q[k:]) * half, (p[:k] - p[k:]) * half
+    sigma = moved.sigma[:, None, None]
+    k = sigma.shape[0]
+    dq, dp = (q - prep.stiffness[:1]) * sigma, (p - prep.damping[:1]) * sigma
     result: Array = eq18_residuals(dq, dp, np.broadcast_to(cg, (k, 3)), np.broadcast_to(inertia_params, (k, 6)))
     return result
 
