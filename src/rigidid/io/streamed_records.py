@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -116,6 +116,10 @@ class StreamedRecord:
         The pre-factor and the second stage's factor (1: none; see the
         `cascade` option of :func:`read_record_streamed`); `factor` is their
         product.
+    dt_uncertainty : float
+        Bound on the error of `dt` from the rounding of the time column as
+        written (s, at `dt`'s rate;
+        :func:`~rigidid.core.timedomain.stamps.interval_uncertainty`).
     """
 
     data: Array
@@ -126,6 +130,7 @@ class StreamedRecord:
     energy: Array
     spectrum: tuple[Array, Array] | None = None
     stages: tuple[int, int] = (1, 1)
+    dt_uncertainty: float = 0.0
 
 
 class _Source:
@@ -313,6 +318,13 @@ class _TimeCheck:
                 "time does not increase from the first to the last row", source=self.src, location=_column("time")
             )
         return dt
+
+    def uncertainty(self) -> float:
+        """Bound on the error of :meth:`dt` from the digits the time column is written with."""
+        from rigidid.core.timedomain.stamps import interval_uncertainty, token_resolution
+
+        resolution = min((token_resolution(token) for token in self.source.time_tokens()), default=0.0)
+        return interval_uncertainty(resolution, self.rows, max(abs(self.first), abs(self.last)))
 
 
 class _Welch:
@@ -573,6 +585,7 @@ def read_record_streamed(
         last = line_of(n - 1) if n else 1
         raise InputError(f"{n} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(last))
     dt = times.dt() if source.dt is None else float(source.dt)
+    dt_error = times.uncertainty() if source.dt is None else 0.0
     for i, name in enumerate(wanted):
         if not peaks[i] > 0.0:
             raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
@@ -589,7 +602,8 @@ def read_record_streamed(
     energy = channel_energy(data)
     _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * total), src, energy)
     spectrum = welch.spectrum() if welch is not None else None
-    return StreamedRecord(data, dt * total, total, offset, n, energy, spectrum, (factor, total // factor))
+    stages = (factor, total // factor)
+    return StreamedRecord(data, dt * total, total, offset, n, energy, spectrum, stages, dt_error * total)
 
 
 def _content(streamed: Sequence[StreamedRecord], dt: float) -> tuple[float, float] | None:
@@ -654,13 +668,16 @@ def read_records_streamed(
     q0, q2 = first.stages
     streamed = [first]
     streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
+    from rigidid.core.timedomain.stamps import common_interval, different_intervals
+
     total = streamed[0].factor
     dts = [r.dt for r in streamed]
-    if max(dts) - min(dts) > 1e-9 * max(dts):
-        raise InputError(
-            f"records have different sample intervals ({min(dts) / total:.6g} to {max(dts) / total:.6g} s)",
-            source="records",
-        )
+    common, same = common_interval(dts, [r.dt_uncertainty for r in streamed])
+    if not same:
+        raise InputError(different_intervals([d / total for d in dts], [r.dt_uncertainty / total for r in streamed]),
+                         source="records")  # fmt: skip
+    streamed = [r if r.dt == common else replace(r, dt=common) for r in streamed]
+    dts = [common] * len(streamed)
     content = _content(streamed, dts[0] / total)
     if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
         del streamed, first
