@@ -956,8 +956,13 @@ def estimate_modes(
         raise InputError(
             f"records have different sample intervals ({min(dts):.6g} to {max(dts):.6g} s)", source="records"
         )
+    from rigidid.core.timedomain.clipping import clipped_channels
+
+    ids = tuple(s.id for s in lay.sensors)
+    kept = _unclipped(ids, [clipped_channels([data]) for data, _ in arrays])
+    columns = list(range(len(ids)) if kept is None else kept)
     result = estimate(
-        [data for data, _ in arrays],
+        [data[:, columns] for data, _ in arrays],
         dts[0],
         method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
         n_modes=n_modes,
@@ -966,9 +971,79 @@ def estimate_modes(
         decimate=decimate,
         progress=progress,
     )
-    ids = tuple(s.id for s in lay.sensors)
-    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    if kept is not None:
+        result = replace(result, channels=kept)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
+
+
+def _unclipped(ids: Sequence[str], clipped: Sequence[NDArray[np.bool_]]) -> tuple[int, ...] | None:
+    """The channels to fit when some record has clipped ones (None: all), with a ClippedChannelWarning naming them.
+
+    Parameters
+    ----------
+    ids : sequence of str
+        The sensors, in record column order.
+    clipped : sequence of ndarray of bool
+        Per record, :func:`~rigidid.core.timedomain.clipping.clipped_channels`.
+
+    Returns
+    -------
+    tuple of int or None
+        The columns kept; None when none is clipped, or when leaving them out
+        would leave fewer than six sensors (then they are kept, and the warning says so).
+    """
+    import warnings
+
+    from rigidid.errors import ClippedChannelWarning
+
+    flags = np.zeros(len(ids), dtype=bool)
+    where: dict[int, list[int]] = {}
+    for k, mask in enumerate(clipped):
+        if mask is None:
+            continue
+        flags |= mask
+        for c in np.flatnonzero(mask):
+            where.setdefault(int(c), []).append(k + 1)
+    if not flags.any():
+        return None
+    named = ", ".join(f"{ids[c]!r} (record {', '.join(map(str, where[c]))})" for c in sorted(where))
+    kept = tuple(int(c) for c in np.flatnonzero(~flags))
+    if len(kept) < 6:
+        warnings.warn(
+            f"clipped channels (flat tops at their peak): {named}; kept in the fit, since leaving them out "
+            f"leaves {len(kept)} sensors of the 6 needed: the answer is biased by the overload",
+            ClippedChannelWarning,
+            stacklevel=3,
+        )
+        return None
+    warnings.warn(
+        f"clipped channels (flat tops at their peak) left out of the fit: {named}",
+        ClippedChannelWarning,
+        stacklevel=3,
+    )
+    return kept
+
+
+def fitted_layout(layout: LayoutFile, modes: ModeTable) -> LayoutFile:
+    """The layout's sensors that `modes` has shapes for (all of them unless channels were left out).
+
+    Parameters
+    ----------
+    layout : LayoutFile
+        The test's layout.
+    modes : ModeTable
+        Modes estimated from its records (:func:`estimate_modes`).
+
+    Returns
+    -------
+    LayoutFile
+        `layout` itself, or a copy with the sensors left out of the estimate removed.
+    """
+    if tuple(s.id for s in layout.sensors) == modes.sensor_ids:
+        return layout
+    keep = set(modes.sensor_ids)
+    return layout.model_copy(update={"sensors": [s for s in layout.sensors if s.id in keep]})
 
 
 def estimate_rigid_modes(
@@ -1015,14 +1090,14 @@ def estimate_rigid_modes(
 
     from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import elastic_suspect, separate_elastic
-    from rigidid.errors import ElasticModeWarning, IdentificationError
+    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, IdentificationError
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
         "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
     }  # fmt: skip
     table, estimate = estimate_modes(lay, records, n_modes=6, **options)
-    _, positions, directions = files.layout_arrays(lay)
+    _, positions, directions = files.layout_arrays(fitted_layout(lay, table))
     if positions.shape[0] <= 6:
         return table, estimate
     t = local_sensor_matrix(positions, directions)
@@ -1035,7 +1110,9 @@ def estimate_rigid_modes(
         f"against {float(np.median(np.delete(residual, k))):.2g} for the others: an elastic mode taken for a rigid one?"
     )
     try:
-        table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
+        with warnings.catch_warnings():  # the clipped channels were named by the first estimation
+            warnings.simplefilter("ignore", ClippedChannelWarning)
+            table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
     except IdentificationError:
         warnings.warn(
             f"{found} The records give no seventh stable mode to replace it; name the six rigid-body modes "
@@ -1095,9 +1172,11 @@ def _estimate_streamed(
     factor = streamed[0].factor
     dts = [r.dt for r in streamed]
     cascaded = streamed[0].stages[1] > 1
+    kept = _unclipped(ids, [r.clipped for r in streamed if r.clipped is not None])
+    columns = list(range(len(ids)) if kept is None else kept)
     try:
         result = estimate(
-            [r.data for r in streamed],
+            [r.data[:, columns] for r in streamed],
             dts[0],
             method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
             n_modes=n_modes,
@@ -1124,7 +1203,9 @@ def _estimate_streamed(
             for r, i in zip(streamed, result.impacts, strict=False)
         )
         result = replace(result, decimation=result.decimation * factor, impacts=impacts)
-    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, tuple(ids), result.shapes)
+    if kept is not None:
+        result = replace(result, channels=kept)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
 
 
@@ -1628,7 +1709,7 @@ def with_refinement(
     ident = result.identification
     if progress is not None:
         progress("refit", 0, 1)
-    arrays = [data for data, _ in records]
+    arrays = [data if estimate.channels is None else data[:, list(estimate.channels)] for data, _ in records]
     unused = [k + 1 not in result.modes_used for k in range(estimate.poles.size)]
     if any(unused):  # modes estimated but not used (elastic): out of the records the rigid-body model is fitted to
         from rigidid.core.timedomain.nuisance import subtract_modes
@@ -1760,7 +1841,7 @@ def refine_records(
     differ from a whole-record estimation's when that budget binds.
     """
 
-    from rigidid.core.timedomain.refine import refine_prepared
+    from rigidid.core.timedomain.refine import columns_of, refine_prepared
     from rigidid.io.records import layout_ids
     from rigidid.io.streamed_records import open_source
 
@@ -1795,6 +1876,8 @@ def refine_records(
             paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
             factor=estimate.decimation, progress=progress,
         )  # fmt: skip
+        if estimate.channels is not None:  # clipped channels left out
+            data = columns_of(data, estimate.channels)
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,

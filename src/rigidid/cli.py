@@ -546,10 +546,10 @@ def _identify(
             )
     paths = list(inputs or []) if streamed else None
     chosen = _parse_modes(modes_used)
-    from rigidid.errors import ElasticModeWarning, RefinementWarning
+    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, RefinementWarning
 
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
-    with _noted(notes, ElasticModeWarning):
+    with _noted(notes, ElasticModeWarning, ClippedChannelWarning):
         modes, estimate = (
             _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None)
             if records
@@ -563,7 +563,7 @@ def _identify(
 
     with _naming(src), terminal_progress() as progress:
         result = api.identify(
-            data.layout,
+            api.fitted_layout(data.layout, modes),  # without the channels left out (clipped)
             modes,
             mass=mass,
             modes_used=chosen,

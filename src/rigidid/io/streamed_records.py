@@ -116,6 +116,9 @@ class StreamedRecord:
         The pre-factor and the second stage's factor (1: none; see the
         `cascade` option of :func:`read_record_streamed`); `factor` is their
         product.
+    clipped : ndarray of bool or None
+        Per channel, whether its peak is a flat top at the raw rate
+        (:class:`~rigidid.core.timedomain.clipping.PeakCount`).
     dt_uncertainty : float
         Bound on the error of `dt` from the rounding of the time column as
         written (s, at `dt`'s rate;
@@ -131,6 +134,7 @@ class StreamedRecord:
     spectrum: tuple[Array, Array] | None = None
     stages: tuple[int, int] = (1, 1)
     dt_uncertainty: float = 0.0
+    clipped: NDArray[np.bool_] | None = None
 
 
 class _Source:
@@ -502,6 +506,7 @@ def read_record_streamed(
         The errors of :func:`rigidid.io.records.read_record`, naming the file,
         row and column; and a record too short for `factor`.
     """
+    from rigidid.core.timedomain.clipping import PeakCount
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, Decimator, channel_energy
     from rigidid.io.records import MIN_ROWS, _check_decay, layout_ids
 
@@ -509,7 +514,7 @@ def read_record_streamed(
     wanted = layout_ids(sensor_ids, src)
     source = open_source(Path(path), wanted, progress)
     times = _TimeCheck(source, src)
-    peaks = np.zeros(len(wanted))
+    tops = PeakCount(len(wanted))  # each channel's peak, and the samples at it (a flat top: clipped)
     pending: list[tuple[Array, Array]] = []
     blocks = iter(source.blocks)
     held = 0  # hold the head raw: its content chooses the factor and is the estimation's
@@ -554,7 +559,7 @@ def read_record_streamed(
         if welch is not None:
             welch.add(values, times.rows)
         times.add(t)
-        np.maximum(peaks, np.max(np.abs(values), axis=0), out=peaks)
+        tops.add(values)
         done = stream.push(values)
         emit(done if stage2 is None else stage2.push(done))
         if auto and welch is not None and welch.complete(times.rows):
@@ -587,7 +592,7 @@ def read_record_streamed(
     dt = times.dt() if source.dt is None else float(source.dt)
     dt_error = times.uncertainty() if source.dt is None else 0.0
     for i, name in enumerate(wanted):
-        if not peaks[i] > 0.0:
+        if not tops.peak[i] > 0.0:
             raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
     try:
         stream.finish()
@@ -603,7 +608,8 @@ def read_record_streamed(
     _check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * total), src, energy)
     spectrum = welch.spectrum() if welch is not None else None
     stages = (factor, total // factor)
-    return StreamedRecord(data, dt * total, total, offset, n, energy, spectrum, stages, dt_error * total)
+    clipped = tops.clipped()
+    return StreamedRecord(data, dt * total, total, offset, n, energy, spectrum, stages, dt_error * total, clipped)
 
 
 def _content(streamed: Sequence[StreamedRecord], dt: float) -> tuple[float, float] | None:

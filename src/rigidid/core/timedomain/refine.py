@@ -35,6 +35,7 @@ __all__ = [
     "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "columns_of",
     "cut_decays",
     "fit_factor",
     "good_fit",
@@ -283,6 +284,23 @@ class PreparedDecays:
 
 
 _Data = PreparedDecays
+
+
+def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
+    """`data` with only the given channels (e.g. the clipped ones left out).
+
+    Parameters
+    ----------
+    data : PreparedDecays
+    channels : sequence of int
+        Columns kept, in order.
+
+    Returns
+    -------
+    PreparedDecays
+    """
+    cols = list(channels)
+    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from)
 
 
 def pretrigger_sigma(
