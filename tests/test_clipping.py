@@ -94,3 +94,30 @@ def test_estimate_from_arrays_leaves_the_clipped_channel_out(clipped: dict[str, 
     assert table.sensor_ids == ("1", "2", "4", "5", "6", "7", "8")
     assert estimate.channels == (0, 1, 3, 4, 5, 6, 7) and estimate.shapes.shape[0] == 7
     assert [s.id for s in api.fitted_layout(lay, table).sensors] == list(table.sensor_ids)
+
+
+def test_the_records_intervals_carry_the_sensor_budget_stated_in_the_layout(
+    clipped: dict[str, list[Path]], tmp_path: Path
+) -> None:
+    """Issue 23: the sensors' tolerances (type B) in every refit std; zero tolerances leave the noise's."""
+    layout = json.loads((FOUR / "layout.json").read_text())
+    stated = tmp_path / "layout.json"
+    layout["tolerances"] = {"sensitivity": 0.0, "orientation_deg": 0.0, "transverse": 0.0, "position": 0.0}
+    stated.write_text(json.dumps(layout))
+    zero = json.loads(run("identify", stated, "--records", *clipped["clean"], "--json", "-").stdout)
+    crb0 = zero["uncertainty_records_crb"]
+    np.testing.assert_array_equal(crb0["center_of_gravity"]["std"], crb0["sensor_budget"]["noise"]["center_of_gravity"])
+    layout["tolerances"] = {"sensitivity": 0.02, "orientation_deg": 1.0, "transverse": 0.03, "position": 0.002}
+    stated.write_text(json.dumps(layout))
+    out = run("identify", stated, "--records", *clipped["clean"], "--json", "-")
+    assert out.returncode == 0, out.stderr
+    crb = json.loads(out.stdout)["uncertainty_records_crb"]
+    assert crb["tolerances"] == layout["tolerances"]
+    budget = crb["sensor_budget"]
+    assert list(budget) == ["noise", "sensitivity", "orientation", "transverse", "position"]
+    rss = np.sqrt(sum(np.square(budget[s]["center_of_gravity"]) for s in budget))
+    np.testing.assert_allclose(crb["center_of_gravity"]["std"], rss, rtol=1e-9)
+    assert np.all(np.array(budget["orientation"]["center_of_gravity"]) > 0)
+    # the noise part is the bound without tolerances; the estimate does not move
+    np.testing.assert_allclose(budget["noise"]["center_of_gravity"], crb0["center_of_gravity"]["std"], rtol=1e-9)
+    assert crb["center_of_gravity"]["estimate"] == crb0["center_of_gravity"]["estimate"]

@@ -20,6 +20,7 @@ from rigidid.models import LayoutFile
 from rigidid.results import IdentifyResult, PathLike, TestData, TestRun
 
 if TYPE_CHECKING:
+    from rigidid.core.sensor_budget import SensorBounds
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
@@ -399,6 +400,7 @@ def with_refinement(
     estimate: ModalEstimate,
     *,
     progress: ProgressCallback | None = None,
+    tolerances: SensorBounds | None = None,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -412,6 +414,10 @@ def with_refinement(
         The modal estimate the modes came from (impacts found, decimation).
     progress : ProgressCallback, optional
         Called with ``("refit", done, total)``.
+    tolerances : SensorBounds, optional
+        The sensors' error bounds (type B), propagated into the intervals with the
+        noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
+        :func:`sensor_bounds` of a layout without ``tolerances``.
 
     Returns
     -------
@@ -458,10 +464,13 @@ def with_refinement(
             damping_per_mass=ident.damping_per_mass,
         ),
         progress,
+        tolerances,
     )
 
 
-def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) -> IdentifyResult:
+def _refit(
+    result: IdentifyResult, fit: Any, progress: ProgressCallback | None, tolerances: SensorBounds | None = None
+) -> IdentifyResult:
     """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
     import warnings
 
@@ -480,10 +489,58 @@ def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) 
     finally:
         if progress is not None:
             progress("refit", 1, 1)
-    return _accept_refinement(result, refinement)
+    return _accept_refinement(result, refinement, tolerances)
 
 
-def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResult:
+def sensor_bounds(layout: LayoutFile | None, length: str = "m") -> SensorBounds:
+    """The sensors' error bounds: the layout's ``tolerances``, each field left out from the defaults.
+
+    Parameters
+    ----------
+    layout : LayoutFile or None
+        The layout (its ``tolerances`` and length unit); None: the defaults.
+    length : str
+        The length unit when `layout` is None.
+
+    Returns
+    -------
+    SensorBounds
+        :data:`rigidid.core.sensor_budget.DEFAULT_BOUNDS` (position converted to
+        the layout's length unit) overridden field by field.
+    """
+    from rigidid.core.sensor_budget import DEFAULT_BOUNDS
+    from rigidid.core.sensor_budget import SensorBounds as Bounds
+    from rigidid.units import M_PER_LENGTH
+
+    unit = layout.units.length if layout is not None else length
+    values = {
+        "sensitivity": DEFAULT_BOUNDS.sensitivity,
+        "orientation_deg": DEFAULT_BOUNDS.orientation_deg,
+        "transverse": DEFAULT_BOUNDS.transverse,
+        "position": DEFAULT_BOUNDS.position / M_PER_LENGTH[unit],
+    }
+    given = layout.tolerances if layout is not None else None
+    if given is not None:
+        values.update({k: v for k, v in given.model_dump().items() if v is not None})
+    return Bounds(**values)
+
+
+def _sensor_std(result: IdentifyResult, bounds: SensorBounds) -> dict[str, dict[str, NDArray[np.float64]]] | None:
+    """Each type-B source's std of the body at the modes used (None when the kernel cannot linearise them)."""
+    from rigidid.core.sensor_budget import sensor_budget
+
+    if result.poles is None or result.shapes is None:
+        return None
+    try:
+        budget = sensor_budget(result.positions, result.directions, result.poles, result.shapes, bounds)
+    except ValueError:
+        return None
+    return budget.std
+
+
+def _accept_refinement(
+    result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None
+) -> IdentifyResult:
     """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
     import warnings
 
@@ -507,7 +564,10 @@ def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResul
         stiffness_per_mass=refinement.stiffness_per_mass,
         damping_per_mass=refinement.damping_per_mass,
     )
-    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+    bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
+    sensor_std = _sensor_std(result, bounds)
+    bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
+    return replace(result, identification=refined, record_bound=bound)
 
 
 STREAM_REFIT_VALUES = 16 * 150_000
@@ -587,7 +647,9 @@ def refine_records(
 
         raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
-        return with_refinement(result, raw, replace(estimate, impacts=found), progress=progress)
+        return with_refinement(
+            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
+        )
     estimate = replace(estimate, impacts=tuple(impacts))
     from rigidid.io.refit_records import read_prepared_decays
 
@@ -608,7 +670,7 @@ def refine_records(
             damping_per_mass=ident.damping_per_mass,
         )  # fmt: skip
 
-    return _refit(result, fit, progress)
+    return _refit(result, fit, progress, sensor_bounds(lay))
 
 
 def records_spectrum(
@@ -798,7 +860,9 @@ def identify_test(
             if paths is not None:
                 result = refine_records(result, paths, data.layout, estimate, progress=progress)
             else:
-                result = with_refinement(result, data.records, estimate, progress=progress)
+                result = with_refinement(
+                    result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout)
+                )
     result = with_warnings(result, notes)
     if resample:
         if not records:
