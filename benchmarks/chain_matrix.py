@@ -22,7 +22,8 @@ Printed per cell: runs finished (exit 0) of all; the median and worst CG error (
 span, largest coordinate) and inertia error (largest relative error of the diagonal, %); runs
 whose refit was accepted; coverage of the reported 95 % intervals (CG and inertia diagonal: the
 fraction of the 6 quantities x runs whose interval holds the truth); runs "silently wrong" (exit 0,
-no warning, some error beyond 4 reported standard errors). ``floor``: the same errors from the
+no warning, some error beyond 4 reported standard errors); the layout states the sensor tolerances
+the errors were drawn within (zero in the cells without sensor errors). ``floor``: the same errors from the
 exact modes read through the same erroneous sensors (``rigidid.api.identify`` on perfect modal
 data), the floor the chain's sensor errors leave.
 """
@@ -184,8 +185,20 @@ def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.n
     return y
 
 
-def write_case(folder: Path, records: list[np.ndarray], stamps: bool) -> list[Path]:
-    layout = {
+def stated_tolerances(effects: set[str]) -> dict[str, float]:
+    """The layout's tolerances: the bounds the simulated sensor errors were drawn within (zero without them)."""
+    return {
+        "sensitivity": 0.03 if "sens" in effects else 0.0,
+        "orientation_deg": 3.0 if "orient" in effects else 0.0,
+        "transverse": 0.03 if "transverse" in effects else 0.0,
+        "position": 0.003 if "position" in effects else 0.0,
+    }
+
+
+def write_case(
+    folder: Path, records: list[np.ndarray], stamps: bool, tolerances: dict[str, float] | None = None
+) -> list[Path]:
+    layout: dict[str, object] = {
         "name": "150 kg body, ten single-axis accelerometers (chain_matrix benchmark)",
         "units": {"length": "m", "mass": "kg"},
         "mass": MASS,
@@ -194,6 +207,8 @@ def write_case(folder: Path, records: list[np.ndarray], stamps: bool) -> list[Pa
             for i in range(SENSORS.shape[0])
         ],
     }
+    if tolerances is not None:
+        layout["tolerances"] = tolerances
     (folder / "layout.json").write_text(json.dumps(layout))
     paths = []
     header = "time," + ",".join(f"s{i + 1}" for i in range(SENSORS.shape[0]))
@@ -283,7 +298,7 @@ def run_cell(cell: str, seed: int) -> dict[str, object]:
     records = simulate(effects, rng, sensors)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        paths = write_case(folder, records, "stamps" in effects)
+        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects))
         env = dict(os.environ)
         out = subprocess.run(
             [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
