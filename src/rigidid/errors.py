@@ -112,6 +112,10 @@ class ElasticModeWarning(RigididWarning):
     """A mode estimated from the records looks elastic (its shape fits rigid-body motion far worse than the others')."""
 
 
+class ClippedChannelWarning(RigididWarning):
+    """A record's channel is clipped (flat tops at its peak): it is left out of the fit, named."""
+
+
 class RefinementWarning(RigididWarning):
     """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""
 

@@ -413,8 +413,9 @@ def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
-    ``converged`` and per quantity
-    ``{"estimate", "std", "ci95"}``."""
+    ``converged``, per quantity ``{"estimate", "std", "ci95"}``, and, when the sensors'
+    tolerances were propagated, ``sensor_budget`` (per source, ``noise`` first, the std of
+    ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
         "normalised_cost": bound.normalised_cost,
@@ -424,7 +425,18 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         "evaluations": bound.evaluations,
         "converged": bound.converged,
     }
-    return {**head, **_body_intervals(bound)}
+    out = {**head, **_body_intervals(bound)}
+    if bound.sensor_budget is not None:
+        inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
+        out["sensor_budget"] = {
+            source: {
+                "center_of_gravity": parts["center_of_gravity"].tolist(),
+                inertia: parts["inertia_per_mass"].tolist(),
+            }
+            for source, parts in bound.sensor_budget.items()
+        }
+        out["tolerances"] = bound.tolerances
+    return out
 
 
 def layout_report_to_dict(report: LayoutReport) -> dict[str, Any]:

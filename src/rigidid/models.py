@@ -119,6 +119,18 @@ class TestBlock(_Strict):
     notes: Annotated[str, Field(max_length=5000, description="anything else (set-up, conditions)")] | None = None
 
 
+class SensorTolerances(_Strict):
+    """Bounds of the sensors' errors (half-widths of rectangular distributions): a type-B budget.
+
+    A field left out takes the default of :data:`rigidid.core.sensor_budget.DEFAULT_BOUNDS`.
+    """
+
+    sensitivity: Annotated[float, Field(ge=0.0, le=0.5, description="relative sensitivity error")] | None = None
+    orientation_deg: Annotated[float, Field(ge=0.0, le=20.0, description="tilt per normal axis, deg")] | None = None
+    transverse: Annotated[float, Field(ge=0.0, le=0.5, description="largest transverse sensitivity")] | None = None
+    position: Annotated[float, Field(ge=0.0, description="position error per axis (length unit)")] | None = None
+
+
 class LayoutFile(_Strict):
     """``layout.json``: the sensors of a test and, optionally, the body's mass."""
 
@@ -127,6 +139,9 @@ class LayoutFile(_Strict):
     mass: Annotated[float, Field(gt=0.0, description="mass of the body (mass unit)")] | None = None
     sensors: Annotated[list[SensorSpec], Field(min_length=1)]
     test: TestBlock | None = Field(default=None, description="test metadata for the report (all optional)")
+    tolerances: SensorTolerances | None = Field(
+        default=None, description="the sensors' error bounds, propagated into the records' intervals (type B)"
+    )
 
     @field_validator("mass")
     @classmethod
@@ -379,6 +394,15 @@ class RecordBoundResult(BaseModel):
         "variances, or stalled at the J, K, C > 0 boundary) rather than stopping at its evaluation budget",
     )
     center_of_gravity: Interval
+    sensor_budget: dict[str, dict[str, list[float] | list[list[float]]]] | None = Field(
+        default=None,
+        description="standard deviation of center_of_gravity and inertia_tensor from each source: noise (the "
+        "refit's bound) and the sensors' sensitivity, orientation, transverse sensitivity and position "
+        "tolerances (type B); std is their root sum of squares",
+    )
+    tolerances: dict[str, float] | None = Field(
+        default=None, description="the sensor error bounds the budget used (position in the layout's length unit)"
+    )
 
 
 class ScaledModesResult(_Strict):
