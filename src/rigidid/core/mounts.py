@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -731,35 +731,13 @@ def fit_mount_model(
     x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
-    f_result = None
-    cost = None
+    f_result = cost = None
     if noise is not None:
-        output = _OutputError((local_pos, dirs), mu, psi, noise)
-
-        def build(z: Array) -> tuple[Array, Array, Array, Array]:
-            g = z[:3]
-            kr = (ties @ z[9 : 9 + shared]).reshape(q, 3)
-            cr = (ties @ z[9 + shared :]).reshape(q, 3)
-            return (
-                g,
-                _inertia(z[3:9]),
-                _support_matrix(kr, local_mounts - g, u),
-                _support_matrix(cr, local_mounts - g, u),
-            )
-
-        z0 = np.concatenate([x, rates])
-        lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
-        refined = least_squares(
-            lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
+        x, rates, cost, f_result = _refit_output_error(
+            x, rates, (local_pos, dirs), mu, psi, noise, (local_mounts, u, ties)
         )
-        x, rates = refined.x[:9], refined.x[9:]
         a, b = system(x)
         resid = a @ rates - b
-        cost = float(np.sum(output(*build(refined.x)) ** 2))
-        f_result = _f_test(
-            cost, output.free_cost(sensor_matrix(local_pos, dirs)), mu.size, pos.shape[0], 9 + 2 * shared,
-            output.floored,
-        )  # fmt: skip
     g, j = x[:3], _inertia(x[3:])
     k = (ties @ rates[:shared]).reshape(q, 3) * omega**2
     c = (ties @ rates[shared:]).reshape(q, 3) * omega
@@ -777,6 +755,52 @@ def fit_mount_model(
         p_value=None if f_result is None else f_result[2],
         cost=cost,
     )
+
+
+def _refit_output_error(
+    x: Array,
+    rates: Array,
+    sensors: tuple[Array, Array],
+    mu: NDArray[np.complex128],
+    psi: NDArray[np.complex128],
+    noise: Any,
+    mounts: tuple[Array, Array, Array],
+) -> tuple[Array, Array, float, tuple[float, tuple[int, int], float] | None]:
+    """The mount model refined by noise-weighted output error, its cost and the F test against the free model.
+
+    `x` holds the CG and the inertia's Cholesky factor (local frame), `rates` the grouped mount rates
+    (stiffness then damping); `mounts` is (local positions, axes, group ties).
+    """
+    from scipy.optimize import least_squares
+
+    from rigidid.core.geometry import sensor_matrix
+
+    local_mounts, u, ties = mounts
+    q, shared = local_mounts.shape[0], ties.shape[1]
+    output = _OutputError(sensors, mu, psi, noise)
+
+    def build(z: Array) -> tuple[Array, Array, Array, Array]:
+        g = z[:3]
+        kr = (ties @ z[9 : 9 + shared]).reshape(q, 3)
+        cr = (ties @ z[9 + shared :]).reshape(q, 3)
+        return (
+            g,
+            _inertia(z[3:9]),
+            _support_matrix(kr, local_mounts - g, u),
+            _support_matrix(cr, local_mounts - g, u),
+        )
+
+    z0 = np.concatenate([x, rates])
+    lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
+    refined = least_squares(
+        lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
+    )
+    cost = float(np.sum(output(*build(refined.x)) ** 2))
+    f_result = _f_test(
+        cost, output.free_cost(sensor_matrix(*sensors)), mu.size, sensors[0].shape[0], 9 + 2 * shared,
+        output.floored,
+    )  # fmt: skip
+    return refined.x[:9], refined.x[9:], cost, f_result
 
 
 def split_misfit(
