@@ -224,6 +224,7 @@ def identify_massline(
             "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
             "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
         )
+    _frf_verdict(result, "mass line" if modes is None and method != "residues" else "residues")
     scaled = None
     if poles is not None:
         from rigidid.core.frfmodes import body_from_frfs, rigid_band
@@ -242,6 +243,44 @@ def identify_massline(
 
 
 Arr = NDArray[np.float64]
+
+EXACT_MISFIT = 1e-8
+"""A relative misfit below this is exact data (rounding only): no verdict in noise units."""
+
+
+def _frf_verdict(result: MassLine, route: str) -> None:
+    """Refuse or warn when the fit misfits the FRFs beyond their noise, or gives an impossible inertia.
+
+    Raises
+    ------
+    IdentificationError
+        If the misfit exceeds :data:`rigidid.core.frfstats.MISFIT_REFUSE` noise units, or the
+        inertia tensor is not that of a body (principal moments positive, each at most the sum
+        of the other two).
+    """
+    import warnings
+
+    from rigidid.core.frfstats import MISFIT_REFUSE, MISFIT_WARN
+    from rigidid.errors import FrfMisfitWarning, IdentificationError
+
+    moments = np.linalg.eigvalsh(0.5 * (result.inertia_tensor + result.inertia_tensor.T))
+    tol = 1e-9 * float(np.max(np.abs(moments)))
+    if moments[0] <= 0.0 or moments[2] > moments[0] + moments[1] + tol:
+        raise IdentificationError(
+            f"the {route} gives principal moments of inertia {', '.join(f'{v:.4g}' for v in moments)}: not a body "
+            f"(misfit {result.residual:.2g}; the FRFs in this band do not fit the model)"
+        )
+    units = result.misfit_noise_units
+    if units is None or result.residual < EXACT_MISFIT:
+        return
+    text = (
+        f"the {route} misfits the FRFs by {units:.3g} times their noise (worst: {result.misfit_where}): "
+        "a mode, a residual or the supports the model leaves out"
+    )
+    if units > MISFIT_REFUSE:
+        raise IdentificationError(text + "; give the band, or the modes (MODES.csv)")
+    if units > MISFIT_WARN:
+        warnings.warn(text + "; its intervals may be too narrow", FrfMisfitWarning, stacklevel=3)
 
 
 def _load_frf(

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 __all__ = [
     "DampingUnitWarning",
     "ElasticModeWarning",
+    "FrfMisfitWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -107,6 +108,10 @@ class NonSensorColumnWarning(RigididWarning):
 
 class ElasticModeWarning(RigididWarning):
     """A mode estimated from the records looks elastic (its shape fits rigid-body motion far worse than the others')."""
+
+
+class FrfMisfitWarning(RigididWarning):
+    """An FRF route's model misfits the FRFs by more than their noise explains (its answer may be off)."""
 
 
 class RefinementWarning(RigididWarning):
