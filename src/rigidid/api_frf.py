@@ -244,43 +244,14 @@ def identify_massline(
 
 Arr = NDArray[np.float64]
 
-EXACT_MISFIT = 1e-8
-"""A relative misfit below this is exact data (rounding only): no verdict in noise units."""
-
 
 def _frf_verdict(result: MassLine, route: str) -> None:
-    """Refuse or warn when the fit misfits the FRFs beyond their noise, or gives an impossible inertia.
+    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says."""
+    from rigidid.core.frfstats import verdict
+    from rigidid.errors import emit
 
-    Raises
-    ------
-    IdentificationError
-        If the misfit exceeds :data:`rigidid.core.frfstats.MISFIT_REFUSE` noise units, or the
-        inertia tensor is not that of a body (principal moments positive, each at most the sum
-        of the other two).
-    """
-    import warnings
-
-    from rigidid.core.frfstats import MISFIT_REFUSE, MISFIT_WARN
-    from rigidid.errors import FrfMisfitWarning, IdentificationError
-
-    moments = np.linalg.eigvalsh(0.5 * (result.inertia_tensor + result.inertia_tensor.T))
-    tol = 1e-9 * float(np.max(np.abs(moments)))
-    if moments[0] <= 0.0 or moments[2] > moments[0] + moments[1] + tol:
-        raise IdentificationError(
-            f"the {route} gives principal moments of inertia {', '.join(f'{v:.4g}' for v in moments)}: not a body "
-            f"(misfit {result.residual:.2g}; the FRFs in this band do not fit the model)"
-        )
-    units = result.misfit_noise_units
-    if units is None or result.residual < EXACT_MISFIT:
-        return
-    text = (
-        f"the {route} misfits the FRFs by {units:.3g} times their noise (worst: {result.misfit_where}): "
-        "a mode, a residual or the supports the model leaves out"
-    )
-    if units > MISFIT_REFUSE:
-        raise IdentificationError(text + "; give the band, or the modes (MODES.csv)")
-    if units > MISFIT_WARN:
-        warnings.warn(text + "; its intervals may be too narrow", FrfMisfitWarning, stacklevel=3)
+    notice = verdict(result.inertia_tensor, result.residual, result.misfit_noise_units, result.misfit_where, route)
+    emit([notice] if notice is not None else [], stacklevel=3)
 
 
 def _load_frf(

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.uncertainty import IntervalEstimate
+from rigidid.errors import FrfMisfitWarning, IdentificationError, Notice
 
 __all__ = [
     "MISFIT_REFUSE",
@@ -38,6 +39,7 @@ __all__ = [
     "local_noise",
     "misfit_units",
     "sandwich_variance",
+    "verdict",
 ]
 
 Array = NDArray[np.float64]
@@ -221,3 +223,55 @@ def body_intervals(
         inertia_tensor=_interval(base[4:].reshape(3, 3), sd[4:].reshape(3, 3)),
         method=method,
     )
+
+
+EXACT_MISFIT = 1e-8
+"""A relative misfit below this is exact data (rounding only): no verdict in noise units."""
+
+
+def verdict(inertia: Array, residual: float, units: float | None, where: str, route: str) -> Notice | None:
+    """The verdict on an FRF route's answer: refused, warned about, or accepted.
+
+    Parameters
+    ----------
+    inertia : ndarray, shape (3, 3)
+        The inertia tensor about the CG it gives.
+    residual : float
+        Its relative misfit.
+    units : float or None
+        Its misfit in noise units (:func:`misfit_units`; None: not measured).
+    where : str
+        Where the misfit is worst (for the message).
+    route : str
+        The route's name (for the message).
+
+    Returns
+    -------
+    Notice or None
+        A :class:`~rigidid.errors.FrfMisfitWarning` when the misfit exceeds :data:`MISFIT_WARN`
+        noise units.
+
+    Raises
+    ------
+    IdentificationError
+        If the misfit exceeds :data:`MISFIT_REFUSE` noise units, or the inertia tensor is not
+        a body's (principal moments positive, each at most the sum of the other two).
+    """
+    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+    tol = 1e-9 * float(np.max(np.abs(moments)))
+    if moments[0] <= 0.0 or moments[2] > moments[0] + moments[1] + tol:
+        raise IdentificationError(
+            f"the {route} gives principal moments of inertia {', '.join(f'{v:.4g}' for v in moments)}: not a body "
+            f"(misfit {residual:.2g}; the FRFs in this band do not fit the model)"
+        )
+    if units is None or residual < EXACT_MISFIT:
+        return None
+    text = (
+        f"the {route} misfits the FRFs by {units:.3g} times their noise (worst: {where}): "
+        "a mode, a residual or the supports the model leaves out"
+    )
+    if units > MISFIT_REFUSE:
+        raise IdentificationError(text + "; give the band, or the modes (MODES.csv)")
+    if units > MISFIT_WARN:
+        return Notice(FrfMisfitWarning, text + "; its intervals may be too narrow")
+    return None
