@@ -14,6 +14,19 @@ from .tolerances import STREAMED_DECAY_ATOL, STREAMED_REFIT_REL
 
 FOUR = SAMPLES / "four-mounts"
 
+def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
+    """Replace `name` in the package and in every API module that holds it (they import it by name)."""
+    import importlib
+
+    from rigidid import api
+
+    monkeypatch.setattr(api, name, value)
+    for module in ("load", "records", "reports"):
+        owner = importlib.import_module(f"rigidid.api.{module}")
+        if hasattr(owner, name):
+            monkeypatch.setattr(owner, name, value)
+
+
 
 @pytest.fixture(scope="module")
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
@@ -66,7 +79,7 @@ def test_without_the_refit_records_are_streamed_not_loaded_whole(
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, ["identify", str(FOUR / "layout.json"), "--records", *map(str, records),
                                    "--no-refine", "--json", "-"])  # fmt: skip
     assert out.exit_code == 0, out.output
@@ -99,11 +112,11 @@ def long_records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
 def test_the_refit_data_read_in_row_blocks_equal_the_whole_records(
     long_records: list[Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The second pass (io/refit_records) builds the refit's decays and noise levels the whole records give."""
+    """The second pass (io/records/refit) builds the refit's decays and noise levels the whole records give."""
     from rigidid import api
     from rigidid.core.timedomain import refine
     from rigidid.core.timedomain.preprocess import find_impact
-    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+    from rigidid.io.records.refit import locate_impacts, read_prepared_decays
 
     monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # the fit decimates (q > 1) and cuts the decays
     layout = api.load_layout(FOUR / "layout.json")
@@ -140,7 +153,7 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
     from rigidid import api
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     layout = api.load_layout(FOUR / "layout.json")
     modes, estimate = api.estimate_rigid_modes(layout, long_records)
     start = api.identify(layout, modes)
@@ -150,9 +163,9 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     streamed = api.refine_records(start, long_records, layout, estimate, stream_above=0)
-    monkeypatch.setattr(api, "load_records", real)
+    _patch(monkeypatch, "load_records", real)
     assert whole.record_bound is not None and streamed.record_bound is not None
     for name in ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass"):
         a, b = getattr(whole.identification, name), getattr(streamed.identification, name)
@@ -169,21 +182,20 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     the JSON keys of the whole read, the impacts in the files' rows."""
     from typer.testing import CliRunner
 
-    from rigidid import api
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 10**12)
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 10**12)
     whole = CliRunner().invoke(app, args)
     assert whole.exit_code == 0, whole.output
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
 
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, args)
     assert out.exit_code == 0, out.output
     data, expected = json.loads(out.stdout), json.loads(whole.stdout)
@@ -199,7 +211,7 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
 
 
 def test_the_report_spectrum_of_files_read_in_row_blocks_is_the_whole_records(long_records: list[Path]) -> None:
-    """The report's summed spectrum streamed (io/streamed_spectrum) equals summed_spectrum of the whole records."""
+    """The report's summed spectrum streamed (io/records/spectrum) equals summed_spectrum of the whole records."""
     from rigidid import api
     from rigidid.core.spectrum import summed_spectrum
 
@@ -222,8 +234,8 @@ def test_report_records_never_holds_the_raw_records(
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
     seen: list[int] = []
     real = api.records_spectrum
 
@@ -243,9 +255,9 @@ def test_report_records_never_holds_the_raw_records(
         drawn.append(kwargs.get("spectrum"))
         return real_report(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(api, "records_spectrum", spy)
-    monkeypatch.setattr(api, "report", report)
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "records_spectrum", spy)
+    _patch(monkeypatch, "report", report)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, ["report", str(FOUR / "layout.json"), "--records", *map(str, long_records),
                                    "-o", str(tmp_path / "r.html")])  # fmt: skip
     assert out.exit_code == 0, out.output
@@ -258,7 +270,7 @@ def test_the_row_block_passes_read_csv_records_as_npy(long_records: list[Path], 
     """A CSV record (rows only estimated from its size) gives the row-block passes the .npy's numbers."""
     from rigidid import api
     from rigidid.core.timedomain import Impact
-    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+    from rigidid.io.records.refit import locate_impacts, read_prepared_decays
 
     layout = api.load_layout(FOUR / "layout.json")
     ids = [s.id for s in layout.sensors]

@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rigidid import api_frf
+from rigidid.api import frf as api_frf
 from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.frf import frf_format_from, frf_uff_bytes, load_frf_uff, load_references, reference_arrays
@@ -112,7 +112,7 @@ def test_values_are_per_the_164_force_unit_and_come_back_in_layout_units(
     _, h = load_frf_uff(path, data.sensor_ids, data.reference_ids, units=units)
     np.testing.assert_allclose(h, data.frf, rtol=1e-12, atol=0.0)
     other = {"length": "mm", "mass": "kg"}
-    with pytest.raises(InputError, match=r"units .* differ from the layout's mm, kg") as info:
+    with pytest.raises(InputError, match=r"units .* differ from the layout's units \(mm, kg\)") as info:
         load_frf_uff(path, data.sensor_ids, data.reference_ids, units=other)
     assert info.value.location == "dataset 164"
 

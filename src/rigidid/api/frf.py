@@ -1,88 +1,26 @@
-"""The FRF routes of the Python API: simulated FRFs and the mass line.
-
-What ``rigidid simulate --frf`` and ``rigidid identify --method massline`` call;
-kept apart from :mod:`rigidid.api` so that the FRF work does not grow that module.
-"""
+"""The FRF routes: simulated FRFs, modes fitted to FRFs (pLSCF + LSFD), and mass, CG and inertia from the
+mass line or from force-scaled residues."""
 
 from __future__ import annotations
 
-import os
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api.load import body_from_file, load_references_for, same_units
 from rigidid.errors import InputError
 from rigidid.io import files
+from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile, ReferencesFile
-
-__all__ = ["FrfData", "MassLineResult", "fit_modes_frf", "identify_massline", "simulate_frf"]
+from rigidid.results import FrfData, MassLineResult, PathLike
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import FrfModes, ScaledBody
-    from rigidid.core.massline import MassLine
+    from rigidid.core.frfmodes import FrfModes
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
 
-PathLike = str | os.PathLike[str]
 
-
-@dataclass(frozen=True)
-class FrfData:
-    """FRFs of a test with their sensors and references.
-
-    Attributes
-    ----------
-    frequencies : ndarray, shape (f,)
-        Hz.
-    frf : ndarray of complex, shape (p, q, f)
-        Accelerance (1 / mass unit).
-    sensor_ids, reference_ids : tuple of str
-    """
-
-    frequencies: NDArray[np.float64]
-    frf: NDArray[np.complex128]
-    sensor_ids: tuple[str, ...]
-    reference_ids: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class MassLineResult:
-    """``identify --method massline``: the mass line and how it compares with a given mass.
-
-    Attributes
-    ----------
-    massline : rigidid.core.massline.MassLine
-    units : dict
-        ``{"length": ..., "mass": ...}`` of the layout.
-    mass_given : float or None
-        The mass of the layout or of the ``mass`` parameter, if any.
-    reason : str
-        Why this route was used.
-    route : str
-        ``"massline"`` or ``"residues"`` (scaled modes).
-    scaled : rigidid.core.frfmodes.ScaledBody or None
-        Route residues: the body from the six scaled rigid-body modes, with the
-        stiffness and damping in absolute units.
-    """
-
-    massline: MassLine
-    units: dict[str, str]
-    mass_given: float | None
-    reason: str
-    route: str = "massline"
-    scaled: ScaledBody | None = None
-
-
-def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
-    from rigidid.io.frf import load_references
-
-    refs = references if isinstance(references, ReferencesFile) else load_references(references)
-    if refs.units is not None and refs.units != layout.units:
-        source = None if isinstance(references, ReferencesFile) else str(references)
-        raise InputError("units differ from the layout's units", source=source, location="units")
-    return refs
 
 
 def simulate_frf(
@@ -112,15 +50,14 @@ def simulate_frf(
     -------
     FrfData
     """
-    from rigidid.api import _same_units, body_from_file
     from rigidid.core.frf import accelerance
     from rigidid.core.simulate import body_modes
     from rigidid.io.frf import reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
-    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
-    refs = _references(references, lay)
+    same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     truth = body_from_file(spec)
@@ -177,7 +114,7 @@ def identify_massline(
     from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = _references(references, lay)
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
@@ -261,7 +198,7 @@ def _load_frf(
     from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = _references(references, lay)
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
