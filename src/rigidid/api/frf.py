@@ -17,6 +17,7 @@ from rigidid.results import FrfData, MassLineResult, PathLike
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import FrfModes
+    from rigidid.core.massline import MassLine
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
 
