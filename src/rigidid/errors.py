@@ -16,6 +16,7 @@ from dataclasses import dataclass
 __all__ = [
     "DampingUnitWarning",
     "ElasticModeWarning",
+    "FrfMisfitWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -114,6 +115,10 @@ class ElasticModeWarning(RigididWarning):
 
 class ClippedChannelWarning(RigididWarning):
     """A record's channel is clipped (flat tops at its peak): it is left out of the fit, named."""
+
+
+class FrfMisfitWarning(RigididWarning):
+    """An FRF route's model misfits the FRFs by more than their noise explains (its answer may be off)."""
 
 
 class RefinementWarning(RigididWarning):

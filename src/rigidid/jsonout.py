@@ -654,6 +654,16 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         "mass_given": None,
         "mass_difference": None,
         "mass_difference_relative": None,
+        "misfit_noise_units": None if ml.misfit_noise_units is None else float(ml.misfit_noise_units),
+        "misfit_where": ml.misfit_where,
+        "intervals": None
+        if ml.intervals is None
+        else {
+            "method": ml.intervals.method,
+            "mass": interval_to_dict(ml.intervals.mass),
+            "center_of_gravity": interval_to_dict(ml.intervals.center_of_gravity),
+            "inertia_tensor": interval_to_dict(ml.intervals.inertia_tensor),
+        },
     }
     if result.mass_given is not None:
         out["mass_given"] = float(result.mass_given)
