@@ -14,12 +14,14 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 __all__ = [
+    "ClippedChannelWarning",
     "DampingUnitWarning",
     "ElasticModeWarning",
     "FrfMisfitWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
+    "ModelMisfitWarning",
     "NonSensorColumnWarning",
     "Notice",
     "PhysicalPlausibilityWarning",
@@ -27,6 +29,7 @@ __all__ = [
     "RigididError",
     "RigididWarning",
     "SensorFitWarning",
+    "UnitsWarning",
     "emit",
     "named_source",
     "noted",
