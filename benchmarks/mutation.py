@@ -295,7 +295,8 @@ def run(mutant: Mutant) -> tuple[bool, float]:
         shutil.copytree(SRC, tree, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         _apply(tree, mutant)
         env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1")
-        cmd = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "--no-header", "-n", "0", *mutant.tests]
+        cmd = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "--no-header", "-n", "0"]
+        cmd += mutant.tests
         start = time.perf_counter()
         out = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
         seconds = time.perf_counter() - start
