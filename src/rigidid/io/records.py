@@ -55,7 +55,6 @@ MIN_ROWS = 16
 """Fewest data rows a record may have."""
 
 
-
 def _resolution(token: str) -> float:
     """Unit of the last digit of a number as written (``"0.125"`` -> 0.001, ``"1.5e-3"`` -> 1e-4)."""
     text = token.strip().lower()
