@@ -176,6 +176,31 @@ def _uff_id(node: int, code: int, ids: Sequence[str]) -> str | None:
     return None
 
 
+_ROTATIONS = {4: "x", 5: "y", 6: "z"}
+
+
+def _check_uff_record(dset: dict[str, Any], src: str, where: str) -> None:
+    """Refuse a dataset 58 FRF whose directions are no translation or whose point count is not its values'."""
+    for role in ("rsp", "ref"):
+        code = int(dset.get(f"{role}_dir", 0))
+        name = "response" if role == "rsp" else "reference"
+        if abs(code) in _ROTATIONS:
+            raise InputError(
+                f"{name} direction {code} is a rotation about {_ROTATIONS[abs(code)]}: rigidid reads translations "
+                "(+-1, +-2, +-3 for x, y, z)",
+                source=src, location=where,
+            )  # fmt: skip
+        if abs(code) not in (1, 2, 3):
+            raise InputError(
+                f"{name} direction {code} is not a UFF direction code (+-1, +-2, +-3 for x, y, z)",
+                source=src, location=where,
+            )  # fmt: skip
+    n = int(dset.get("num_pts", -1))
+    size = int(np.size(dset.get("data", [])))
+    if size != n or n < 1:
+        raise InputError(f"{size} values where the header says {dset.get('num_pts')}", source=src, location=where)
+
+
 def _uff_units_factor(sets: list[dict[str, Any]], src: str, units: dict[str, str] | None) -> float:
     """Factor from rigidid's accelerance to the file's, from its dataset 164 (1 without one)."""
     from rigidid.io.uff import _LENGTH_PER_M, _MASS_PER_KG, _units_from_164
@@ -282,6 +307,7 @@ def load_frf_uff(
                 source=src,
                 location=where,
             )
+        _check_uff_record(dset, src, where)
         rsp = _uff_id(int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0)), list(s_index))
         ref = _uff_id(int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)), list(r_index))
         if rsp is None:
@@ -305,6 +331,8 @@ def load_frf_uff(
             data = 1j * w * data
         elif kind == "receptance":
             data = -(w**2) * data
+        if (s_index[rsp], r_index[ref]) in found:
+            raise InputError(f"a second FRF for response {rsp!r} and reference {ref!r}", source=src, location=where)
         found[(s_index[rsp], r_index[ref])] = (x, data)
     if not found:
         raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
