@@ -14,6 +14,19 @@ from .tolerances import STREAMED_DECAY_ATOL, STREAMED_REFIT_REL
 
 FOUR = SAMPLES / "four-mounts"
 
+def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
+    """Replace `name` in the package and in every API module that holds it (they import it by name)."""
+    import importlib
+
+    from rigidid import api
+
+    monkeypatch.setattr(api, name, value)
+    for module in ("load", "records", "reports"):
+        owner = importlib.import_module(f"rigidid.api.{module}")
+        if hasattr(owner, name):
+            monkeypatch.setattr(owner, name, value)
+
+
 
 @pytest.fixture(scope="module")
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
@@ -66,7 +79,7 @@ def test_without_the_refit_records_are_streamed_not_loaded_whole(
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, ["identify", str(FOUR / "layout.json"), "--records", *map(str, records),
                                    "--no-refine", "--json", "-"])  # fmt: skip
     assert out.exit_code == 0, out.output
@@ -150,9 +163,9 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     streamed = api.refine_records(start, long_records, layout, estimate, stream_above=0)
-    monkeypatch.setattr(api, "load_records", real)
+    _patch(monkeypatch, "load_records", real)
     assert whole.record_bound is not None and streamed.record_bound is not None
     for name in ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass"):
         a, b = getattr(whole.identification, name), getattr(streamed.identification, name)
@@ -169,21 +182,20 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     the JSON keys of the whole read, the impacts in the files' rows."""
     from typer.testing import CliRunner
 
-    from rigidid import api
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
     monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
     args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 10**12)
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 10**12)
     whole = CliRunner().invoke(app, args)
     assert whole.exit_code == 0, whole.output
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
 
     def refuse(*_: object, **__: object) -> None:
         raise AssertionError("records loaded whole")
 
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, args)
     assert out.exit_code == 0, out.output
     data, expected = json.loads(out.stdout), json.loads(whole.stdout)
@@ -223,7 +235,7 @@ def test_report_records_never_holds_the_raw_records(
     from rigidid.core.timedomain import refine
 
     monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
-    monkeypatch.setattr(api, "STREAM_REFIT_VALUES", 0)
+    _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
     seen: list[int] = []
     real = api.records_spectrum
 
@@ -243,9 +255,9 @@ def test_report_records_never_holds_the_raw_records(
         drawn.append(kwargs.get("spectrum"))
         return real_report(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(api, "records_spectrum", spy)
-    monkeypatch.setattr(api, "report", report)
-    monkeypatch.setattr(api, "load_records", refuse)
+    _patch(monkeypatch, "records_spectrum", spy)
+    _patch(monkeypatch, "report", report)
+    _patch(monkeypatch, "load_records", refuse)
     out = CliRunner().invoke(app, ["report", str(FOUR / "layout.json"), "--records", *map(str, long_records),
                                    "-o", str(tmp_path / "r.html")])  # fmt: skip
     assert out.exit_code == 0, out.output

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigidid import api_frf
+from rigidid.api import frf as api_frf
 from rigidid.errors import InputError
 from rigidid.io.frf import frf_csv_text, load_frf_csv, load_frf_uff, load_references, reference_arrays
 

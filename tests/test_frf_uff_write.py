@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rigidid import api_frf
+from rigidid.api import frf as api_frf
 from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.frf import frf_format_from, frf_uff_bytes, load_frf_uff, load_references, reference_arrays

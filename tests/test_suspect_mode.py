@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from rigidid.api import _suspect_mode
+from rigidid.api.identification import suspect_mode as _suspect_mode
 from rigidid.core.identify import identify
 from rigidid.core.simulate import body_modes
 

@@ -25,12 +25,10 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 import typer
 
 from rigidid import __version__
-from rigidid.errors import InputError, RigididError
+from rigidid.errors import InputError, RigididError, named_source
 
 if TYPE_CHECKING:
-    from rigidid.api import IdentifyResult, TestData
-    from rigidid.core.timedomain import ModalEstimate
-    from rigidid.io.files import ModeTable
+    from rigidid.results import IdentifyResult, TestRun
 
 app = typer.Typer(
     name="rigidid",
@@ -197,6 +195,8 @@ _FLAGS = {
     "max_order": "--max-order",
     "units": "--units",
     "frf_format": "--frf-format",
+    "modal_method": "--modal-method",
+    "geometry": "--geometry",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
@@ -225,16 +225,6 @@ def _print_warnings(caught: list[warnings.WarningMessage]) -> None:
             sys.stderr.write(f"rigidid: warning: {text}\n")
 
 
-@contextmanager
-def _noted(into: list[str], *categories: type[Warning]) -> Iterator[None]:
-    """Pass on every warning raised inside; the texts of those of `categories` also go into `into`."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        yield
-    for w in caught:
-        if issubclass(w.category, categories) and str(w.message) not in into:
-            into.append(str(w.message))
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 @contextmanager
@@ -403,87 +393,14 @@ def _check_options(**values: Any) -> None:
             check_number(value, flag, positive=name in ("sample_rate", "duration"), nonnegative=name != "mass")
 
 
-def _source(layout: Path, inputs: list[Path] | None) -> str:
-    """The file(s) modes or records come from, to name in an error."""
-    if layout.suffix.lower() in UFF_SUFFIXES or not inputs:
-        return str(layout)
-    return ", ".join(str(p) for p in inputs)
 
 
-def _test_data(
-    layout: Path, inputs: list[Path], records: bool, units: str | None, geometry: Path | None = None
-) -> TestData:
-    """The layout and its modes or records, from JSON/CSV files or one UFF file (and its geometry file)."""
-    from rigidid import api
-
-    if geometry is not None and layout.suffix.lower() not in UFF_SUFFIXES:
-        raise InputError("a geometry file completes a UFF input; the layout here is not UFF", source="--geometry")
-    if layout.suffix.lower() in UFF_SUFFIXES:
-        if inputs:
-            raise InputError("with a UFF file, give no other input files", source=str(inputs[0]))
-        data = api.load_uff(layout, units=_parse_units(units), geometry=geometry)
-        if records and not data.records:
-            raise InputError("no time records (dataset 58) in the file", source=str(layout))
-        if not records and data.modes is None:
-            raise InputError("no modes (dataset 55) in the file; with time records pass --records", source=str(layout))
-        return data
-    lay = api.load_layout(layout)
-    if records:
-        if not inputs:
-            raise InputError("no records: give one records.csv per impact", source="RECORDS")
-        return api.TestData(lay, None, api.load_records(inputs, lay), [str(p) for p in inputs])
-    if len(inputs) != 1:
-        message = "give one modes.csv" if not inputs else "give one modes.csv (several files: records? pass --records)"
-        raise InputError(message, source="MODES")
-    return api.TestData(lay, api.load_modes(inputs[0], lay))
 
 
-def _estimate(
-    data: TestData,
-    method: str | None,
-    n_modes: int,
-    band: tuple[float, float] | None,
-    max_order: int | None,
-    decimate: int | None,
-    option: str = "--modal-method",
-    source: str | None = None,
-    paths: list[Path] | None = None,
-    rigid_six: bool = False,
-) -> tuple[ModeTable, ModalEstimate]:
-    """Modes from the records; with `rigid_six`, seven when one of six looks elastic (identify picks six)."""
-    from rigidid import api
-    from rigidid.core.timedomain import METHODS
-
-    if method is not None and method not in METHODS:
-        raise InputError(f"unknown method {method!r}; choose {' or '.join(METHODS)}", source=option)
-    _check_options(n_modes=n_modes, band=band, max_order=max_order, decimate=decimate)
-    from rigidid.progress import terminal_progress
-
-    with _naming(source), terminal_progress() as progress:
-        if rigid_six and n_modes == 6:
-            return api.estimate_rigid_modes(
-                data.layout, paths or data.records, method=method, band=band, max_order=max_order,
-                decimate=decimate, progress=progress,
-            )  # fmt: skip
-        return api.estimate_modes(
-            data.layout, paths or data.records, method=method, n_modes=n_modes, band=band, max_order=max_order,
-            decimate=decimate, progress=progress,
-        )  # fmt: skip
 
 
-@contextmanager
-def _naming(source: str | None) -> Iterator[None]:
-    """Give an error that names no file the input file(s) it came from."""
-    try:
-        yield
-    except InputError as exc:
-        if source and exc.source in (None, "records"):
-            raise InputError(exc.message, source=source, location=exc.location) from None
-        raise
-    except RigididError as exc:
-        if source and not str(exc).startswith(source):
-            raise type(exc)(f"{source}: {exc}") from None
-        raise
+
+
 
 
 def _identify(
@@ -493,25 +410,21 @@ def _identify(
     units: str | None,
     modal: dict[str, Any],
     *,
-    mass: float | None,
-    modes_used: str | None,
     method: str,
     draws: int,
-    noise: dict[str, float],
+    mass: float | None,
     seed: int,
     resample: int = 0,
     geometry: Path | None = None,
-    keep: dict[str, Any] | None = None,
     mounts: Path | None = None,
-    refine: bool = True,
-) -> tuple[IdentifyResult, ModalEstimate | None]:
-    """Load the test, estimate its modes from records if asked, identify: what identify and report share.
-
-    With `keep`, its ``"records"`` entry receives the records read, or its ``"spectrum"`` entry the summed spectrum
-    of record files read in row blocks (for the report's spectrum).
-    """
+    spectrum: bool = False,
+    **options: Any,
+) -> TestRun:
+    """Check the options, then :func:`rigidid.api.records.identify_test` (what identify and report share)."""
     from rigidid import api
+    from rigidid.api.records import ModalOptions
     from rigidid.core.identify import METHODS
+    from rigidid.progress import terminal_progress
 
     if method not in (*METHODS, "mounts"):
         raise InputError(f"unknown method {method!r}; choose {', '.join(METHODS)} or mounts", source="--method")
@@ -520,75 +433,15 @@ def _identify(
     if draws < 0:
         raise InputError(f"must be zero or positive, got {draws}", source="--uncertainty")
     _check_options(mass=mass, uncertainty=draws, seed=seed, resample=resample)
-    src = _source(layout, inputs)
-    # record files are read in blocks and decimated as they arrive (io/streamed_records.py) unless a later step
-    # needs the samples themselves: the refit (structured, --refine), --resample, the report's spectrum
-    raw_needed = resample > 0
-    files_in = records and bool(inputs) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
-    # the refit reads the files again in row blocks (api.refine_records), the report's spectrum too
-    # (api.records_spectrum): the same answers, memory bounded
-    streamed = files_in and not raw_needed
-    if streamed:
-        from rigidid import api
-
-        data = api.TestData(api.load_layout(layout))
-    else:
-        data = _test_data(layout, inputs or [], records, units, geometry)
-    if keep is not None and not streamed:
-        keep["records"] = data.records
-    if resample and data.records:  # before any estimation: blame the option, not the records
-        shortest = min(values.shape[0] for values, _ in data.records)
-        if resample * 16 > shortest:
-            raise InputError(
-                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
-                f"the limit here is {shortest // 16}",
-                source="--resample",
-            )
-    paths = list(inputs or []) if streamed else None
-    chosen = _parse_modes(modes_used)
-    from rigidid.errors import ElasticModeWarning, RefinementWarning
-
-    notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
-    with _noted(notes, ElasticModeWarning):
-        modes, estimate = (
-            _estimate(data, **modal, source=src, paths=paths, rigid_six=chosen is None)
-            if records
-            else (data.modes, None)
-        )
-    assert modes is not None
-    if keep is not None and paths:  # after the estimation, which checked the files
-        with _naming(src):
-            keep["spectrum"], keep["records"] = api.records_spectrum(paths, data.layout), None
-    from rigidid.progress import terminal_progress
-
-    with _naming(src), terminal_progress() as progress:
-        result = api.identify(
-            data.layout,
-            modes,
-            mass=mass,
-            modes_used=chosen,
-            method=method,  # type: ignore[arg-type]
-            uncertainty=draws,
-            noise=noise,
-            seed=seed,
-            progress=progress,
-            mounts=mounts,
-        )
-    if refine and estimate is not None and method == "structured":
-        with _naming(src), terminal_progress() as progress, _noted(notes, RefinementWarning):
-            if paths is not None:
-                result = api.refine_records(result, paths, data.layout, estimate, progress=progress)
-            else:
-                result = api.with_refinement(result, data.records, estimate, progress=progress)
-    result = api.with_warnings(result, notes)
-    if resample:
-        if not records:
-            raise InputError("data-driven intervals need impact records (--records)", source="--resample")
-        options = {key: modal[key] for key in ("method", "band", "max_order") if modal[key] is not None}
-        result = api.with_record_spread(
-            result, data.records, segments=resample, n_modes=len(modes.labels), estimate_options=options
-        )
-    return result, estimate
+    if records:
+        _check_options(**{k: v for k, v in modal.items() if k != "method"})
+    chosen = _parse_modes(options.pop("modes_used"))
+    with terminal_progress() as progress:
+        return api.identify_test(
+            layout, inputs, records=records, modal=ModalOptions(**modal), units=_parse_units(units),
+            geometry=geometry, resample=resample, spectrum=spectrum, progress=progress, mass=mass,
+            modes_used=chosen, method=method, uncertainty=draws, seed=seed, mounts=mounts, **options,
+        )  # fmt: skip
 
 
 def _version(value: bool) -> None:
@@ -664,10 +517,11 @@ def identify(
             angle_deg=angle_noise,
         )  # fmt: skip
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
-        result, estimate = _identify(
+        run = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
         )  # fmt: skip
+        result, estimate = run.result, run.estimate
         result = _with_mounts(result, mounts, torque_axis)
         with OutputSet():  # every output or none
             if json_path is not None:
@@ -740,19 +594,16 @@ def modes(
         if output == "-" and json_path == "-":
             raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
         _check_outputs({"--output": output, "--json": json_path})
-        # record files are read in blocks and decimated as they arrive (io/streamed_records.py)
-        streamed = bool(records) and layout.suffix.lower() not in UFF_SUFFIXES and geometry is None
-        if streamed:
-            from rigidid import api
+        _check_options(n_modes=n_modes, band=band, max_order=max_order, decimate=decimate)
+        from rigidid import api
+        from rigidid.api.records import ModalOptions
+        from rigidid.progress import terminal_progress
 
-            data = api.TestData(api.load_layout(layout))
-        else:
-            data = _test_data(layout, records or [], True, units, geometry)
-        option = "--modal-method" if method is None else "--method"
-        table, estimate = _estimate(
-            data, modal_method, n_modes, band, max_order, decimate, option=option, source=_source(layout, records),
-            paths=list(records or []) if streamed else None, rigid_six=True,
-        )  # fmt: skip
+        modal = ModalOptions(modal_method, n_modes, band, max_order, decimate)
+        with terminal_progress() as progress:
+            table, estimate = api.estimate_records_modes(
+                layout, records or [], modal, units=_parse_units(units), geometry=geometry, progress=progress
+            )
         text = modes_csv_text(table)
         with OutputSet() as outs:  # every output or none
             if json_path is not None:
@@ -834,7 +685,7 @@ def simulate(
         impacts = [_parse_impact(text) for text in impact] if impact else None
         if mounts is not None:
             body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
-        with _naming(str(body)):
+        with named_source(str(body)):
             table = api.simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
                 seed=seed,
@@ -880,8 +731,8 @@ def _modes_frf(
     max_order: int | None,
     n_modes: int,
 ) -> None:
-    """``modes --frf``: modes fitted to FRFs (rigidid.api_frf.fit_modes_frf), shapes scaled by the force."""
-    from rigidid import api_frf
+    """``modes --frf``: modes fitted to FRFs (rigidid.api.frf.fit_modes_frf), shapes scaled by the force."""
+    from rigidid.api import frf as api_frf
     from rigidid.io.atomic import OutputSet, write_text_atomic
     from rigidid.io.files import modes_csv_text
     from rigidid.jsonout import frf_modes_to_dict
@@ -923,8 +774,8 @@ def _identify_massline(
     modes: list[Path] | None = None,
     modes_used: str | None = None,
 ) -> None:
-    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api_frf)."""
-    from rigidid import api_frf
+    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api.frf)."""
+    from rigidid.api import frf as api_frf
     from rigidid.jsonout import massline_to_dict
 
     if method not in ("massline", "residues"):
@@ -962,7 +813,7 @@ def _simulate_frf(
 ) -> None:
     import numpy as np
 
-    from rigidid import api_frf
+    from rigidid.api import frf as api_frf
     from rigidid.io import files
     from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
     from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
@@ -1069,7 +920,7 @@ def plan(
         )  # fmt: skip
         from rigidid.progress import terminal_progress
 
-        with _naming(str(body) if body is not None else None), terminal_progress() as progress:
+        with named_source(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
                 units=_parse_units(units), geometry=geometry, progress=progress, references=references,
@@ -1133,11 +984,11 @@ def report(
             angle_deg=angle_noise,
         )  # fmt: skip
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
-        kept: dict[str, Any] = {}
-        result, estimate = _identify(
+        run = _identify(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry, keep=kept, refine=refine, mounts=mounts,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, spectrum=True, refine=refine, mounts=mounts,
         )  # fmt: skip
+        result, estimate = run.result, run.estimate
         result = _with_mounts(result, mounts, torque_axis)
         spec = None
         if body is not None:
@@ -1155,8 +1006,8 @@ def report(
         with terminal_progress() as progress:
             text = api.report(
                 result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
-                force_unit=force_unit, body=spec, records=kept.get("records"), progress=progress,
-                spectrum=kept.get("spectrum"),
+                force_unit=force_unit, body=spec, records=run.records, progress=progress,
+                spectrum=run.spectrum,
             )  # fmt: skip
         paths: list[Any] = []
         with OutputSet() as outs:  # every output or none
@@ -1166,7 +1017,7 @@ def report(
                 with terminal_progress() as progress:
                     paths = api.report_pngs(
                         result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
-                        records=kept.get("records"), progress=progress, spectrum=kept.get("spectrum"),
+                        records=run.records, progress=progress, spectrum=run.spectrum,
                     )  # fmt: skip
         sys.stderr.write(f"rigidid: wrote {output}\n")
         if png is not None:

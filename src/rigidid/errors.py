@@ -9,7 +9,8 @@ only at its top level and turns it into one line on standard error.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 __all__ = [
@@ -26,6 +27,8 @@ __all__ = [
     "RigididWarning",
     "SensorFitWarning",
     "emit",
+    "named_source",
+    "noted",
 ]
 
 
@@ -111,3 +114,30 @@ class ElasticModeWarning(RigididWarning):
 
 class RefinementWarning(RigididWarning):
     """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""
+
+
+@contextmanager
+def named_source(source: str | None) -> Iterator[None]:
+    """Give an error raised inside that names no file the input file(s) `source` it came from."""
+    try:
+        yield
+    except InputError as exc:
+        if source and exc.source in (None, "records"):
+            raise InputError(exc.message, source=source, location=exc.location) from None
+        raise
+    except RigididError as exc:
+        if source and not str(exc).startswith(source):
+            raise type(exc)(f"{source}: {exc}") from None
+        raise
+
+
+@contextmanager
+def noted(into: list[str], *categories: type[Warning]) -> Iterator[None]:
+    """Pass on every warning raised inside; the texts of those of `categories` also go into `into`."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for w in caught:
+        if issubclass(w.category, categories) and str(w.message) not in into:
+            into.append(str(w.message))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

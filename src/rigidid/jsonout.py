@@ -20,8 +20,6 @@ from rigidid import __version__
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
-    from rigidid.api import IdentifyResult, PlanResult
-    from rigidid.api_frf import MassLineResult
     from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.layout_check import LayoutReport
     from rigidid.core.noise import NoiseLevels
@@ -31,6 +29,7 @@ if TYPE_CHECKING:
     from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.timedomain.stabilisation import OrderPoles
     from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
+    from rigidid.results import IdentifyResult, MassLineResult, PlanResult
 
 __all__ = [
     "estimate_to_dict",

@@ -8,16 +8,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.api import IdentifyResult, PlanResult
 from rigidid.jsonout import noise_to_dict
+from rigidid.results import IdentifyResult, PlanResult
 
 if TYPE_CHECKING:
     from rich.console import Group
     from rich.table import Table
 
-    from rigidid.api_frf import MassLineResult
     from rigidid.core.plan import ReferenceReport
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.results import MassLineResult
 
 __all__ = ["estimate_tables", "massline_tables", "plan_tables", "result_csv_files", "result_tables"]
 

@@ -103,7 +103,7 @@ def test_mount_model_recovers_an_exact_body_from_five_modes() -> None:
 
 def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     """An unmodelled support (a hose) is flagged by the F test; the mounts alone pass (exact modes)."""
-    from rigidid import api
+    from rigidid.api.mounts import mount_model
 
     body, where, axes, _ = _body(4)
     hidden = Body(body.mass, body.center_of_gravity, body.inertia_tensor,
@@ -112,7 +112,7 @@ def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
     for truth, adequate in ((body, True), (hidden, False)):
         modes = body_modes(truth, pos, dirs)
-        _, fit = api._mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
+        _, fit = mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
         assert fit.verdict is adequate, (fit.residual, fit.free_residual)
 
 

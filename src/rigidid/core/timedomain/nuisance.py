@@ -1,7 +1,7 @@
 """Modes that are not rigid-body modes, taken out of the records before the output-error refit.
 
 The refit (:mod:`rigidid.core.timedomain.refine`) models the six rigid-body modes of eq. (19)
-of [1] only. An elastic mode in the band (a mode of the estimate that :func:`rigidid.api.identify`
+of [1] only. An elastic mode in the band (a mode of the estimate that :func:`rigidid.api.identification`
 did not use) is free decay too, which the refit cannot explain: its normalised cost then rises
 far above 1 and the refit is rejected. :func:`subtract_modes` fits every estimated mode's free
 decay to each record by linear least squares (poles fixed at the estimate, one complex

@@ -1,78 +1,23 @@
-"""The FRF routes of the Python API: simulated FRFs and the mass line.
-
-What ``rigidid simulate --frf`` and ``rigidid identify --method massline`` call;
-kept apart from :mod:`rigidid.api` so that the FRF work does not grow that module.
-"""
+"""TODO docstring frf."""
 
 from __future__ import annotations
 
-import os
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api.load import body_from_file, same_units
 from rigidid.errors import InputError
 from rigidid.io import files
+from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile, ReferencesFile
-
-__all__ = ["FrfData", "MassLineResult", "fit_modes_frf", "identify_massline", "simulate_frf"]
+from rigidid.results import FrfData, MassLineResult, PathLike
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import FrfModes, ScaledBody
-    from rigidid.core.massline import MassLine
+    from rigidid.core.frfmodes import FrfModes
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
-
-PathLike = str | os.PathLike[str]
-
-
-@dataclass(frozen=True)
-class FrfData:
-    """FRFs of a test with their sensors and references.
-
-    Attributes
-    ----------
-    frequencies : ndarray, shape (f,)
-        Hz.
-    frf : ndarray of complex, shape (p, q, f)
-        Accelerance (1 / mass unit).
-    sensor_ids, reference_ids : tuple of str
-    """
-
-    frequencies: NDArray[np.float64]
-    frf: NDArray[np.complex128]
-    sensor_ids: tuple[str, ...]
-    reference_ids: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class MassLineResult:
-    """``identify --method massline``: the mass line and how it compares with a given mass.
-
-    Attributes
-    ----------
-    massline : rigidid.core.massline.MassLine
-    units : dict
-        ``{"length": ..., "mass": ...}`` of the layout.
-    mass_given : float or None
-        The mass of the layout or of the ``mass`` parameter, if any.
-    reason : str
-        Why this route was used.
-    route : str
-        ``"massline"`` or ``"residues"`` (scaled modes).
-    scaled : rigidid.core.frfmodes.ScaledBody or None
-        Route residues: the body from the six scaled rigid-body modes, with the
-        stiffness and damping in absolute units.
-    """
-
-    massline: MassLine
-    units: dict[str, str]
-    mass_given: float | None
-    reason: str
-    route: str = "massline"
-    scaled: ScaledBody | None = None
 
 
 def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
@@ -83,6 +28,7 @@ def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> Re
         source = None if isinstance(references, ReferencesFile) else str(references)
         raise InputError("units differ from the layout's units", source=source, location="units")
     return refs
+
 
 
 def simulate_frf(
@@ -112,14 +58,13 @@ def simulate_frf(
     -------
     FrfData
     """
-    from rigidid.api import _same_units, body_from_file
     from rigidid.core.frf import accelerance
     from rigidid.core.simulate import body_modes
     from rigidid.io.frf import reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
-    _same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     refs = _references(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
@@ -132,6 +77,7 @@ def simulate_frf(
     rng = np.random.default_rng(seed)
     h = accelerance(truth, pos, dirs, rpos, rdirs, frequencies, noise=noise, rng=rng)
     return FrfData(np.asarray(frequencies, dtype=float), h, ids, rids)
+
 
 
 def identify_massline(
@@ -241,7 +187,9 @@ def identify_massline(
     )
 
 
+
 Arr = NDArray[np.float64]
+
 
 
 def _load_frf(
@@ -257,6 +205,7 @@ def _load_frf(
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
     freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
     return ids, freqs, h, pos, dirs, rpos, rdirs
+
 
 
 def fit_modes_frf(

@@ -1,0 +1,139 @@
+"""TODO docstring mounts."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.core.identify import Identification
+from rigidid.core.identify import identify as identify_core
+from rigidid.errors import InputError
+from rigidid.io import files
+from rigidid.models import LayoutFile, MountsFile
+from rigidid.results import IdentifyResult, MountModelFit, Mounts, PathLike
+
+if TYPE_CHECKING:
+    from rigidid.core.noise import NoiseLevels
+    pass
+
+
+def with_mounts(
+    result: IdentifyResult, mounts: PathLike | MountsFile | None = None, *, torque_axis: Sequence[float] | None = None
+) -> IdentifyResult:
+    """Add per-mount rates (from ``mounts.json`` or a ``body.json``) and the torque roll axis.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        An identification with a mass (rates in force units) or without (per mass).
+    mounts : path-like or MountsFile, optional
+        Mount positions and optional principal axes, in the layout's units.
+    torque_axis : sequence of 3 floats, optional
+        Direction of a torque (for an engine, the crankshaft) for the torque roll axis.
+
+    Returns
+    -------
+    IdentifyResult
+        `result` with :attr:`IdentifyResult.mounts` and/or
+        :attr:`IdentifyResult.torque_roll_axis` set.
+
+    Raises
+    ------
+    InputError
+        A bad file, units that differ from the layout's, or a zero torque axis.
+    """
+    from rigidid.core.mounts import mount_rates, torque_roll_axis
+
+    ident = result.identification
+    out = result
+    if mounts is not None:
+        positions, axes, spec = read_mount_spec(mounts, result.units)
+        scale = 1.0 if ident.mass is None else ident.mass
+        groups = tuple(m.group for m in spec.mounts)
+        rates = mount_rates(
+            scale * ident.stiffness_per_mass, ident.center_of_gravity, positions, axes, scale * ident.damping_per_mass,
+            groups=groups,
+        )  # fmt: skip
+        nominal = None
+        if all(m.stiffness is not None for m in spec.mounts):
+            nominal = np.array([
+                np.diag(rates.axes[k].T @ np.asarray(m.stiffness, dtype=float) @ rates.axes[k])
+                for k, m in enumerate(spec.mounts)
+            ])  # fmt: skip
+        ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups))
+    if torque_axis is not None:
+        out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
+    return out
+
+
+
+def read_mount_spec(
+    mounts: PathLike | MountsFile, units: Mapping[str, str]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], MountsFile]:
+    """Positions and axes (columns) of the mounts, checked against the layout's units."""
+    spec = mounts if isinstance(mounts, MountsFile) else files.load_mounts(mounts)
+    source = None if isinstance(mounts, MountsFile) else str(mounts)
+    if (spec.units.length, spec.units.mass) != (units["length"], units["mass"]):
+        raise InputError(
+            f"units ({spec.units.length}, {spec.units.mass}) differ from the layout's "
+            f"({units['length']}, {units['mass']})",
+            source=source,
+            location="units",
+        )
+    positions = np.array([m.position for m in spec.mounts], dtype=float)
+    axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
+    return positions, axes, spec
+
+
+
+def mount_model(
+    positions: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    poles: NDArray[np.complex128],
+    shapes: NDArray[np.complex128],
+    mass: float | None,
+    mounts: PathLike | MountsFile,
+    layout: LayoutFile,
+    noise: NoiseLevels | Mapping[str, float] | None = None,
+) -> tuple[Identification, MountModelFit]:
+    """The mount model, started from the free route when six modes allow it, and the comparison with it.
+
+    The output residuals are weighted by `noise` (default: ``estimate_noise``, the shape noise from the
+    rigid-body fit, with any overrides of a mapping), as the Monte Carlo intervals are.
+    """
+    from rigidid.core.geometry import layout_frame
+    from rigidid.core.mounts import eigen_residual, identify_mount_model
+    from rigidid.core.noise import NoiseLevels, estimate_noise
+    from rigidid.errors import IdentificationError
+
+    where, axes, spec = read_mount_spec(mounts, {"length": layout.units.length, "mass": layout.units.mass})
+    groups = [m.group for m in spec.mounts]
+    if isinstance(noise, NoiseLevels):
+        levels = noise
+    else:
+        levels = replace(estimate_noise(positions, directions, shapes), **dict(noise or {}))
+    free = None
+    if poles.size == 6:
+        try:
+            free = identify_core(positions, directions, poles, shapes, mass=mass, warn=False)
+        except IdentificationError:
+            free = None
+    start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
+    ident, model = identify_mount_model(
+        positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
+    )
+    length = layout_frame(positions).scale
+    residual = eigen_residual(
+        poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length
+    )
+    free_residual = None
+    if free is not None:
+        free_residual = eigen_residual(
+            poles, free.mode_shapes_cg, free.inertia_per_mass, free.stiffness_per_mass, free.damping_per_mass, length
+        )
+    return ident, MountModelFit(model, residual, free_residual, noise=levels)

@@ -1,0 +1,179 @@
+"""TODO docstring plan."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rigidid.api.load import body_from_file, load_uff, same_units
+from rigidid.api.mounts import read_mount_spec
+from rigidid.core.simulate import Body
+from rigidid.errors import InputError
+from rigidid.io import files
+from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
+from rigidid.progress import no_progress
+from rigidid.results import PathLike, PlanResult
+
+if TYPE_CHECKING:
+    from rigidid.core.plan import ReferenceReport
+    from rigidid.progress import ProgressCallback
+
+
+def plan(
+    layout: LayoutFile | PathLike,
+    *,
+    body: BodyFile | PathLike | None = None,
+    candidates: LayoutFile | PathLike | None = None,
+    add: int = 0,
+    noise: Mapping[str, float] | None = None,
+    draws: int = 1000,
+    seed: int | None = 0,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
+    progress: ProgressCallback | None = None,
+    references: ReferencesFile | PathLike | None = None,
+    mounts: PathLike | MountsFile | None = None,
+) -> PlanResult:
+    """Check a sensor layout before the test; predict and improve it with a body estimate.
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The planned sensors (any number, rank not required): ``layout.json``
+        or a UFF file (its nodes and records give the sensors).
+    body : BodyFile or path-like, optional
+        An estimate of the body and its mounts (e.g. from CAD), in the layout's units.
+    candidates : LayoutFile or path-like, optional
+        Possible extra sensors, as a layout file (positions and directions); by
+        default a 3 x 3 x 3 grid over the sensors' bounding box, each point tried
+        along x, y and z.
+    add : int
+        How many sensors to suggest, one at a time (greedy).
+    noise : mapping, optional
+        Overrides of :data:`~rigidid.core.noise.DEFAULT_NOISE`
+        (``frequency``, ``damping``, ``shape``, ``position``, ``angle_deg``).
+    draws : int
+        Monte Carlo draws of each prediction.
+    seed : int, optional
+        Seed of the draws.
+    units : dict, optional
+        ``{"length", "mass"}`` of a UFF layout without dataset 164.
+    geometry : path-like, optional
+        A UFF file completing a UFF layout (see :func:`load_uff`).
+    progress : callable, optional
+        ``progress(task, done, total)`` around the predictions and the search
+        for sensors (total unknown while they run).
+    references : ReferencesFile or path-like, optional
+        ``references.json`` of an FRF test: checked with
+        :func:`rigidid.core.plan.check_references` (about the body's CG and
+        with its modes when a body is given).
+    mounts : path-like or MountsFile, optional
+        ``mounts.json`` (or a ``body.json``): whether this mount layout determines
+        every per-mount rate (:func:`rigidid.core.mounts.split_uniqueness`),
+        in :attr:`PlanResult.mount_split`; with `body`, also the mount model's
+        predicted precision (:func:`rigidid.core.mounts.predict_mount_model`,
+        at most 50 draws) in :attr:`PlanResult.mount_prediction`.
+
+    Returns
+    -------
+    PlanResult
+
+    Raises
+    ------
+    InputError
+        Bad files, units that differ between files, ``add`` > 0 without a body.
+    """
+    from rigidid.core.noise import DEFAULT_NOISE
+    from rigidid.core.plan import check_layout, predict_uncertainty, suggest_sensors
+
+    if isinstance(layout, LayoutFile):
+        lay = layout
+    elif Path(layout).suffix.lower() in (".uff", ".unv"):
+        lay = load_uff(layout, units=units, geometry=geometry).layout
+    else:
+        lay = files.load_layout(layout, require_rank=False)
+    ids, positions, directions = files.layout_arrays(lay)
+    layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    report = check_layout(positions, directions, unit=lay.units.length, names=ids)
+    split = None
+    if mounts is not None:
+        from rigidid.core.mounts import split_uniqueness
+
+        where, axes, mount_spec = read_mount_spec(mounts, layout_units)
+        mount_groups = [m.group for m in mount_spec.mounts]
+        split = split_uniqueness(where, axes, mount_groups)
+    if body is None:
+        if add:
+            raise InputError("suggesting sensors needs a body estimate", source="add")
+        return PlanResult(
+            layout_units, report, references=_plan_references(references, lay, None), mount_split=split
+        )
+    spec = body if isinstance(body, BodyFile) else files.load_body(body)
+    same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
+    core_body = body_from_file(spec)
+    checked_refs = _plan_references(references, lay, core_body)
+    levels = replace(DEFAULT_NOISE, **dict(noise or {}))
+    prediction = None
+    step = progress or no_progress
+    if report.rank == 6:
+        task = f"predicting the uncertainty ({draws} draws)"
+        prediction = predict_uncertainty(
+            core_body, positions, directions, noise=levels, draws=draws, seed=seed,
+            progress=lambda _, done, total: step(task, done, total),
+        )  # fmt: skip
+    mount_prediction = None
+    if mounts is not None and report.rank == 6:
+        from rigidid.core.mounts import predict_mount_model
+
+        step("predicting the mount model", 0, 1)
+        mount_prediction = predict_mount_model(
+            core_body, positions, directions, where, axes, groups=mount_groups, noise=levels, draws=min(draws, 50),
+            seed=seed,
+        )  # fmt: skip
+        step("predicting the mount model", 1, 1)
+    suggestions = None
+    if add:
+        if add < 0:
+            raise InputError(f"must be positive, got {add}", source="add")
+        cand_pos = cand_dir = None
+        if candidates is not None:
+            cand = (
+                candidates if isinstance(candidates, LayoutFile) else files.load_layout(candidates, require_rank=False)
+            )
+            same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
+            _, cand_pos, cand_dir = files.layout_arrays(cand)
+        step(f"choosing {add} sensors to add", 0, add)
+        suggestions = suggest_sensors(
+            core_body,
+            positions,
+            directions,
+            cand_pos,
+            cand_dir,
+            add=add,
+            noise=levels,
+            draws=min(draws, 300),
+            seed=seed,
+            progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
+        )
+    return PlanResult(layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction)
+
+
+
+def _plan_references(
+    references: ReferencesFile | PathLike | None, layout: LayoutFile, body: Body | None
+) -> ReferenceReport | None:
+    """``plan --references``: the reference set checked against the layout (and the body estimate)."""
+    if references is None:
+        return None
+    from rigidid.core.plan import check_references
+    from rigidid.io.frf import load_references, reference_arrays
+
+    refs = references if isinstance(references, ReferencesFile) else load_references(references)
+    if refs.units is not None and refs.units != layout.units:
+        source = None if isinstance(references, ReferencesFile) else str(references)
+        raise InputError("units differ from the layout's units", source=source, location="units")
+    ids, positions, directions = files.layout_arrays(layout)
+    _, rpos, rdirs = reference_arrays(refs)
+    return check_references(positions, directions, rpos, rdirs, body=body, unit=layout.units.length, names=ids)

@@ -1,0 +1,769 @@
+"""TODO docstring records."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.api.identification import identify, suspect_mode, with_warnings
+from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
+from rigidid.core.selection import rigid_fit_residuals
+from rigidid.errors import InputError
+from rigidid.io import files
+from rigidid.io.files import ModeTable
+from rigidid.models import LayoutFile
+from rigidid.results import IdentifyResult, PathLike, TestData, TestRun
+
+if TYPE_CHECKING:
+    from rigidid.core.timedomain import ModalEstimate
+    from rigidid.io.files import ModeTable
+    from rigidid.progress import ProgressCallback
+
+
+def estimate_modes(
+    layout: LayoutFile | PathLike,
+    records: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    method: str | None = None,
+    n_modes: int = 6,
+    band: tuple[float, float] | None = None,
+    max_order: int | None = None,
+    decimate: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """Modal parameters from impact records (the paper's time-domain step).
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        The sensors.
+    records : sequence of path-like, or of (data, dt)
+        One free-decay record per impact: ``records.csv`` files, or arrays
+        (samples x sensors in layout order) with their sample interval (s).
+    method : {"era", "ar"}, optional
+        Estimator (default :data:`rigidid.core.timedomain.DEFAULT_METHOD`).
+    n_modes : int
+        Number of modes to find (6 for the rigid-body modes; more when elastic
+        modes share the band, then :func:`identify` chooses the rigid six).
+    band : (float, float), optional
+        Frequency band (Hz).
+    max_order : int, optional
+        Highest model order of the stabilisation sweep.
+    decimate : int, optional
+        Decimation factor (default chosen from the records' spectrum).
+    progress : ProgressCallback, optional
+        Progress of the decimation and the model-order sweep.
+
+    Returns
+    -------
+    modes : ModeTable
+        Modes labelled 1..n_modes in ascending frequency.
+    estimate : ModalEstimate
+        Everything the estimator found, the stabilisation diagram included.
+
+    Raises
+    ------
+    InputError
+        Bad records or records of different sample rates.
+    IdentificationError
+        Fewer than `n_modes` stable modes.
+    """
+    from rigidid.core.timedomain import DEFAULT_METHOD
+    from rigidid.core.timedomain import estimate_modes as estimate
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    if not records:
+        raise InputError("no records given", source="records")
+    arrays: list[tuple[NDArray[np.float64], float]] = []
+    paths: list[PathLike] = []
+    for item in records:
+        if isinstance(item, tuple):
+            arrays.append(item)
+        else:
+            paths.append(item)
+    if paths and not arrays:
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress)
+    arrays += load_records(paths, lay)
+    dts = [dt for _, dt in arrays]
+    if max(dts) - min(dts) > 1e-9 * max(dts):
+        raise InputError(
+            f"records have different sample intervals ({min(dts):.6g} to {max(dts):.6g} s)", source="records"
+        )
+    result = estimate(
+        [data for data, _ in arrays],
+        dts[0],
+        method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
+        n_modes=n_modes,
+        band=band,
+        max_order=max_order,
+        decimate=decimate,
+        progress=progress,
+    )
+    ids = tuple(s.id for s in lay.sensors)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    return table, result
+
+
+def estimate_rigid_modes(
+    layout: LayoutFile | PathLike,
+    records: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    method: str | None = None,
+    band: tuple[float, float] | None = None,
+    max_order: int | None = None,
+    decimate: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """Six modes from the records, or seven when one of the six looks elastic.
+
+    :func:`estimate_modes` with six modes; when one of them fits rigid-body
+    motion far worse than the others (:func:`rigidid.core.selection.elastic_suspect`:
+    an elastic mode in the band, taken for a rigid one), the records are
+    estimated again for seven modes, and those are returned when the six that
+    fit rigid-body motion best leave the suspect out and look rigid;
+    :func:`identify` then chooses those six (its automatic selection). Either
+    way an :class:`~rigidid.errors.ElasticModeWarning` says what was found and
+    done.
+
+    Parameters
+    ----------
+    layout, records, method, band, max_order, decimate, progress
+        As for :func:`estimate_modes`.
+
+    Returns
+    -------
+    modes : ModeTable
+        Six modes, or seven (one elastic).
+    estimate : ModalEstimate
+        The estimate they came from.
+
+    Notes
+    -----
+    Needs more than six sensors (with six, every shape fits rigid-body motion
+    exactly and nothing is checked). The output-error refinement that follows
+    models rigid-body motion only: :func:`with_refinement` subtracts the unused
+    mode from the records first.
+    """
+    import warnings
+
+    from rigidid.core.geometry import local_sensor_matrix
+    from rigidid.core.selection import elastic_suspect, separate_elastic
+    from rigidid.errors import ElasticModeWarning, IdentificationError
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    options: dict[str, Any] = {
+        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
+    }  # fmt: skip
+    table, estimate = estimate_modes(lay, records, n_modes=6, **options)
+    _, positions, directions = files.layout_arrays(lay)
+    if positions.shape[0] <= 6:
+        return table, estimate
+    t = local_sensor_matrix(positions, directions)
+    residual = rigid_fit_residuals(t, table.shapes)
+    k = elastic_suspect(residual)
+    if k is None:
+        return table, estimate
+    found = (
+        f"the mode at {table.frequency_hz[k]:.4g} Hz fits rigid-body motion with a residual of {residual[k]:.2f} "
+        f"against {float(np.median(np.delete(residual, k))):.2g} for the others: an elastic mode taken for a rigid one?"
+    )
+    try:
+        table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
+    except IdentificationError:
+        warnings.warn(
+            f"{found} The records give no seventh stable mode to replace it; name the six rigid-body modes "
+            "(--modes) or end --band below it",
+            ElasticModeWarning,
+            stacklevel=2,
+        )
+        return table, estimate
+    keep = separate_elastic(t, table7.shapes)
+    if keep is None:
+        warnings.warn(
+            f"{found} Seven modes estimated do not separate six rigid-body modes from it; name the six "
+            "(--modes) or end --band below it",
+            ElasticModeWarning,
+            stacklevel=2,
+        )
+        return table, estimate
+    left_out = int(np.setdiff1d(np.arange(7), keep)[0])
+    warnings.warn(
+        f"{found} Seven modes were estimated and the six that fit rigid-body motion best are used, leaving out "
+        f"the mode at {table7.frequency_hz[left_out]:.4g} Hz",
+        ElasticModeWarning,
+        stacklevel=2,
+    )
+    return table7, estimate7
+
+
+def _estimate_streamed(
+    lay: LayoutFile,
+    paths: Sequence[PathLike],
+    method: str | None,
+    n_modes: int,
+    band: tuple[float, float] | None,
+    max_order: int | None,
+    decimate: int | None,
+    progress: ProgressCallback | None,
+    cascade: bool = True,
+) -> tuple[ModeTable, ModalEstimate]:
+    """:func:`estimate_modes` on record files read in blocks and decimated as they arrive.
+
+    The first record chooses the pre-decimation factor (:mod:`rigidid.io.streamed_records`)
+    or takes the user's `decimate` whole; the others share it. The estimate reports
+    the total factor, the impacts in the files' rows.
+    """
+    from rigidid.core.timedomain import DEFAULT_METHOD, Impact
+    from rigidid.core.timedomain import estimate_modes as estimate
+    from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
+    from rigidid.errors import IdentificationError
+    from rigidid.io.streamed_records import read_records_streamed
+
+    ids = [s.id for s in lay.sensors]
+    f_limit = float(band[1]) if band is not None else None
+    # second decimation stage while reading (memory of the decimated record only), unless the user fixed the
+    # factor; read_records_streamed reads again without it when all records' content asks another factor
+    cascade = cascade and decimate is None
+    streamed, content = read_records_streamed(paths, ids, decimate, f_limit, progress, cascade=cascade)
+    factor = streamed[0].factor
+    dts = [r.dt for r in streamed]
+    cascaded = streamed[0].stages[1] > 1
+    try:
+        result = estimate(
+            [r.data for r in streamed],
+            dts[0],
+            method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
+            n_modes=n_modes,
+            band=band,
+            max_order=max_order,
+            # after a second stage the estimation judges the content again at the records' new rate, where
+            # its spectrum resolves the modes (at 500 kHz the raw one's bins are 122 Hz wide), and may
+            # decimate further; a user's factor was applied whole while reading
+            decimate=None if decimate is None else 1,
+            progress=progress,
+            energies=[r.energy for r in streamed],
+            content=None if cascaded else content,
+            settle=FIR_HALF_LENGTH if cascaded else 0,
+        )
+    except IdentificationError:
+        if not cascaded:
+            raise
+        # the smaller factors the estimation retries need the record before the second stage
+        del streamed
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False)
+    if factor > 1:
+        impacts = tuple(
+            Impact(*(r.offset + k * factor for k in (i.onset, i.peak, i.start)))
+            for r, i in zip(streamed, result.impacts, strict=False)
+        )
+        result = replace(result, decimation=result.decimation * factor, impacts=impacts)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, tuple(ids), result.shapes)
+    return table, result
+
+
+def with_record_spread(
+    result: IdentifyResult,
+    records: Sequence[tuple[NDArray[np.float64], float]],
+    *,
+    segments: int = 8,
+    n_modes: int = 6,
+    estimate_options: Mapping[str, Any] | None = None,
+) -> IdentifyResult:
+    """Add data-driven intervals: re-identify on interleaved segments of the records.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The identification from all the records.
+    records : sequence of (ndarray, float)
+        The records it came from (samples x sensors in layout order, sample interval).
+    segments : int
+        Number of interleaved segments ``K`` (the sample rate over ``K`` must
+        stay above twice the highest mode; 8 when the records allow it).
+    n_modes : int
+        Modes estimated per segment.
+    estimate_options : mapping, optional
+        ``method``, ``band``, ``max_order`` for the estimator.
+
+    Returns
+    -------
+    IdentifyResult
+        `result` with ``record_spread`` set (see
+        :func:`rigidid.core.record_spread.record_spread`).
+    """
+    from rigidid.core.record_spread import record_spread
+
+    spread = record_spread(
+        [data for data, _ in records],
+        records[0][1],
+        result.positions,
+        result.directions,
+        result.identification,
+        segments=segments,
+        mass=result.identification.mass,
+        n_modes=n_modes,
+        estimate_options=dict(estimate_options or {}),
+    )
+    return replace(result, record_spread=spread)
+
+
+def with_refinement(
+    result: IdentifyResult,
+    records: Sequence[tuple[NDArray[np.float64], float]],
+    estimate: ModalEstimate,
+    *,
+    progress: ProgressCallback | None = None,
+) -> IdentifyResult:
+    """Refine the body on the records by output error (maximum likelihood), started from `result`.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The structured identification from the records' estimated modes.
+    records : sequence of (ndarray, float)
+        The records (samples x sensors in layout order, sample interval).
+    estimate : ModalEstimate
+        The modal estimate the modes came from (impacts found, decimation).
+    progress : ProgressCallback, optional
+        Called with ``("refit", done, total)``.
+
+    Returns
+    -------
+    IdentifyResult
+        With CG, inertia, stiffness and damping from the refinement and
+        ``record_bound`` (Cramér-Rao intervals) set; or `result` unchanged,
+        with a :class:`~rigidid.errors.RefinementWarning`, when the fit fails
+        or its normalised cost says it is not at the global minimum.
+
+    Notes
+    -----
+    The refit models the six rigid-body modes only: modes of `estimate` that
+    `result` did not use (an elastic mode left out, see :func:`estimate_rigid_modes`)
+    are subtracted from the records first
+    (:func:`rigidid.core.timedomain.nuisance.subtract_modes`).
+    """
+
+    from rigidid.core.timedomain.refine import refine_body
+
+    ident = result.identification
+    if progress is not None:
+        progress("refit", 0, 1)
+    arrays = [data for data, _ in records]
+    unused = [k + 1 not in result.modes_used for k in range(estimate.poles.size)]
+    if any(unused):  # modes estimated but not used (elastic): out of the records the rigid-body model is fitted to
+        from rigidid.core.timedomain.nuisance import subtract_modes
+
+        arrays = subtract_modes(
+            arrays, records[0][1], [impact.start for impact in estimate.impacts], estimate.poles, unused
+        )
+    return _refit(
+        result,
+        lambda: refine_body(
+            arrays,
+            records[0][1],
+            result.positions,
+            result.directions,
+            starts=[impact.start for impact in estimate.impacts],
+            onsets=[impact.onset for impact in estimate.impacts],
+            decimation=estimate.decimation,
+            center_of_gravity=ident.center_of_gravity,
+            inertia_per_mass=ident.inertia_per_mass,
+            stiffness_per_mass=ident.stiffness_per_mass,
+            damping_per_mass=ident.damping_per_mass,
+        ),
+        progress,
+    )
+
+
+def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) -> IdentifyResult:
+    """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
+    import warnings
+
+    from rigidid.errors import RefinementWarning
+
+    try:
+        refinement = fit()
+    except (np.linalg.LinAlgError, InputError, ValueError) as exc:
+        warnings.warn(
+            f"refinement on the records failed ({exc}); kept the answer from the modes"
+            + suspect_mode(result.identification),
+            RefinementWarning,
+            stacklevel=3,
+        )
+        return result
+    finally:
+        if progress is not None:
+            progress("refit", 1, 1)
+    return _accept_refinement(result, refinement)
+
+
+def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResult:
+    """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
+    import warnings
+
+    from rigidid.core.timedomain.refine import good_fit, record_bound
+    from rigidid.errors import RefinementWarning
+
+    ident = result.identification
+    if not good_fit(refinement):
+        warnings.warn(
+            f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
+            "(about 1 at a good fit): a local minimum or a model that does not fit the records; "
+            "kept the answer from the modes" + suspect_mode(ident),
+            RefinementWarning,
+            stacklevel=2,
+        )
+        return result
+    refined = replace(
+        ident,
+        center_of_gravity=refinement.center_of_gravity,
+        inertia_per_mass=refinement.inertia_per_mass,
+        stiffness_per_mass=refinement.stiffness_per_mass,
+        damping_per_mass=refinement.damping_per_mass,
+    )
+    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+
+
+STREAM_REFIT_VALUES = 16 * 150_000
+
+
+def refine_records(
+    result: IdentifyResult,
+    paths: Sequence[PathLike],
+    layout: LayoutFile | PathLike,
+    estimate: ModalEstimate,
+    *,
+    progress: ProgressCallback | None = None,
+    stream_above: int | None = None,
+) -> IdentifyResult:
+    """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
+
+    Parameters
+    ----------
+    result : IdentifyResult
+        The structured identification from the records' estimated modes.
+    paths : sequence of path-like
+        The record files `estimate` came from (one per impact).
+    layout : LayoutFile or path-like
+        The sensors.
+    estimate : ModalEstimate
+        The modal estimate, its impacts in the files' rows and its total
+        decimation (as :func:`estimate_modes` gives for record files).
+    progress : ProgressCallback, optional
+        Reading and ``("refit", done, total)``.
+    stream_above : int, optional
+        Records of more raw values than this (default :data:`STREAM_REFIT_VALUES`) (samples x sensors, all files,
+        as their headers or sizes tell) are read in row blocks
+        (:func:`rigidid.io.refit_records.read_prepared_decays`: the pre-trigger
+        statistics and the decays at the fit's rate, nothing else held);
+        smaller ones are read whole.
+
+    Returns
+    -------
+    IdentifyResult
+        As :func:`with_refinement`: the same answer whichever way the files
+        were read (to the order of floating-point sums).
+
+    Notes
+    -----
+    The impacts are located again on the raw records
+    (:func:`~rigidid.core.timedomain.preprocess.find_impact`, as an estimation
+    on the whole records would: `estimate`'s, from records decimated while
+    read, are only as fine as that factor), by one more pass in row blocks
+    (:func:`rigidid.io.refit_records.locate_impacts`) holding the rows around
+    `estimate`'s impacts. The records are read whole when that pass cannot
+    prove its impacts, and when `result` leaves out a mode of `estimate` (an
+    elastic one, subtracted from the raw records). The refit's decimation is
+    the smallest up to `estimate`'s factor that fits its row budget, so it may
+    differ from a whole-record estimation's when that budget binds.
+    """
+
+    from rigidid.core.timedomain.refine import refine_prepared
+    from rigidid.io.records import layout_ids
+    from rigidid.io.streamed_records import open_source
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    ids = [s.id for s in lay.sensors]
+    unused = any(k + 1 not in result.modes_used for k in range(estimate.poles.size))
+    size = 0
+    if not unused:
+        size = sum(open_source(Path(p), layout_ids(ids, str(p)), None).rows for p in paths) * len(ids)
+    dt = estimate.sample_interval / max(1, estimate.decimation)
+    impacts = None
+    if not unused and size > (STREAM_REFIT_VALUES if stream_above is None else stream_above):
+        from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
+        from rigidid.io.refit_records import locate_impacts
+
+        reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
+        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress)
+    if impacts is None:  # read whole; the impacts where the raw records put them (as their estimation would)
+        from rigidid.core.timedomain.preprocess import find_impact
+
+        raw = load_records(paths, lay)
+        found = tuple(find_impact(data, step) for data, step in raw)
+        return with_refinement(result, raw, replace(estimate, impacts=found), progress=progress)
+    estimate = replace(estimate, impacts=tuple(impacts))
+    from rigidid.io.refit_records import read_prepared_decays
+
+    ident = result.identification
+    if progress is not None:
+        progress("refit", 0, 1)
+
+    def fit() -> Any:
+        data = read_prepared_decays(
+            paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
+            factor=estimate.decimation, progress=progress,
+        )  # fmt: skip
+        return refine_prepared(
+            data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
+            inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
+            damping_per_mass=ident.damping_per_mass,
+        )  # fmt: skip
+
+    return _refit(result, fit, progress)
+
+
+def records_spectrum(
+    paths: Sequence[PathLike], layout: LayoutFile | PathLike, *, progress: ProgressCallback | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The report's summed spectrum of record files (:func:`report`'s `spectrum`), read in row blocks.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        The record files (one per impact), checked already (read by the estimation).
+    layout : LayoutFile or path-like
+        The sensors.
+    progress : ProgressCallback, optional
+        Reading progress.
+
+    Returns
+    -------
+    (ndarray, ndarray) or None
+        Frequency (Hz) and summed power spectral density, as
+        :func:`rigidid.core.spectrum.summed_spectrum` gives on the whole records
+        (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); the
+        records read whole when one is shorter than a Welch segment (4096 rows).
+    """
+    from rigidid.io.records import layout_ids
+    from rigidid.io.streamed_records import open_source
+    from rigidid.io.streamed_spectrum import summed_spectrum_streamed
+
+    lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
+    ids = [s.id for s in lay.sensors]
+    sources = [open_source(Path(p), layout_ids(ids, str(p)), None) for p in paths]
+    if not sources:
+        return None
+    if min(s.rows for s in sources) < 2 * 4096:  # short records (rows told by the header or the size): read whole
+        del sources
+        return summed_record_spectrum(load_records(paths, lay))
+    dt = _source_dt(sources[0])
+    del sources
+    return summed_spectrum_streamed(paths, ids, dt, progress=progress)
+
+
+def _source_dt(source: Any) -> float:
+    """The sample interval of a row-block source: its own, or from the first block's time column."""
+    if source.dt:
+        return float(source.dt)
+    t, _ = next(iter(source.blocks))
+    return float(t[1] - t[0])
+
+
+def summed_record_spectrum(
+    records: Sequence[tuple[NDArray[np.float64], float]],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    from rigidid.core.spectrum import summed_spectrum
+
+    return summed_spectrum([data for data, _ in records], records[0][1])
+
+
+@dataclass(frozen=True)
+class ModalOptions:
+    """How modes are estimated from impact records (the ``modes`` command's and ``identify --records``' options).
+
+    Attributes
+    ----------
+    method : str or None
+        Estimation method of :mod:`rigidid.core.timedomain` (None: its default).
+    n_modes : int
+        Modes to estimate.
+    band : (float, float) or None
+        Frequency band in Hz.
+    max_order : int or None
+        Highest model order of the stabilisation sweep.
+    decimate : int or None
+        Decimation factor (None: from the records' content).
+    """
+
+    method: str | None = None
+    n_modes: int = 6
+    band: tuple[float, float] | None = None
+    max_order: int | None = None
+    decimate: int | None = None
+
+
+def estimate_test_modes(
+    data: TestData,
+    modal: ModalOptions,
+    *,
+    paths: Sequence[PathLike] | None = None,
+    rigid_six: bool = False,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """Modes from a test's records, or from record files read in row blocks (`paths`).
+
+    With `rigid_six` and six modes asked, seven are estimated when one of six looks elastic and the
+    rigid six are returned (:func:`estimate_rigid_modes`); otherwise :func:`estimate_modes`.
+    """
+    from rigidid.core.timedomain import METHODS
+
+    if modal.method is not None and modal.method not in METHODS:
+        raise InputError(f"unknown method {modal.method!r}; choose {' or '.join(METHODS)}", source="modal_method")
+    source: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]] = paths or data.records
+    options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order, "decimate": modal.decimate}
+    if rigid_six and modal.n_modes == 6:
+        return estimate_rigid_modes(data.layout, source, progress=progress, **options)  # type: ignore[arg-type]
+    return estimate_modes(data.layout, source, n_modes=modal.n_modes, progress=progress, **options)  # type: ignore[arg-type]
+
+
+def identify_test(
+    layout: PathLike,
+    inputs: Sequence[PathLike] | None,
+    *,
+    records: bool = False,
+    modal: ModalOptions | None = None,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
+    refine: bool = True,
+    resample: int = 0,
+    spectrum: bool = False,
+    progress: ProgressCallback | None = None,
+    **identify_options: Any,
+) -> TestRun:
+    """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
+
+    Record files (not UFF) are read in row blocks and decimated as they arrive unless `resample` needs the
+    samples themselves; the output-error refit (`refine`, structured method) and the summed spectrum
+    (`spectrum`, for the report) read the files again in row blocks, so memory stays bounded.
+
+    Parameters
+    ----------
+    layout, inputs, units, geometry
+        As for :func:`rigidid.api.load.load_test`.
+    records : bool
+        The inputs are impact records (one file per impact).
+    modal : ModalOptions, optional
+        How modes are estimated from the records.
+    refine : bool
+        Refit the body to the records (output error) after the identification from modes.
+    resample : int
+        Intervals from this many interleaved segments of the records (0: none).
+    spectrum : bool
+        Also return the records' summed spectrum.
+    progress : callable, optional
+        Progress callback (:mod:`rigidid.progress`).
+    **identify_options
+        Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
+        `noise`, `seed`, `mounts`).
+
+    Returns
+    -------
+    TestRun
+    """
+    from rigidid.errors import ElasticModeWarning, RefinementWarning, named_source, noted
+
+    modal = modal or ModalOptions()
+    method = identify_options.get("method", "structured")
+    src = input_source(layout, inputs)
+    files_in = records and bool(inputs) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
+    streamed = files_in and not resample
+    data = TestData(load_layout(layout)) if streamed else load_test(
+        layout, inputs or [], records=records, units=units, geometry=geometry
+    )
+    if resample and data.records:  # before any estimation: blame the option, not the records
+        shortest = min(values.shape[0] for values, _ in data.records)
+        if resample * 16 > shortest:
+            raise InputError(
+                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
+                f"the limit here is {shortest // 16}",
+                source="segments",
+            )
+    paths = list(inputs or []) if streamed else None
+    notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
+    estimate = None
+    modes = data.modes
+    with named_source(src), noted(notes, ElasticModeWarning):
+        if records:
+            rigid_six = identify_options.get("modes_used") is None
+            modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six, progress=progress)
+    assert modes is not None
+    summed = None
+    if spectrum and paths:  # after the estimation, which checked the files
+        with named_source(src):
+            summed = records_spectrum(paths, data.layout)
+    with named_source(src):
+        result = identify(data.layout, modes, progress=progress, **identify_options)
+    if refine and estimate is not None and method == "structured":
+        with named_source(src), noted(notes, RefinementWarning):
+            if paths is not None:
+                result = refine_records(result, paths, data.layout, estimate, progress=progress)
+            else:
+                result = with_refinement(result, data.records, estimate, progress=progress)
+    result = with_warnings(result, notes)
+    if resample:
+        if not records:
+            raise InputError("data-driven intervals need impact records (--records)", source="segments")
+        options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order}
+        result = with_record_spread(
+            result, data.records, segments=resample, n_modes=len(modes.labels),
+            estimate_options={k: v for k, v in options.items() if v is not None},
+        )  # fmt: skip
+    return TestRun(result, estimate, None if streamed else data.records, summed)
+
+
+def identify_records(
+    layout: PathLike, records: Sequence[PathLike], *, modal: ModalOptions | None = None, **options: Any
+) -> TestRun:
+    """What ``rigidid identify LAYOUT --records FILES`` does: modes from the records, identification, refit.
+
+    Parameters as for :func:`identify_test` (`records` is true here).
+
+    Examples
+    --------
+    >>> from rigidid.api import identify_records
+    >>> run = identify_records("layout.json", ["hit1.csv", "hit2.csv"])  # doctest: +SKIP
+    >>> run.result.identification.center_of_gravity  # doctest: +SKIP
+    """
+    return identify_test(layout, records, records=True, modal=modal, **options)
+
+
+def estimate_records_modes(
+    layout: PathLike,
+    records: Sequence[PathLike],
+    modal: ModalOptions | None = None,
+    *,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[ModeTable, ModalEstimate]:
+    """What ``rigidid modes LAYOUT RECORDS`` does: the modes of a test's record files (or one UFF file).
+
+    Record files are read in row blocks and decimated as they arrive; with six modes asked, seven are
+    estimated when one of six looks elastic and the rigid six returned (:func:`estimate_test_modes`).
+    """
+    from rigidid.errors import named_source
+
+    streamed = bool(records) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
+    data = TestData(load_layout(layout)) if streamed else load_test(
+        layout, records, records=True, units=units, geometry=geometry
+    )
+    with named_source(input_source(layout, records)):
+        return estimate_test_modes(
+            data, modal or ModalOptions(), paths=list(records) if streamed else None, rigid_six=True, progress=progress
+        )
