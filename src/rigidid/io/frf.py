@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError
+from rigidid.io.dialect import plain_number
 from rigidid.models import ReferencesFile
 
 __all__ = [
@@ -106,6 +107,9 @@ def load_frf_csv(
     r_index = {r: j for j, r in enumerate(reference_ids)}
     values: dict[tuple[int, int], dict[float, complex]] = {}
     for n, row in enumerate(reader, start=2):
+        if None in row or any(v is None for v in row.values()):
+            cells = len(header) + len(row.get(None) or []) - sum(v is None for v in row.values())
+            raise InputError(f"{cells} fields, the header has {len(header)}", source=src, location=f"row {n}")
         resp = (row.get("response") or "").strip()
         ref = (row.get("reference") or "").strip()
         if resp not in s_index:
@@ -115,7 +119,10 @@ def load_frf_csv(
         nums = []
         for col in ("frequency_hz", "real", "imag"):
             try:
-                v = float((row.get(col) or "").strip())
+                cell = (row.get(col) or "").strip()
+                if not plain_number(cell):
+                    raise ValueError(cell)
+                v = float(cell)
             except ValueError:
                 raise InputError(f"{col}: not a number: {row.get(col)!r}", source=src, location=f"row {n}") from None
             if not math.isfinite(v):
