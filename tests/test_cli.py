@@ -138,7 +138,7 @@ def test_simulate_rejects_unit_mismatch(tmp_path: Path) -> None:
     (tmp_path / "layout.json").write_text(json.dumps(layout))
     out = run("simulate", ENGINE / "body.json", tmp_path / "layout.json")
     assert out.returncode == 2
-    assert "body.json: units: units (mm, kg) differ from layout units (m, kg)" in out.stderr
+    assert "body.json: units: units (mm, kg) differ from the layout's units (m, kg)" in out.stderr
 
 
 def test_help_and_version() -> None:
@@ -149,7 +149,7 @@ def test_help_and_version() -> None:
 
 
 def test_errors_name_the_option_where_the_api_names_its_parameter(tmp_path: Path) -> None:
-    """The API says `modes_used`; the command line says --modes (one mapping, in cli._FLAGS)."""
+    """The API says `modes_used`; the command line says --modes (one mapping, in cli.options.FLAGS)."""
     text = (PAPER / "modes.csv").read_text()
     extra = [line.replace("1,", "7,", 1) for line in text.splitlines()[1:7]]
     seven = tmp_path / "seven.csv"

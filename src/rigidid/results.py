@@ -1,4 +1,5 @@
-"""TODO docstring results."""
+"""The result types of the API (frozen dataclasses): what a workflow returns and what the presentation
+(JSON, tables, report) reads. Below the API and the presentation; imports neither."""
 
 from __future__ import annotations
 

@@ -22,7 +22,9 @@ Pure Python: no numpy, rich or typer here.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = [
     "FORCE_UNITS",
@@ -180,3 +182,35 @@ def diagonal_units(length: str, mass: str, force: str | None = None) -> tuple[tu
     arm = ("ft" if length == "ft" else "in") if f == "lbf" else "m"
     rotation = KG_PER_MASS[mass] * M_PER_LENGTH[length] ** 2 / (N_PER_FORCE[f] * M_PER_LENGTH[arm])
     return (f"{f}/{length}", translation), (f"{f} {arm}/rad", rotation)
+
+
+def check_same_units(given: Any, layout: Any, *, source: str | None, location: str = "units") -> None:
+    """Refuse a file whose length and mass units differ from the layout's: the one unit check.
+
+    Parameters
+    ----------
+    given, layout
+        The units of the file and of the layout: a mapping with ``"length"`` and ``"mass"`` or an object with
+        those attributes (the files' pydantic ``units`` blocks).
+    source : str or None
+        The file to name in the error.
+    location : str
+        Its field (or dataset) that holds the units.
+
+    Raises
+    ------
+    InputError
+        When the units differ.
+    """
+    from rigidid.errors import InputError
+
+    def pair(units: Any) -> tuple[str, str]:
+        if isinstance(units, Mapping):
+            return str(units["length"]), str(units["mass"])
+        return str(units.length), str(units.mass)
+
+    (gl, gm), (ll, lm) = pair(given), pair(layout)
+    if (gl, gm) != (ll, lm):
+        raise InputError(
+            f"units ({gl}, {gm}) differ from the layout's units ({ll}, {lm})", source=source, location=location
+        )

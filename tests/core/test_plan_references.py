@@ -121,4 +121,4 @@ def test_plan_references_from_the_command_line(tmp_path: Path) -> None:
         {"id": "h1", "position": [0, 0, 0], "direction": "+z"}]}))  # fmt: skip
     done = _run("plan", FOUR / "layout.json", "--references", other)
     assert done.returncode == 2 and done.stderr.count("\n") == 1
-    assert str(other) in done.stderr and "units differ" in done.stderr
+    assert str(other) in done.stderr and "differ from the layout's units" in done.stderr

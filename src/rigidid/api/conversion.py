@@ -1,4 +1,4 @@
-"""TODO docstring convert."""
+"""``rigidid convert``: a UFF file to layout.json, modes.csv and record files."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""TODO docstring frf."""
+"""The FRF routes: simulated FRFs, modes fitted to FRFs (pLSCF + LSFD), and mass, CG and inertia from the
+mass line or from force-scaled residues."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.api.load import body_from_file, same_units
+from rigidid.api.load import body_from_file, load_references_for, same_units
 from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.files import ModeTable
@@ -19,15 +20,6 @@ if TYPE_CHECKING:
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
 
-
-def _references(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
-    from rigidid.io.frf import load_references
-
-    refs = references if isinstance(references, ReferencesFile) else load_references(references)
-    if refs.units is not None and refs.units != layout.units:
-        source = None if isinstance(references, ReferencesFile) else str(references)
-        raise InputError("units differ from the layout's units", source=source, location="units")
-    return refs
 
 
 
@@ -65,7 +57,7 @@ def simulate_frf(
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout, require_rank=False)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
-    refs = _references(references, lay)
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     truth = body_from_file(spec)
@@ -77,7 +69,6 @@ def simulate_frf(
     rng = np.random.default_rng(seed)
     h = accelerance(truth, pos, dirs, rpos, rdirs, frequencies, noise=noise, rng=rng)
     return FrfData(np.asarray(frequencies, dtype=float), h, ids, rids)
-
 
 
 def identify_massline(
@@ -123,7 +114,7 @@ def identify_massline(
     from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = _references(references, lay)
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
@@ -187,9 +178,7 @@ def identify_massline(
     )
 
 
-
 Arr = NDArray[np.float64]
-
 
 
 def _load_frf(
@@ -199,13 +188,12 @@ def _load_frf(
     from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
     lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = _references(references, lay)
+    refs = load_references_for(references, lay)
     ids, pos, dirs = files.layout_arrays(lay)
     rids, rpos, rdirs = reference_arrays(refs)
     is_uff = str(frf).lower().endswith((".uff", ".unv"))
     freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
     return ids, freqs, h, pos, dirs, rpos, rdirs
-
 
 
 def fit_modes_frf(

@@ -1,4 +1,5 @@
-"""TODO docstring identify."""
+"""The modes route: choose the rigid modes, identify (structured, paper or mount model), check the data
+and the result, and keep the warnings in the result's diagnostics."""
 
 from __future__ import annotations
 

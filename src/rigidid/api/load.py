@@ -1,4 +1,5 @@
-"""TODO docstring load."""
+"""Loading a test: layout, modes, records, UFF and body files, validated once at this boundary, and the one
+check that two files speak the same units (:func:`same_units`)."""
 
 from __future__ import annotations
 
@@ -15,8 +16,9 @@ from rigidid.core.statespace import poles_from_modal
 from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.files import ModeTable
-from rigidid.models import BodyFile, LayoutFile, MountsFile
+from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
 from rigidid.results import Arrays, PathLike, TestData
+from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
     pass
@@ -93,14 +95,19 @@ def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -
 
 
 def same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:
-    if other.units != layout.units:
-        raise InputError(
-            f"units ({other.units.length}, {other.units.mass}) differ from layout units "
-            f"({layout.units.length}, {layout.units.mass})",
-            source=source,
-            location="units",
-        )
+    """Refuse a body or layout file whose units differ from the layout's (:func:`rigidid.units.check_same_units`)."""
+    check_same_units(other.units, layout.units, source=source)
 
+
+def load_references_for(references: ReferencesFile | PathLike, layout: LayoutFile) -> ReferencesFile:
+    """The reference (hammer) points of a test, in the layout's units."""
+    from rigidid.io.frf import load_references
+
+    refs = references if isinstance(references, ReferencesFile) else load_references(references)
+    if refs.units is not None:
+        source = None if isinstance(references, ReferencesFile) else str(references)
+        check_same_units(refs.units, layout.units, source=source)
+    return refs
 
 
 def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[NDArray[np.float64], float]]:

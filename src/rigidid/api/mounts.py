@@ -1,4 +1,5 @@
-"""TODO docstring mounts."""
+"""Mounts on an identified body: per-mount rates and the torque roll axis from K and C, and the mount model
+(CG, inertia and mount rates fitted together) for ``--method mounts``."""
 
 from __future__ import annotations
 
@@ -11,10 +12,10 @@ from numpy.typing import NDArray
 
 from rigidid.core.identify import Identification
 from rigidid.core.identify import identify as identify_core
-from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.models import LayoutFile, MountsFile
 from rigidid.results import IdentifyResult, MountModelFit, Mounts, PathLike
+from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
     from rigidid.core.noise import NoiseLevels
@@ -78,13 +79,7 @@ def read_mount_spec(
     """Positions and axes (columns) of the mounts, checked against the layout's units."""
     spec = mounts if isinstance(mounts, MountsFile) else files.load_mounts(mounts)
     source = None if isinstance(mounts, MountsFile) else str(mounts)
-    if (spec.units.length, spec.units.mass) != (units["length"], units["mass"]):
-        raise InputError(
-            f"units ({spec.units.length}, {spec.units.mass}) differ from the layout's "
-            f"({units['length']}, {units['mass']})",
-            source=source,
-            location="units",
-        )
+    check_same_units(spec.units, units, source=source)
     positions = np.array([m.position for m in spec.mounts], dtype=float)
     axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
     return positions, axes, spec

@@ -1,4 +1,5 @@
-"""TODO docstring plan."""
+"""``rigidid plan``: check a layout (and hammer points, and mounts) before the test; with a body estimate,
+predict the precision and suggest sensors to add."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rigidid.api.load import body_from_file, load_uff, same_units
+from rigidid.api.load import body_from_file, load_references_for, load_uff, same_units
 from rigidid.api.mounts import read_mount_spec
 from rigidid.core.simulate import Body
 from rigidid.errors import InputError
@@ -17,7 +18,11 @@ from rigidid.progress import no_progress
 from rigidid.results import PathLike, PlanResult
 
 if TYPE_CHECKING:
-    from rigidid.core.plan import ReferenceReport
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from rigidid.core.noise import NoiseLevels
+    from rigidid.core.plan import ReferenceReport, SensorPlan
     from rigidid.progress import ProgressCallback
 
 
@@ -86,7 +91,7 @@ def plan(
         Bad files, units that differ between files, ``add`` > 0 without a body.
     """
     from rigidid.core.noise import DEFAULT_NOISE
-    from rigidid.core.plan import check_layout, predict_uncertainty, suggest_sensors
+    from rigidid.core.plan import check_layout, predict_uncertainty
 
     if isinstance(layout, LayoutFile):
         lay = layout
@@ -107,9 +112,7 @@ def plan(
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
-        return PlanResult(
-            layout_units, report, references=_plan_references(references, lay, None), mount_split=split
-        )
+        return PlanResult(layout_units, report, references=_plan_references(references, lay, None), mount_split=split)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     core_body = body_from_file(spec)
@@ -133,32 +136,8 @@ def plan(
             seed=seed,
         )  # fmt: skip
         step("predicting the mount model", 1, 1)
-    suggestions = None
-    if add:
-        if add < 0:
-            raise InputError(f"must be positive, got {add}", source="add")
-        cand_pos = cand_dir = None
-        if candidates is not None:
-            cand = (
-                candidates if isinstance(candidates, LayoutFile) else files.load_layout(candidates, require_rank=False)
-            )
-            same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
-            _, cand_pos, cand_dir = files.layout_arrays(cand)
-        step(f"choosing {add} sensors to add", 0, add)
-        suggestions = suggest_sensors(
-            core_body,
-            positions,
-            directions,
-            cand_pos,
-            cand_dir,
-            add=add,
-            noise=levels,
-            draws=min(draws, 300),
-            seed=seed,
-            progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
-        )
+    suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
     return PlanResult(layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction)
-
 
 
 def _plan_references(
@@ -168,12 +147,40 @@ def _plan_references(
     if references is None:
         return None
     from rigidid.core.plan import check_references
-    from rigidid.io.frf import load_references, reference_arrays
+    from rigidid.io.frf import reference_arrays
 
-    refs = references if isinstance(references, ReferencesFile) else load_references(references)
-    if refs.units is not None and refs.units != layout.units:
-        source = None if isinstance(references, ReferencesFile) else str(references)
-        raise InputError("units differ from the layout's units", source=source, location="units")
+    refs = load_references_for(references, layout)
     ids, positions, directions = files.layout_arrays(layout)
     _, rpos, rdirs = reference_arrays(refs)
     return check_references(positions, directions, rpos, rdirs, body=body, unit=layout.units.length, names=ids)
+
+
+def _suggest(
+    body: Body,
+    lay: LayoutFile,
+    positions: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    candidates: LayoutFile | PathLike | None,
+    add: int,
+    levels: NoiseLevels,
+    draws: int,
+    seed: int | None,
+    step: ProgressCallback,
+) -> SensorPlan | None:
+    """`add` sensors chosen one at a time among `candidates` (default: a grid around the layout), or None."""
+    from rigidid.core.plan import suggest_sensors
+
+    if not add:
+        return None
+    if add < 0:
+        raise InputError(f"must be positive, got {add}", source="add")
+    cand_pos = cand_dir = None
+    if candidates is not None:
+        cand = candidates if isinstance(candidates, LayoutFile) else files.load_layout(candidates, require_rank=False)
+        same_units(cand, lay, None if isinstance(candidates, LayoutFile) else str(candidates))
+        _, cand_pos, cand_dir = files.layout_arrays(cand)
+    step(f"choosing {add} sensors to add", 0, add)
+    return suggest_sensors(
+        body, positions, directions, cand_pos, cand_dir, add=add, noise=levels, draws=min(draws, 300), seed=seed,
+        progress=lambda _, done, total: step(f"choosing {add} sensors to add", done, total),
+    )  # fmt: skip

@@ -1,4 +1,6 @@
-"""TODO docstring records."""
+"""Impact records: modes estimated from record files (read in row blocks), the output-error refit of the body
+on the records, record-spread intervals, the records' spectrum, and :func:`identify_test` /
+:func:`identify_records`, what ``rigidid identify`` does with a test's files."""
 
 from __future__ import annotations
 

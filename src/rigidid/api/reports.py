@@ -1,4 +1,4 @@
-"""TODO docstring report."""
+"""The HTML report and the PNG figures of an identification (matplotlib is imported only here, on use)."""
 
 from __future__ import annotations
 

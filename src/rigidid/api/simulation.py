@@ -1,4 +1,4 @@
-"""TODO docstring simulate."""
+"""Forward simulation: the modes (and impact records) of a body on its mounts, written as the files a test gives."""
 
 from __future__ import annotations
 

@@ -449,15 +449,7 @@ def suggest_sensors(
     dirs = normalise_directions(directions) if pos.shape[0] else np.zeros((0, 3))
     if dirs.shape != pos.shape:
         raise InputError(f"directions must match positions {pos.shape}, got {dirs.shape}")
-    cand = candidate_grid(pos) if candidates is None else np.asarray(candidates, dtype=float).reshape(-1, 3)
-    if candidate_directions is None:
-        c_pos = np.repeat(cand, 3, axis=0)
-        c_dir = np.tile(np.eye(3), (cand.shape[0], 1))
-    else:
-        c_dir = normalise_directions(candidate_directions)
-        if c_dir.shape != cand.shape:
-            raise InputError(f"candidate directions must match candidates {cand.shape}, got {c_dir.shape}")
-        c_pos = cand
+    c_pos, c_dir = _sensor_candidates(pos, candidates, candidate_directions)
     if not (1 <= add <= c_pos.shape[0]):
         raise InputError(f"can add between 1 and {c_pos.shape[0]} sensors (the candidates), asked for {add}")
     if not (isinstance(draws, int) and draws >= 2):
@@ -744,89 +736,19 @@ def check_references(
     weakest_parameter = INERTIAL_PARAMETERS[int(np.argmax(np.abs(weak)))]
     load_rank = int(numerical_rank(np.linalg.svd(loads.T, compute_uv=False), loads.shape[1]))
 
-    # the references to add, one at a time (at most three): each sensor's place (and the references'
-    # own) along x, y and z, the one giving the highest rank, then the lowest condition
     places = np.vstack([pos, rpos])
-    labels = list(names or [f"#{i + 1}" for i in range(pos.shape[0])])
-    labels += [f"reference #{j + 1}" for j in range(len(rpos))]
-    unit_text = " " + unit if unit else ""
-    chosen: list[tuple[int, int]] = []
-    current = loads
-    best_rank, best_cond = rank, cond
-    while len(chosen) < 3:
-        best = (-1, math.inf, 0, 0)
-        for i, place in enumerate(places):
-            for axis in range(3):
-                extra = loads_of(place[None], np.eye(3)[axis][None])
-                r, c = _condition(_parameter_map(mass_s, np.hstack([current, extra])))[:2]
-                if r > best[0] or (r == best[0] and c < best[1]):
-                    best = (r, c, i, axis)
-        chosen.append((best[2], best[3]))
-        current = np.hstack([current, loads_of(places[best[2]][None], np.eye(3)[best[3]][None])])
-        best_rank, best_cond = best[0], best[1]
-        if _accepted(best_rank, best_cond) or _accepted(rank, cond):
-            break
-    parts = []
-    for i, axis in chosen:
-        where = f"sensor {labels[i]}" if i < pos.shape[0] else labels[i]
-        coords = ", ".join(f"{v:.4g}" for v in places[i])
-        parts.append(f"along +{'xyz'[axis]} at {where} ({coords}{unit_text})")
-    suggestion = f"add a reference {' and one '.join(parts)}: " + (
-        f"condition {best_cond:.3g}" if best_rank == 10 else f"rank {best_rank} of 10"
-    )
+    chosen, best_rank, best_cond = _references_to_add(places, loads, mass_s, loads_of, rank, cond)
+    suggestion = _suggestion_text(places, pos.shape[0], chosen, best_rank, best_cond, names, unit)
     add_pos = places[chosen[0][0]].copy()
     add_dir = np.eye(3)[chosen[0][1]]
 
-    participation = frequencies = None
-    if body is not None and body.mounts:
-        from rigidid.core.simulate import system_matrices
-
-        m_cg, k_cg, _ = system_matrices(body)
-        eigvals, psi = _mass_normal_modes(k_cg, m_cg)
-        if eigvals is not None:
-            g_cg = sensor_matrix(rpos, rdirs, np.asarray(body.center_of_gravity, dtype=float)).T  # (6, q)
-            norms = np.sqrt(np.einsum("aj,aj->j", g_cg, np.linalg.solve(m_cg, g_cg)))
-            participation = np.max(np.abs(psi.T @ g_cg) / norms, axis=1)
-            frequencies = np.sqrt(np.clip(eigvals, 0.0, None)) / (2.0 * np.pi)
+    participation, frequencies = _participation(body, rpos, rdirs)
 
     ok = _accepted(rank, cond)
     excited = participation is None or bool(np.all(participation >= PARTICIPATION_MIN))
     q = rpos.shape[0]
-    subject = "the reference" if q == 1 else f"the {q} references"
-    absent = [name for name, v in zip(RIGID_LOADS, coverage, strict=True) if v < 1e-9]
-    if absent:
-        listed = absent[0] if len(absent) == 1 else ", a ".join(absent[:-1]) + " or a " + absent[-1]
-        missing = f"no reference gives a {listed}"
-    else:
-        missing = f"the weakest load is the {weakest_load} ({coverage.min():.0%} of the strongest)"
-    if q == 2 and rank < 10:
-        missing += (
-            "; two references never determine the inertia about the axis normal to the two rotations "
-            "they cause: a third is needed"
-        )
-    if ok:
-        statement = (
-            f"{subject} determine{'s' if q == 1 else ''} mass, CG and inertia from the mass line "
-            f"(condition {cond:.3g}); {missing}"
-        )
-    elif rank < 10:
-        statement = (
-            f"{subject} leave{'s' if q == 1 else ''} {weakest_parameter} undetermined (rank {rank} of 10); {missing}"
-        )
-    else:
-        statement = (
-            f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
-            f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
-        )
-    if participation is not None and frequencies is not None:
-        k = int(np.argmin(participation))
-        if not excited:
-            statement += (
-                f"; rigid-body mode {k + 1} ({frequencies[k]:.3g} Hz) is not excited "
-                f"(participation {participation[k]:.1%} < {PARTICIPATION_MIN:.0%})"
-            )
-        else:
-            statement += f"; every rigid-body mode is excited (least: mode {k + 1}, {participation[k]:.0%})"
+    statement = _reference_statement(q, rank, cond, ok, coverage, weakest_load, weakest_parameter)
+    statement += _participation_text(participation, frequencies)
     return ReferenceReport(
         references=q,
         point=point,
@@ -861,3 +783,133 @@ def _mass_normal_modes(stiffness: Array, mass: Array) -> tuple[Array | None, Arr
     eigvals, vecs = np.linalg.eigh(0.5 * (a + a.T))
     psi: Array = np.linalg.solve(chol.T, vecs)
     return eigvals, psi
+
+
+def _references_to_add(
+    places: Array,
+    loads: Array,
+    mass_s: Array,
+    loads_of: Callable[[Array, Array], Array],
+    rank: int,
+    cond: float,
+) -> tuple[list[tuple[int, int]], int, float]:
+    """The references to add, one at a time (at most three), and the rank and condition they reach.
+
+    Each candidate is a place (a sensor's or a reference's) along x, y or z; the one giving the highest
+    rank of the inertial-parameter map, then the lowest condition, is taken.
+    """
+    chosen: list[tuple[int, int]] = []
+    current = loads
+    best_rank, best_cond = rank, cond
+    while len(chosen) < 3:
+        best = (-1, math.inf, 0, 0)
+        for i, place in enumerate(places):
+            for axis in range(3):
+                extra = loads_of(place[None], np.eye(3)[axis][None])
+                r, c = _condition(_parameter_map(mass_s, np.hstack([current, extra])))[:2]
+                if r > best[0] or (r == best[0] and c < best[1]):
+                    best = (r, c, i, axis)
+        chosen.append((best[2], best[3]))
+        current = np.hstack([current, loads_of(places[best[2]][None], np.eye(3)[best[3]][None])])
+        best_rank, best_cond = best[0], best[1]
+        if _accepted(best_rank, best_cond) or _accepted(rank, cond):
+            break
+    return chosen, int(best_rank), float(best_cond)
+
+
+def _participation(body: Body | None, rpos: Array, rdirs: Array) -> tuple[Array | None, Array | None]:
+    """Each rigid-body mode's largest participation in the references' loads, and the modes' frequencies (Hz).
+
+    None, None without a body on mounts (or when its modes cannot be computed).
+    """
+    if body is None or not body.mounts:
+        return None, None
+    from rigidid.core.simulate import system_matrices
+
+    m_cg, k_cg, _ = system_matrices(body)
+    eigvals, psi = _mass_normal_modes(k_cg, m_cg)
+    if eigvals is None:
+        return None, None
+    g_cg = sensor_matrix(rpos, rdirs, np.asarray(body.center_of_gravity, dtype=float)).T  # (6, q)
+    norms = np.sqrt(np.einsum("aj,aj->j", g_cg, np.linalg.solve(m_cg, g_cg)))
+    participation: Array = np.max(np.abs(psi.T @ g_cg) / norms, axis=1)
+    frequencies: Array = np.sqrt(np.clip(eigvals, 0.0, None)) / (2.0 * np.pi)
+    return participation, frequencies
+
+
+def _reference_statement(
+    q: int, rank: int, cond: float, ok: bool, coverage: Array, weakest_load: str, weakest_parameter: str
+) -> str:
+    """What the references determine, and the load they miss or give least of."""
+    subject = "the reference" if q == 1 else f"the {q} references"
+    absent = [name for name, v in zip(RIGID_LOADS, coverage, strict=True) if v < 1e-9]
+    if absent:
+        listed = absent[0] if len(absent) == 1 else ", a ".join(absent[:-1]) + " or a " + absent[-1]
+        missing = f"no reference gives a {listed}"
+    else:
+        missing = f"the weakest load is the {weakest_load} ({coverage.min():.0%} of the strongest)"
+    if q == 2 and rank < 10:
+        missing += (
+            "; two references never determine the inertia about the axis normal to the two rotations "
+            "they cause: a third is needed"
+        )
+    if ok:
+        return (
+            f"{subject} determine{'s' if q == 1 else ''} mass, CG and inertia from the mass line "
+            f"(condition {cond:.3g}); {missing}"
+        )
+    if rank < 10:
+        return f"{subject} leave{'s' if q == 1 else ''} {weakest_parameter} undetermined (rank {rank} of 10); {missing}"
+    return (
+        f"{subject} determine{'s' if q == 1 else ''} {weakest_parameter} poorly (condition {cond:.3g} > "
+        f"{REFERENCE_CONDITION_LIMIT:g}); {missing}"
+    )
+
+
+def _sensor_candidates(
+    positions: Array, candidates: ArrayLike | None, candidate_directions: ArrayLike | None
+) -> tuple[Array, Array]:
+    """Candidate sensors (positions, unit directions): each candidate place along x, y and z unless directed."""
+    cand = candidate_grid(positions) if candidates is None else np.asarray(candidates, dtype=float).reshape(-1, 3)
+    if candidate_directions is None:
+        return np.repeat(cand, 3, axis=0), np.tile(np.eye(3), (cand.shape[0], 1))
+    c_dir = normalise_directions(candidate_directions)
+    if c_dir.shape != cand.shape:
+        raise InputError(f"candidate directions must match candidates {cand.shape}, got {c_dir.shape}")
+    return cand, c_dir
+
+
+def _suggestion_text(
+    places: Array,
+    sensors: int,
+    chosen: list[tuple[int, int]],
+    rank: int,
+    cond: float,
+    names: tuple[str, ...] | None,
+    unit: str,
+) -> str:
+    """The references to add, in words: where (a sensor's or a reference's place), along which axis."""
+    labels = list(names or [f"#{i + 1}" for i in range(sensors)])
+    labels += [f"reference #{j + 1}" for j in range(places.shape[0] - sensors)]
+    unit_text = " " + unit if unit else ""
+    parts = []
+    for i, axis in chosen:
+        where = f"sensor {labels[i]}" if i < sensors else labels[i]
+        coords = ", ".join(f"{v:.4g}" for v in places[i])
+        parts.append(f"along +{'xyz'[axis]} at {where} ({coords}{unit_text})")
+    return f"add a reference {' and one '.join(parts)}: " + (
+        f"condition {cond:.3g}" if rank == 10 else f"rank {rank} of 10"
+    )
+
+
+def _participation_text(participation: Array | None, frequencies: Array | None) -> str:
+    """Whether the references excite every rigid-body mode (empty without a body on mounts)."""
+    if participation is None or frequencies is None:
+        return ""
+    k = int(np.argmin(participation))
+    if participation[k] < PARTICIPATION_MIN:
+        return (
+            f"; rigid-body mode {k + 1} ({frequencies[k]:.3g} Hz) is not excited "
+            f"(participation {participation[k]:.1%} < {PARTICIPATION_MIN:.0%})"
+        )
+    return f"; every rigid-body mode is excited (least: mode {k + 1}, {participation[k]:.0%})"

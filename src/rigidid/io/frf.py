@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.io.dialect import plain_number
 from rigidid.models import ReferencesFile
+from rigidid.units import check_same_units
 
 __all__ = [
     "FRF_COLUMNS",
@@ -216,13 +217,8 @@ def _uff_units_factor(sets: list[dict[str, Any]], src: str, units: dict[str, str
     if not found:
         return 1.0
     file_units = _units_from_164(found[0], src, "dataset 164")
-    if units is not None and file_units != {"length": units["length"], "mass": units["mass"]}:
-        raise InputError(
-            f"units {file_units['length']}, {file_units['mass']} differ from the layout's "
-            f"{units['length']}, {units['mass']}",
-            source=src,
-            location="dataset 164",
-        )
+    if units is not None:
+        check_same_units(file_units, units, source=src, location="dataset 164")
     force = float(found[0].get("force", 0.0))
     if not force > 0.0:  # a standard code with zero factors: coherent or gravitational by the code
         from rigidid.io.uff import _CODE_FACTORS

@@ -1097,50 +1097,65 @@ def write_uff_test(
         unique.setdefault(node_of[sid], p)
     datasets.append(_nodes_dataset(list(unique), np.array(list(unique.values()))))
     for i, (time, data, sensor_ids) in enumerate(records):
-        where = f"records[{i}]"
-        t = np.asarray(time, dtype=float).reshape(-1)
-        d = np.asarray(data, dtype=float)
-        d = d.reshape(-1, 1) if d.ndim == 1 else d
-        sids = [str(s) for s in sensor_ids]
-        if d.shape != (t.size, len(sids)) or t.size < 2:
-            raise InputError(
-                f"data shape {d.shape} does not match {t.size} samples x {len(sids)} sensors", source=where
-            )
-        step = np.diff(t)
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(d))):
-            raise InputError("time and data must be finite", source=where)
-        if np.any(step <= 0.0) or np.ptp(step) > 1e-9 * abs(float(np.mean(step))):
-            raise InputError("the time axis is not uniformly sampled", source=where)
-        for j, sid in enumerate(sids):
-            if sid not in node_of:
-                raise InputError(f"sensor {sid!r} is not in the layout", source=where)
-            datasets.append(
-                {
-                    "type": 58,
-                    "binary": int(binary),
-                    "id1": f"impact {i + 1}, sensor {sid}"[:80],
-                    "id2": "rigidid",
-                    "func_type": 1,
-                    "load_case_id": i + 1,
-                    "rsp_node": node_of[sid],
-                    "rsp_dir": codes[sid],
-                    "ref_node": 0,
-                    "ref_dir": 0,
-                    "abscissa_spacing": 1,
-                    "abscissa_spec_data_type": 17,
-                    "abscissa_axis_lab": "Time",
-                    "abscissa_axis_units_lab": "s",
-                    "ordinate_spec_data_type": 12,
-                    "orddenom_spec_data_type": 0,
-                    "ordinate_axis_lab": "Acceleration",
-                    "x": t.copy(),
-                    "data": np.ascontiguousarray(d[:, j]),
-                }
-            )
+        datasets.extend(_record_datasets(i, time, data, sensor_ids, node_of, codes, binary))
     if mode_rows:
         datasets.extend(_measured_modes(mode_rows, ids, node_of, codes, list(unique), units))
     _write_sets(path, datasets)
     return node_of
+
+
+def _record_datasets(
+    i: int,
+    time: ArrayLike,
+    data: ArrayLike,
+    sensor_ids: Sequence[str],
+    node_of: dict[str, int],
+    codes: dict[str, int],
+    binary: bool,
+) -> list[dict[str, Any]]:
+    """Impact `i`'s records as datasets 58, one per sensor (checked: shape, finite, uniform time)."""
+    out: list[dict[str, Any]] = []
+    where = f"records[{i}]"
+    t = np.asarray(time, dtype=float).reshape(-1)
+    d = np.asarray(data, dtype=float)
+    d = d.reshape(-1, 1) if d.ndim == 1 else d
+    sids = [str(s) for s in sensor_ids]
+    if d.shape != (t.size, len(sids)) or t.size < 2:
+        raise InputError(
+            f"data shape {d.shape} does not match {t.size} samples x {len(sids)} sensors", source=where
+        )
+    step = np.diff(t)
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(d))):
+        raise InputError("time and data must be finite", source=where)
+    if np.any(step <= 0.0) or np.ptp(step) > 1e-9 * abs(float(np.mean(step))):
+        raise InputError("the time axis is not uniformly sampled", source=where)
+    for j, sid in enumerate(sids):
+        if sid not in node_of:
+            raise InputError(f"sensor {sid!r} is not in the layout", source=where)
+        out.append(
+            {
+                "type": 58,
+                "binary": int(binary),
+                "id1": f"impact {i + 1}, sensor {sid}"[:80],
+                "id2": "rigidid",
+                "func_type": 1,
+                "load_case_id": i + 1,
+                "rsp_node": node_of[sid],
+                "rsp_dir": codes[sid],
+                "ref_node": 0,
+                "ref_dir": 0,
+                "abscissa_spacing": 1,
+                "abscissa_spec_data_type": 17,
+                "abscissa_axis_lab": "Time",
+                "abscissa_axis_units_lab": "s",
+                "ordinate_spec_data_type": 12,
+                "orddenom_spec_data_type": 0,
+                "ordinate_axis_lab": "Acceleration",
+                "x": t.copy(),
+                "data": np.ascontiguousarray(d[:, j]),
+            }
+        )
+    return out
 
 
 def _measured_modes(

@@ -1,0 +1,150 @@
+"""The typer application: the commands registered, exit statuses, closed standard streams and SIGPIPE."""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import TYPE_CHECKING, Annotated, NoReturn
+
+import typer
+
+from rigidid import __version__
+from rigidid.cli.common import EXIT_INPUT, StdoutGone
+from rigidid.cli.convert import convert
+from rigidid.cli.identify import identify
+from rigidid.cli.modes import modes
+from rigidid.cli.plan import plan
+from rigidid.cli.report import report
+from rigidid.cli.simulate import simulate
+
+if TYPE_CHECKING:
+    pass
+
+
+app = typer.Typer(
+    name="rigidid",
+    help="Centre of gravity, inertia tensor and support stiffness/damping of a rigid body from impact-test modes.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+for _command in (identify, modes, simulate, plan, report, convert):
+    app.command()(_command)
+
+
+def _version(value: bool) -> None:
+    if value:
+        sys.stdout.write(f"rigidid {__version__}\n")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool, typer.Option("--version", "-V", callback=_version, is_eager=True, help="Print the version and exit.")
+    ] = False,
+) -> None:
+    """Rigid-body properties from the modes of an impact test."""
+
+
+class _ClosedStdout:
+    """Stands for a standard output that was closed (``>&-``): writing to it is a broken pipe."""
+
+    encoding = "utf-8"
+
+    def write(self, text: str) -> int:
+        raise BrokenPipeError(32, "standard output is closed")
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+    def fileno(self) -> int:
+        import io
+
+        raise io.UnsupportedOperation("standard output is closed")
+
+
+def _plug_closed_descriptors() -> None:
+    """Point closed descriptors 0-2 at /dev/null, so that no file rigidid opens becomes one of them."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            opened = os.open(os.devnull, os.O_RDWR)
+            if opened != fd:  # pragma: no cover - the lowest free descriptor is the closed one
+                os.dup2(opened, fd)
+                os.close(opened)
+            if fd == 1:
+                sys.stdout = _ClosedStdout()
+            elif fd == 2:
+                sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+    if sys.stdout is None:
+        sys.stdout = _ClosedStdout()
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+
+
+def _end_quietly_by_sigpipe() -> NoReturn:
+    """Standard output's reader has gone: end as a Unix filter does, killed by SIGPIPE, nothing printed."""
+    import signal
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)  # nothing left to flush at exit
+    if hasattr(signal, "SIGPIPE"):
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGPIPE)
+    raise SystemExit(141)  # pragma: no cover - where there is no SIGPIPE
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Run the command line on `argv` (default ``sys.argv[1:]``); return the exit status.
+
+    Every error is one line on standard error: usage errors (status 2) included.
+    A standard output that is closed or whose reader has gone raises
+    :class:`BrokenPipeError` out of here; :func:`main` turns it into a quiet end.
+    """
+    from typer import exceptions as typer_exceptions
+    from typer._click import exceptions as click_exceptions
+
+    try:
+        try:
+            status = app(args=argv, prog_name="rigidid", standalone_mode=False)
+        except click_exceptions.NoArgsIsHelpError:
+            return EXIT_INPUT
+        except click_exceptions.UsageError as exc:
+            command = exc.ctx.command_path if exc.ctx is not None else "rigidid"
+            message = " ".join(exc.format_message().split()) or "usage error"
+            sys.stderr.write(f"rigidid: error: {command}: {message} (see {command} --help)\n")
+            return EXIT_INPUT
+        except typer_exceptions.Abort:
+            sys.stderr.write("rigidid: error: aborted\n")
+            return EXIT_INPUT
+        sys.stdout.flush()
+    except (StdoutGone, BrokenPipeError):
+        raise BrokenPipeError(32, "standard output is closed") from None
+    except OSError as exc:
+        sys.stderr.write(f"rigidid: error: standard output: {exc.strerror or exc}\n")
+        return EXIT_INPUT
+    return int(status or 0)
+
+
+def main() -> None:
+    """Entry point of the ``rigidid`` console script."""
+    _plug_closed_descriptors()
+    try:
+        status = run()
+    except BrokenPipeError:
+        _end_quietly_by_sigpipe()
+    except BaseException:
+        raise
+    if status:
+        # a failed flush at exit must not print a second message
+        try:
+            sys.stdout.flush()
+        except OSError:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+    raise SystemExit(status)

@@ -1,0 +1,182 @@
+"""``rigidid identify``: CG, inertia, stiffness and damping from modes, records or FRFs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from rigidid.cli.common import (
+    add_mounts,
+    check_force_unit,
+    check_outputs,
+    identify_files,
+    make_console,
+    noise_overrides,
+    parse_modes,
+    reported,
+    write_csv,
+    write_json,
+)
+from rigidid.cli.options import (
+    AngleNoise,
+    Band,
+    CsvDir,
+    DampingNoise,
+    Decimate,
+    Draws,
+    ForceUnit,
+    FrequencyNoise,
+    FrfPath,
+    Geometry,
+    IdMethod,
+    Inputs,
+    JsonPath,
+    Mass,
+    MaxOrder,
+    ModalMethod,
+    ModesUsed,
+    MountsPath,
+    NModes,
+    PositionNoise,
+    RecordsFlag,
+    ReferencesPath,
+    Refine,
+    Resample,
+    Seed,
+    ShapeNoise,
+    TorqueAxis,
+    Units,
+)
+from rigidid.errors import InputError
+
+if TYPE_CHECKING:
+    pass
+
+
+def identify(
+    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json), or a UFF file.", show_default=False)],
+    inputs: Inputs = None,
+    records: RecordsFlag = False,
+    mass: Mass = None,
+    modes_used: ModesUsed = None,
+    method: IdMethod = "structured",
+    json_path: JsonPath = None,
+    uff: Annotated[
+        Path | None, typer.Option(help="Also write the identified modes and geometry as a UFF file (15, 55, 82).")
+    ] = None,
+    uncertainty: Draws = 0,
+    frequency_noise: FrequencyNoise = None,
+    damping_noise: DampingNoise = None,
+    shape_noise: ShapeNoise = None,
+    position_noise: PositionNoise = None,
+    angle_noise: AngleNoise = None,
+    seed: Seed = 0,
+    resample: Resample = 0,
+    modal_method: ModalMethod = None,
+    n_modes: NModes = 6,
+    band: Band = None,
+    max_order: MaxOrder = None,
+    decimate: Decimate = None,
+    units: Units = None,
+    geometry: Geometry = None,
+    force_unit: ForceUnit = None,
+    csv: CsvDir = None,
+    frf: FrfPath = None,
+    references: ReferencesPath = None,
+    mounts: MountsPath = None,
+    torque_axis: TorqueAxis = None,
+    refine: Refine = True,
+) -> None:
+    """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
+    with reported():
+        from rigidid.io.atomic import OutputSet
+        from rigidid.jsonout import result_to_dict
+
+        if method in ("massline", "residues") or frf is not None:
+            check_outputs({"--json": json_path})
+            _identify_massline(
+                layout, frf, references, mass=mass, band=band, method=method, json_path=json_path,
+                modes=inputs, modes_used=modes_used,
+            )  # fmt: skip
+            return
+        force_unit = check_force_unit(force_unit)
+
+        check_outputs({"--json": json_path, "--uff": uff}, {"--csv": csv})
+        noise = noise_overrides(
+            frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
+            angle_deg=angle_noise,
+        )  # fmt: skip
+        modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        run = identify_files(
+            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
+        )  # fmt: skip
+        result, estimate = run.result, run.estimate
+        result = add_mounts(result, mounts, torque_axis)
+        with OutputSet():  # every output or none
+            if json_path is not None:
+                out = result_to_dict(result, force_unit)
+                if estimate is not None:
+                    from rigidid.jsonout import estimate_to_dict
+
+                    out["modal_estimation"] = estimate_to_dict(estimate)
+                write_json(json_path, out)
+            if uff is not None:
+                from rigidid.io.uff import write_uff
+
+                write_uff(
+                    uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units
+                )
+            if csv is not None:
+                write_csv(csv, result, force_unit)
+        if json_path != "-":
+            from rigidid.render import result_tables
+
+            console = make_console()
+            if estimate is not None:
+                from rigidid.render import estimate_tables
+
+                console.print(estimate_tables(estimate))
+            console.print(result_tables(result, force_unit))
+
+
+def _identify_massline(
+    layout: Path,
+    frf: Path | None,
+    references: Path | None,
+    *,
+    mass: float | None,
+    band: tuple[float, float] | None,
+    method: str,
+    json_path: str | None,
+    modes: list[Path] | None = None,
+    modes_used: str | None = None,
+) -> None:
+    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api.frf)."""
+    from rigidid.api import frf as api_frf
+    from rigidid.jsonout import massline_to_dict
+
+    if method not in ("massline", "residues"):
+        raise InputError(f"FRFs are identified with --method massline or residues, not {method!r}", source="--method")
+    if frf is None:
+        raise InputError(f"--method {method} needs --frf FRF.csv", source="--frf")
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    modes_file = None
+    if method == "residues" and modes:
+        if len(modes) != 1:
+            raise InputError("--method residues takes one modes.csv (its rigid-body poles)", source="MODES")
+        modes_file = modes[0]
+    parsed = parse_modes(modes_used) if method == "residues" else None
+    labels = tuple(parsed) if parsed is not None else None
+    result = api_frf.identify_massline(
+        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels, method=method
+    )
+    if json_path is not None:
+        write_json(json_path, massline_to_dict(result))
+    if json_path != "-":
+        from rigidid.render import massline_tables
+
+        make_console().print(massline_tables(result))

@@ -1,0 +1,260 @@
+"""Option and argument types shared by the commands (``Annotated`` typer options), and the map from the API's
+parameter names to the options that set them (:data:`FLAGS`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+if TYPE_CHECKING:
+    pass
+
+
+UFF_SUFFIXES = (".uff", ".unv")
+
+
+UNCERTAINTY_PANEL = "Uncertainty"
+
+
+RECORDS_PANEL = "Time records"
+
+
+Mass = Annotated[float | None, typer.Option(help="Mass of the body in the layout's mass unit (overrides the layout).")]
+
+
+ModesUsed = Annotated[
+    str | None,
+    typer.Option("--modes", help="The six rigid-body mode labels, e.g. 1,2,3,5,6,7.", show_default=False),
+]
+
+
+IdMethod = Annotated[
+    str,
+    typer.Option(
+        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40); from --frf: massline, "
+        "or residues (scaled modes, with MODES)."
+    ),
+]
+
+
+FrfPath = Annotated[
+    Path | None, typer.Option("--frf", help="FRF CSV (accelerance) for --method massline.", show_default=False)
+]
+
+
+ReferencesPath = Annotated[
+    Path | None, typer.Option(help="references.json: force points and directions of the FRFs.", show_default=False)
+]
+
+
+JsonPath = Annotated[
+    str | None,
+    typer.Option("--json", help="Also write the result as JSON to PATH ('-': standard output only).", metavar="PATH"),
+]
+
+
+Draws = Annotated[
+    int, typer.Option(help="Monte Carlo draws for uncertainty intervals (0: none).", rich_help_panel=UNCERTAINTY_PANEL)
+]
+
+
+FrequencyNoise = Annotated[
+    float | None,
+    typer.Option(help="Relative std of natural frequencies \\[default: 0.001].", rich_help_panel=UNCERTAINTY_PANEL),
+]
+
+
+DampingNoise = Annotated[
+    float | None,
+    typer.Option(help="Relative std of damping ratios \\[default: 0.05].", rich_help_panel=UNCERTAINTY_PANEL),
+]
+
+
+ShapeNoise = Annotated[
+    float | None,
+    typer.Option(
+        help="Std of shape values relative to each mode's RMS \\[default: from the rigid-body fit with more than "
+        "six sensors, else 0.01].",
+        rich_help_panel=UNCERTAINTY_PANEL,
+    ),
+]
+
+
+PositionNoise = Annotated[
+    float | None,
+    typer.Option(help="Std of sensor positions (length unit) \\[default: 0].", rich_help_panel=UNCERTAINTY_PANEL),
+]
+
+
+AngleNoise = Annotated[
+    float | None,
+    typer.Option(help="Std of sensor directions (degrees) \\[default: 0].", rich_help_panel=UNCERTAINTY_PANEL),
+]
+
+
+Seed = Annotated[int, typer.Option(help="Seed of the random draws.")]
+
+
+Resample = Annotated[
+    int,
+    typer.Option(
+        help="With --records: also re-identify on K interleaved segments of the records for a data-driven interval "
+        "(sample rate / K must stay above twice the highest mode; 8 is a good choice).",
+        metavar="K",
+        rich_help_panel=UNCERTAINTY_PANEL,
+    ),
+]
+
+
+Inputs = Annotated[
+    list[Path] | None,
+    typer.Argument(
+        help="modes.csv; or, with --records, one records.csv per impact. Not needed when LAYOUT is a UFF file "
+        "with modes (55) or records (58).",
+        show_default=False,
+    ),
+]
+
+
+RecordsFlag = Annotated[
+    bool,
+    typer.Option(
+        "--records", help="The inputs are impact records: estimate the modes first.", rich_help_panel=RECORDS_PANEL
+    ),
+]
+
+
+ModalMethod = Annotated[
+    str | None,
+    typer.Option(help="Modal estimator for records: era or ar \\[default: era].", rich_help_panel=RECORDS_PANEL),
+]
+
+
+Band = Annotated[
+    tuple[float, float] | None,
+    typer.Option(help="Frequency band of the modes (Hz).", metavar="FMIN FMAX", rich_help_panel=RECORDS_PANEL),
+]
+
+
+MaxOrder = Annotated[int | None, typer.Option(help="Highest model order of the sweep.", rich_help_panel=RECORDS_PANEL)]
+
+
+Decimate = Annotated[
+    int | None, typer.Option(help="Decimation factor \\[default: from the spectrum].", rich_help_panel=RECORDS_PANEL)
+]
+
+
+NModes = Annotated[
+    int, typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).")
+]
+
+
+ForceUnit = Annotated[
+    str | None,
+    typer.Option(
+        help="Force unit of stiffness and damping: N, kN or lbf \\[default: N for kg, g, t; lbf for lb, slug].",
+        metavar="N|kN|lbf",
+    ),
+]
+
+
+CsvDir = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv", help="Also write each result matrix as a CSV file (for spreadsheets) into DIR.", metavar="DIR"
+    ),
+]
+
+
+Refine = Annotated[
+    bool,
+    typer.Option(
+        "--refine/--no-refine",
+        help="With --records: refine the body by an output-error fit to the records, with Cramér-Rao intervals.",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+
+
+Units = Annotated[
+    str | None,
+    typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
+]
+
+
+MountsPath = Annotated[
+    Path | None,
+    typer.Option(
+        "--mounts",
+        help="mounts.json (or a body.json): mount positions and axes; adds per-mount rates fitted to K and C.",
+        metavar="FILE",
+        show_default=False,
+    ),
+]
+
+
+TorqueAxis = Annotated[
+    str | None,
+    typer.Option(
+        help="Axis of a pure torque (x, y, z or X,Y,Z; for an engine the crankshaft): adds the torque roll axis.",
+        metavar="AXIS",
+        show_default=False,
+    ),
+]
+
+
+Geometry = Annotated[
+    Path | None,
+    typer.Option(
+        help="A UFF file with the nodes (15/2411), coordinate systems (18/2420) and units (164) of a UFF input "
+        "that lacks them.",
+        metavar="UFF",
+    ),
+]
+
+
+FLAGS = {
+    "modes_used": "--modes",
+    "uncertainty": "--uncertainty",
+    "draws": "--uncertainty",
+    "segments": "--resample",
+    "add": "--add",
+    "impacts": "--impact",
+    "band": "--band",
+    "max_order": "--max-order",
+    "units": "--units",
+    "frf_format": "--frf-format",
+    "modal_method": "--modal-method",
+    "geometry": "--geometry",
+}
+"""API parameter names, as the API's errors name them, and the options that set them."""
+
+# simulate's record and FRF outputs
+RecordsOut = Annotated[
+    Path | None,
+    typer.Option(help="Also write impulse-response records (record-<k>.csv) into DIR.", rich_help_panel=RECORDS_PANEL),
+]
+Impacts = Annotated[
+    list[str] | None,
+    typer.Option(
+        help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
+        "\\[default: two impacts at the first sensors].",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+SampleRate = Annotated[float, typer.Option(help="Samples per second.", rich_help_panel=RECORDS_PANEL)]
+Duration = Annotated[float, typer.Option(help="Free decay per record (s).", rich_help_panel=RECORDS_PANEL)]
+Pretrigger = Annotated[float, typer.Option(help="Record before the impact (s).", rich_help_panel=RECORDS_PANEL)]
+RecordNoise = Annotated[
+    float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=RECORDS_PANEL)
+]
+FrfFormat = Annotated[
+    str | None,
+    typer.Option(
+        "--frf-format",
+        help="Format of --frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
+        show_default=False,
+    ),
+]

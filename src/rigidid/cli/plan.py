@@ -1,0 +1,121 @@
+"""``rigidid plan``: check a sensor layout (and hammer points) before the test, predict and improve it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from rigidid.cli.common import (
+    EXIT_IDENTIFICATION,
+    check_options,
+    check_outputs,
+    make_console,
+    noise_overrides,
+    parse_units,
+    reported,
+    write_json,
+)
+from rigidid.cli.options import (
+    UNCERTAINTY_PANEL,
+    AngleNoise,
+    DampingNoise,
+    FrequencyNoise,
+    Geometry,
+    JsonPath,
+    PositionNoise,
+    Seed,
+    ShapeNoise,
+    Units,
+)
+from rigidid.errors import InputError, named_source
+
+if TYPE_CHECKING:
+    pass
+
+
+def plan(
+    layout: Annotated[Path, typer.Argument(help="Planned sensor layout (layout.json or UFF).", show_default=False)],
+    body: Annotated[
+        Path | None, typer.Option(help="Estimate of the body and mounts (body.json) to predict the uncertainty.")
+    ] = None,
+    candidates: Annotated[
+        Path | None,
+        typer.Option(help="Candidate sensors, as a layout.json \\[default: a grid over the sensors' bounding box]."),
+    ] = None,
+    add: Annotated[int, typer.Option(help="Suggest this many sensors to add, one at a time (needs --body).")] = 0,
+    draws: Annotated[
+        int, typer.Option(help="Monte Carlo draws per prediction.", rich_help_panel=UNCERTAINTY_PANEL)
+    ] = 1000,
+    frequency_noise: FrequencyNoise = None,
+    damping_noise: DampingNoise = None,
+    shape_noise: ShapeNoise = None,
+    position_noise: PositionNoise = None,
+    angle_noise: AngleNoise = None,
+    seed: Seed = 0,
+    json_path: JsonPath = None,
+    units: Units = None,
+    geometry: Geometry = None,
+    references: Annotated[
+        Path | None,
+        typer.Option(
+            help="references.json of an FRF test: do its hammer points excite all six rigid-body motions?",
+            show_default=False,
+        ),
+    ] = None,
+    mounts: Annotated[
+        Path | None,
+        typer.Option("--mounts", help="mounts.json: check that the mount layout determines every per-mount rate."),
+    ] = None,
+) -> None:
+    """Check a sensor layout before the test; with a body estimate, predict and improve it."""
+    with reported():
+        from rigidid import api
+        from rigidid.io.atomic import OutputSet
+        from rigidid.jsonout import plan_to_dict
+
+        if draws < 2:
+            raise InputError(f"need at least 2 draws, got {draws}", source="--draws")
+        check_options(draws=draws, add=add, seed=seed)
+        check_outputs({"--json": json_path})
+        noise = noise_overrides(
+            frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
+            angle_deg=angle_noise,
+        )  # fmt: skip
+        from rigidid.progress import terminal_progress
+
+        with named_source(str(body) if body is not None else None), terminal_progress() as progress:
+            result = api.plan(
+                layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
+                units=parse_units(units), geometry=geometry, progress=progress, references=references,
+                mounts=mounts,
+            )  # fmt: skip
+        with OutputSet():
+            if json_path is not None:
+                write_json(json_path, plan_to_dict(result))
+        if json_path != "-":
+            from rigidid.render import plan_tables
+
+            make_console().print(plan_tables(result))
+        if not result.report.ok or (result.references is not None and not result.references.ok):
+            raise typer.Exit(EXIT_IDENTIFICATION)
+
+
+def parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    try:
+        where, along = text.split(":")
+        position = tuple(float(v) for v in where.split(","))
+        direction = tuple(float(v) for v in along.split(","))
+    except ValueError:
+        raise InputError(f"expected X,Y,Z:DX,DY,DZ, got {text!r}", source="--impact") from None
+    if len(position) != 3 or len(direction) != 3:
+        raise InputError(f"expected X,Y,Z:DX,DY,DZ, got {text!r}", source="--impact")
+    from rigidid.limits import check_number
+
+    for value in (*position, *direction):
+        check_number(value, "--impact")
+    big = max(abs(v) for v in direction)
+    if big == 0.0:
+        raise InputError(f"the force direction of {text!r} is the zero vector", source="--impact")
+    return position, tuple(v / big for v in direction)

@@ -1,0 +1,121 @@
+"""``rigidid report``: the HTML report (and PNG figures) of an identification."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rigidid.cli.common import add_mounts, check_force_unit, check_outputs, identify_files, noise_overrides, reported
+from rigidid.cli.options import (
+    AngleNoise,
+    Band,
+    DampingNoise,
+    Decimate,
+    Draws,
+    ForceUnit,
+    FrequencyNoise,
+    Geometry,
+    IdMethod,
+    Inputs,
+    Mass,
+    MaxOrder,
+    ModalMethod,
+    ModesUsed,
+    MountsPath,
+    NModes,
+    PositionNoise,
+    RecordsFlag,
+    Refine,
+    Resample,
+    Seed,
+    ShapeNoise,
+    TorqueAxis,
+    Units,
+)
+
+if TYPE_CHECKING:
+    pass
+
+
+def report(
+    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json), or a UFF file.", show_default=False)],
+    inputs: Inputs = None,
+    output: Annotated[Path, typer.Option("-o", "--output", help="The HTML report to write.")] = Path("report.html"),
+    png: Annotated[Path | None, typer.Option(help="Also write the figures as PNG files into DIR.")] = None,
+    body: Annotated[Path | None, typer.Option(help="body.json whose mounts (and their stiffness) to draw.")] = None,
+    title: Annotated[
+        str | None, typer.Option(help="Title of the report \\[default: the layout's name, else 'rigidid report'].")
+    ] = None,
+    records: RecordsFlag = False,
+    mass: Mass = None,
+    modes_used: ModesUsed = None,
+    method: IdMethod = "structured",
+    uncertainty: Draws = 0,
+    frequency_noise: FrequencyNoise = None,
+    damping_noise: DampingNoise = None,
+    shape_noise: ShapeNoise = None,
+    position_noise: PositionNoise = None,
+    angle_noise: AngleNoise = None,
+    seed: Seed = 0,
+    resample: Resample = 0,
+    modal_method: ModalMethod = None,
+    n_modes: NModes = 6,
+    band: Band = None,
+    max_order: MaxOrder = None,
+    decimate: Decimate = None,
+    units: Units = None,
+    geometry: Geometry = None,
+    force_unit: ForceUnit = None,
+    refine: Refine = True,
+    mounts: MountsPath = None,
+    torque_axis: TorqueAxis = None,
+) -> None:
+    """Identify, then write one self-contained HTML report with tables and pictures."""
+    with reported():
+        from rigidid import api
+        from rigidid.io.atomic import OutputSet, write_text_atomic
+        from rigidid.io.files import load_body
+        from rigidid.units import check_same_units
+
+        force_unit = check_force_unit(force_unit)
+        check_outputs({"--output": output}, {"--png": png})
+        noise = noise_overrides(
+            frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
+            angle_deg=angle_noise,
+        )  # fmt: skip
+        modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
+        run = identify_files(
+            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
+            noise=noise, seed=seed, resample=resample, geometry=geometry, spectrum=True, refine=refine, mounts=mounts,
+        )  # fmt: skip
+        result, estimate = run.result, run.estimate
+        result = add_mounts(result, mounts, torque_axis)
+        spec = None
+        if body is not None:
+            spec = load_body(body)
+            check_same_units(spec.units, result.units, source=str(body))
+        diagram = None if estimate is None else estimate.diagram
+        from rigidid.progress import terminal_progress
+
+        with terminal_progress() as progress:
+            text = api.report(
+                result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
+                force_unit=force_unit, body=spec, records=run.records, progress=progress,
+                spectrum=run.spectrum,
+            )  # fmt: skip
+        paths: list[Any] = []
+        with OutputSet() as outs:  # every output or none
+            write_text_atomic(output, text)
+            if png is not None:
+                outs.folder(png, option="--png")
+                with terminal_progress() as progress:
+                    paths = api.report_pngs(
+                        result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
+                        records=run.records, progress=progress, spectrum=run.spectrum,
+                    )  # fmt: skip
+        sys.stderr.write(f"rigidid: wrote {output}\n")
+        if png is not None:
+            sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")

@@ -1,0 +1,162 @@
+"""``rigidid simulate``: modes, impact records or FRFs of a body on mounts."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rigidid.cli.common import check_options, check_outputs, reported
+from rigidid.cli.options import (
+    Duration,
+    FrfFormat,
+    Impacts,
+    Pretrigger,
+    RecordNoise,
+    RecordsOut,
+    ReferencesPath,
+    SampleRate,
+)
+from rigidid.cli.plan import parse_impact
+from rigidid.errors import InputError, named_source
+
+if TYPE_CHECKING:
+    pass
+
+
+def simulate(
+    body: Annotated[Path, typer.Argument(help="Body on mounts (body.json).", show_default=False)],
+    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json).", show_default=False)],
+    output: Annotated[str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).")] = "-",
+    frequency_noise: Annotated[float, typer.Option(help="Relative std of frequency noise (0.001 = 0.1 %).")] = 0.0,
+    damping_noise: Annotated[float, typer.Option(help="Relative std of damping-ratio noise.")] = 0.0,
+    shape_noise: Annotated[float, typer.Option(help="Complex shape noise relative to each mode's RMS.")] = 0.0,
+    seed: Annotated[int | None, typer.Option(help="Seed of the noise.")] = None,
+    records: RecordsOut = None,
+    impact: Impacts = None,
+    sample_rate: SampleRate = 512.0,
+    duration: Duration = 8.0,
+    pretrigger: Pretrigger = 0.1,
+    record_noise: RecordNoise = 0.0,
+    frf: Annotated[
+        Path | None, typer.Option("--frf", help="Also write accelerance FRFs to PATH (CSV, or UFF for .uff/.unv).")
+    ] = None,
+    references: ReferencesPath = None,
+    frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
+    frf_format: FrfFormat = None,
+    mounts: Annotated[
+        Path | None,
+        typer.Option("--mounts", help="mounts.json whose mounts (with their stiffness) replace the body's."),
+    ] = None,
+) -> None:
+    """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
+    with reported():
+        from rigidid import api
+        from rigidid.io.atomic import OutputSet, write_text_atomic
+        from rigidid.io.files import modes_csv_text
+        from rigidid.limits import check_number
+
+        for name, value in (
+            ("--frequency-noise", frequency_noise),
+            ("--damping-noise", damping_noise),
+            ("--shape-noise", shape_noise),
+            ("--record-noise", record_noise),
+        ):
+            check_number(value, name, nonnegative=True)
+        check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
+        check_outputs({"--output": output, "--frf": frf}, {"--records": records})
+        impacts = [parse_impact(text) for text in impact] if impact else None
+        if mounts is not None:
+            body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
+        with named_source(str(body)):
+            table = api.simulate(
+                body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
+                seed=seed,
+            )  # fmt: skip
+        text = modes_csv_text(table)
+        with OutputSet() as outs:  # every output or none
+            written = []
+            if records is not None:
+                written = _simulate_records(
+                    body, layout, records, impacts=impacts, sample_rate=sample_rate, duration=duration,
+                    pretrigger=pretrigger, noise=record_noise, seed=seed,
+                )  # fmt: skip
+            if frf is not None:
+                _simulate_frf(body, layout, frf, references, frf_noise, seed, frf_format)
+            if output == "-":
+                outs.stdout(text)
+            else:
+                write_text_atomic(output, text)
+        if records is not None:
+            sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
+        if output != "-":
+            sys.stderr.write(
+                f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
+            )
+
+
+def _simulate_records(body: Path, layout: Path, records: Path, **options: Any) -> list[Path]:
+    """``simulate --records DIR``: the impact records written; a record length the rate cannot fill blames both."""
+    from rigidid import api
+    from rigidid.progress import terminal_progress
+
+    try:
+        with terminal_progress() as progress:
+            written: list[Path] = api.simulate_records(body, layout, records, progress=progress, **options)
+            return written
+    except InputError as exc:
+        if exc.source == "sample_rate":
+            raise InputError(exc.message, source="--sample-rate/--duration") from None
+        raise
+
+
+def _simulate_frf(
+    body: Path,
+    layout: Path,
+    out: Path,
+    references: Path | None,
+    noise: float,
+    seed: int | None,
+    frf_format: str | None = None,
+) -> None:
+    import numpy as np
+
+    from rigidid.api import frf as api_frf
+    from rigidid.io import files
+    from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
+    from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
+
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    if not noise >= 0.0:
+        raise InputError(f"must be zero or positive, got {noise}", source="--frf-noise")
+    fmt = frf_format_from(out, frf_format)
+    if fmt == "csv":
+        data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
+        write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+    else:
+        lay = files.load_layout(layout, require_rank=False)
+        refs = load_references(references)
+        data = api_frf.simulate_frf(body, lay, refs, noise=noise, seed=seed)
+        # UFF 58 states the abscissa as start and step in 6 digits: simulate on a grid that has them
+        step = float(f"{data.frequencies[0]:.5e}")
+        grid = step * np.arange(1, data.frequencies.size + 1, dtype=np.float64)
+        data = api_frf.simulate_frf(body, lay, refs, frequencies=grid, noise=noise, seed=seed)
+        dirs = files.layout_arrays(lay)[2]
+        rdirs = reference_arrays(refs)[2]
+        try:
+            content = frf_uff_bytes(
+                data.frequencies, data.frf, data.sensor_ids, dirs, data.reference_ids, rdirs,
+                {"length": lay.units.length, "mass": lay.units.mass}, binary=fmt == "uff",
+            )  # fmt: skip
+        except InputError as exc:
+            if exc.source in ("sensors", "references"):
+                exc.source = str(layout if exc.source == "sensors" else references)
+            raise
+        write_bytes_atomic(out, content)
+    sys.stderr.write(
+        f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
+        f"({data.frequencies.size} lines) to {out}\n"
+    )
