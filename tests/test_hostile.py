@@ -279,13 +279,17 @@ def test_broken_pipe_ends_quietly() -> None:
     assert err == ""
 
 
-def test_closed_stdout_ends_quietly_without_a_traceback() -> None:
+@pytest.mark.parametrize("json_target", ["-", "out.json"])
+def test_closed_stdout_is_one_line_and_writes_nothing(tmp_path: Path, json_target: str) -> None:
+    # a closed standard output is not a broken pipe (no reader has gone): one line, exit 2, no output file
     proc = subprocess.run(
-        f"'{sys.executable}' -m rigidid simulate '{FOUR / 'body.json'}' '{FOUR / 'layout.json'}' >&-",
-        shell=True, capture_output=True, text=True, timeout=60, check=False,
+        f"'{sys.executable}' -m rigidid identify '{PAPER / 'layout.json'}' '{PAPER / 'modes.csv'}' "
+        f"--json {json_target} >&-",
+        shell=True, capture_output=True, text=True, timeout=60, check=False, cwd=tmp_path,
     )  # fmt: skip
-    assert proc.returncode in (-signal.SIGPIPE, 128 + signal.SIGPIPE)
-    assert proc.stderr == ""
+    assert proc.returncode == 2
+    assert one_error(proc.stderr) == "rigidid: error: standard output: it is closed (>&-): nothing written"
+    assert list(tmp_path.iterdir()) == []
 
 
 @ROOT_ONLY

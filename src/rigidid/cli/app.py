@@ -49,12 +49,15 @@ def _root(
 
 
 class _ClosedStdout:
-    """Stands for a standard output that was closed (``>&-``): writing to it is a broken pipe."""
+    """Stands for a standard output that was closed (``>&-``): writing to it is an error (EBADF), not a broken
+    pipe (no reader has gone; the caller gave no output): one line on stderr, exit 2."""
 
     encoding = "utf-8"
 
     def write(self, text: str) -> int:
-        raise BrokenPipeError(32, "standard output is closed")
+        import errno
+
+        raise OSError(errno.EBADF, "it is closed (>&-): nothing written")
 
     def flush(self) -> None:
         pass

@@ -90,6 +90,19 @@ def make_console() -> Any:
     return Console(width=None if sys.stdout.isatty() else 150)
 
 
+def stage_tables(*renderables: Any) -> None:
+    """Stage rich tables for standard output in the active output set: written first when it publishes,
+    so that a standard output that fails (a full disk, a closed stream) leaves no output file behind."""
+    from rigidid.io.atomic import transaction
+
+    console = make_console()
+    with console.capture() as captured:
+        for item in renderables:
+            console.print(item)
+    with transaction() as outs:
+        outs.stdout(captured.get())
+
+
 def check_force_unit(text: str | None) -> str | None:
     from rigidid.units import FORCE_UNITS
 
@@ -199,7 +212,7 @@ def check_outputs(files: dict[str, Any], folders: dict[str, Any] | None = None) 
 
 def check_options(**values: Any) -> None:
     """Refuse option values that would overflow or run without bound (name -> value, by flag)."""
-    from rigidid.limits import MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number
+    from rigidid.limits import MAX_MAGNITUDE, MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number
 
     counts = {"--n-modes": (1, MAX_MODES), "--max-order": (1, MAX_MODEL_ORDER), "--resample": (0, MAX_SEGMENTS),
               "--decimate": (1, 10_000), "--uncertainty": (0, 1_000_000), "--draws": (2, 1_000_000),
@@ -214,7 +227,9 @@ def check_options(**values: Any) -> None:
         elif flag in counts and value is not None:
             check_count(value, flag, low=counts[flag][0], high=counts[flag][1])
         elif isinstance(value, float):
-            check_number(value, flag, positive=name in ("sample_rate", "duration"), nonnegative=name != "mass")
+            check_number(value, flag, positive=name in ("sample_rate", "duration", "mass"), nonnegative=True)
+            if name == "mass" and value < 1.0 / MAX_MAGNITUDE:  # 1e-320 would divide by zero
+                raise InputError(f"must be at least {1.0 / MAX_MAGNITUDE:g}, got {value:g}", source=flag)
 
 
 def identify_files(

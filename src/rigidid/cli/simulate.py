@@ -63,6 +63,7 @@ def simulate(
             ("--damping-noise", damping_noise),
             ("--shape-noise", shape_noise),
             ("--record-noise", record_noise),
+            ("--frf-noise", frf_noise),
         ):
             check_number(value, name, nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
