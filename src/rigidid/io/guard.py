@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import struct
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -24,9 +25,11 @@ __all__ = ["guarded", "reading"]
 
 T = TypeVar("T")
 
-# what a damaged file raises inside the libraries a binary reader calls
+# what a damaged file raises inside the libraries a binary reader calls (numpy parses a .npy header with
+# Python's tokenizer: TokenError, SyntaxError)
 _DAMAGE = (zipfile.BadZipFile, zlib.error, struct.error, EOFError, OSError, KeyError, ValueError, TypeError,
-           IndexError, ZeroDivisionError, OverflowError, RuntimeError)  # fmt: skip
+           IndexError, ZeroDivisionError, OverflowError, RuntimeError, SyntaxError,
+           tokenize.TokenError)  # fmt: skip
 
 
 def _reason(exc: BaseException) -> str:
