@@ -392,7 +392,7 @@ ODD_MORE: dict[str, list[list[str]]] = {
             ["--records"], ["--mass", "1e-320"], ["--mass", "-1"], ["--units", "in,lb"], ["--max-order", "1"],
             ["--max-order", "1001"], ["--method", "residues"], ["--modes", "1,2,3,4,5,6"]],
     "mounts": [["--torque-axis", "x"], ["--torque-axis", "0,0,0"], ["--torque-axis", "1e-200,0,0"],
-               ["--torque-axis", "q"], ["--method", "mounts"], ["--mass", "1e-320"], ["--force-unit", "kN"],
+               ["--torque-axis", "q"], ["--mass", "1e-320"], ["--force-unit", "kN"],
                ["--force-unit", "dyn"]],
     "plan_refs": [["--add", "2"], ["--add", "-1"], ["--draws", "1"], ["--body", "f_body.json"]],
     "simulate_frf": [["--frf-noise", "inf"], ["--frf-noise", "1e308"], ["--frf-noise", "-1"], ["--frf-noise", "nan"],
@@ -436,6 +436,8 @@ def _mounts_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> N
     pick = rnd.choice(["f", "e"])
     case.argv = ["identify", use(f"{pick}_layout.json"), use(f"{pick}_modes.csv")]
     case.argv += ["--mounts", use(f"{pick}_mounts.json")]
+    if pick == "e" and rnd.random() < 0.15:  # the mount model (four-mounts takes minutes: issue 24, left open)
+        case.argv += ["--method", "mounts"]
     if rnd.random() < 0.5:
         case.argv += ["--json", _target(rnd, case, "json")]
 
@@ -694,7 +696,8 @@ def run_case(case: Case, folder: Path, timeout: float = 60.0) -> Result:
         now = after.get(name, ("absent", ""))
         if now[0] != kind or (kind == "symlink" and now != before[name]):
             return result("damaged target", f"{name} was {kind}, now {now[0]}")
-    if status != 0:
+    verdict = status == 1 and case.argv[0] == "plan"  # an exit-1 verdict writes its report (FORMATS)
+    if status != 0 and not verdict:
         changed = [name for name in after if before.get(name) != after[name]]
         if changed:
             return result("partial output", ", ".join(changed))

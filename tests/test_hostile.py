@@ -304,3 +304,43 @@ def test_full_disk_is_one_line(tmp_path: Path) -> None:
     assert status == 2
     assert one_error(err) == "rigidid: error: full: cannot write: No space left on device"
     assert stat.S_ISCHR(os.stat(full).st_mode)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["identify", "{L}", "{M}", "--csv", ""], "--csv: empty output path"),
+        (["identify", "{L}", "{M}", "--uff", "x/"], "x/: is a folder path"),
+        (["simulate", "{B}", "{FL}", "--records", ""], "--records: empty output path"),
+        (["convert", "{U}", "-o", ""], "-o: empty output path"),
+        (["identify", "{L}", "{M}", "--units", "in,lb"], "--units: is for a UFF file without dataset 164"),
+        (["identify", "{L}", "{M}", "--mass", "1e-320"], "--mass: must be at least 1e-100"),
+        (["simulate", "{B}", "{FL}", "--frequency-noise", "10"], "--frequency-noise: too large"),
+        (["simulate", "{B}", "{FL}", "--frf", "f.csv", "--references", "r.json", "--frf-noise", "inf"],
+         "--frf-noise: must be a finite number"),
+        (["modes", "{FL}", "--frf", "f.csv", "--references", "r.json", "--max-order", "1001"],
+         "--max-order: must be from 1 to 1000"),
+        (["identify", "{FL}", "--records", "--frf", "f.csv", "--references", "r.json"], "give --records or --frf"),
+        (["identify", "{FL}", "--frf", "f.csv", "--references", "r.json", "--method", "massline", "--band", "nan", "9"],
+         "--band: must be a finite number"),
+    ],
+)  # fmt: skip
+def test_round_two_options_and_targets_are_refused_in_one_line(tmp_path: Path, args: list[str], message: str) -> None:
+    names = {"L": PAPER / "layout.json", "M": PAPER / "modes.csv", "B": FOUR / "body.json",
+             "FL": FOUR / "layout.json", "U": PAPER / "layout.json"}  # fmt: skip
+    status, _, err = cli(tmp_path, *[a.format(**names) for a in args])
+    assert status == 2
+    assert message in one_error(err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_with_mounts_names_the_files_not_the_body(tmp_path: Path) -> None:
+    mounts = tmp_path / "m.json"
+    two = [{"position": [x, 0, 0], "stiffness": [1e4, 1e4, 1e4]} for x in (0.3, -0.3)]  # a mechanism: no 6 modes
+    mounts.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "mounts": two}))
+    status, _, err = cli(
+        tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--mounts", mounts, "-o", "s.csv"
+    )
+    assert status == 2
+    assert one_error(err) == (f"rigidid: error: {FOUR / 'body.json'}, {mounts}: the body on its mounts must have six "
+                              "stable, underdamped modes")  # fmt: skip

@@ -155,9 +155,14 @@ def add_mounts(result: IdentifyResult, mounts: Path | None, torque_axis: str | N
         raise
 
 
-def parse_units(text: str | None) -> dict[str, str] | None:
+def parse_units(text: str | None, layout: Path | None = None) -> dict[str, str] | None:
+    """``--units LENGTH,MASS``; refused beside a layout that is not a UFF file (a layout.json states its units)."""
     if text is None:
         return None
+    from rigidid.cli.options import UFF_SUFFIXES
+
+    if layout is not None and Path(layout).suffix.lower() not in UFF_SUFFIXES:
+        raise InputError(f"is for a UFF file without dataset 164; {layout} states its own units", source="--units")
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 2:
         raise InputError(f"expected LENGTH,MASS like in,lb, got {text!r}", source="--units")
@@ -267,7 +272,7 @@ def identify_files(
     chosen = parse_modes(options.pop("modes_used"))
     with terminal_progress() as progress:
         return api.identify_test(
-            layout, inputs, records=records, modal=ModalOptions(**modal), units=parse_units(units),
+            layout, inputs, records=records, modal=ModalOptions(**modal), units=parse_units(units, layout),
             geometry=geometry, resample=resample, spectrum=spectrum, progress=progress, mass=mass,
             modes_used=chosen, method=method, uncertainty=draws, seed=seed, mounts=mounts, **options,
         )  # fmt: skip

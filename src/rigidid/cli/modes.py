@@ -67,7 +67,7 @@ def modes(
         modal = ModalOptions(modal_method, n_modes, band, max_order, decimate)
         with terminal_progress() as progress:
             table, estimate = api.estimate_records_modes(
-                layout, records or [], modal, units=parse_units(units), geometry=geometry, progress=progress
+                layout, records or [], modal, units=parse_units(units, layout), geometry=geometry, progress=progress
             )
         text = modes_csv_text(table)
         with OutputSet() as outs:  # every output or none

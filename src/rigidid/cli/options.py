@@ -228,6 +228,13 @@ FLAGS = {
     "frf_format": "--frf-format",
     "modal_method": "--modal-method",
     "geometry": "--geometry",
+    "n_modes": "--n-modes",
+    "records_format": "--records-format",
+    "decimate": "--decimate",
+    "frequency_noise": "--frequency-noise",
+    "damping_noise": "--damping-noise",
+    "mass": "--mass",
+    "pretrigger": "--pretrigger",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 

@@ -89,7 +89,7 @@ def plan(
         with named_source(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
-                units=parse_units(units), geometry=geometry, progress=progress, references=references,
+                units=parse_units(units, layout), geometry=geometry, progress=progress, references=references,
                 mounts=mounts,
             )  # fmt: skip
         with OutputSet():  # a verdict (exit 1) writes its report too: standard output first, then the file

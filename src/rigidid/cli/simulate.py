@@ -69,9 +69,10 @@ def simulate(
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
         check_outputs({"--output": output, "--frf": frf}, {"--records": records})
         impacts = [parse_impact(text) for text in impact] if impact else None
+        source = str(body) if mounts is None else f"{body}, {mounts}"
         if mounts is not None:
             body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
-        with named_source(str(body)):
+        with named_source(source):
             table = api.simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
                 seed=seed,

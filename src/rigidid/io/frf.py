@@ -149,6 +149,8 @@ def load_frf_csv(
             if len(pair) != freqs.size or np.any(np.array(sorted(pair)) != freqs):
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
             frf[i, j] = [pair[f] for f in freqs]
+    if not np.any(frf):
+        raise InputError("every FRF value is zero: no response to fit", source=src)
     return freqs, frf
 
 
@@ -352,6 +354,8 @@ def load_frf_uff(
             if pair[0].shape != freqs.shape or not np.allclose(pair[0], freqs, rtol=1e-9, atol=0.0):
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
             frf[i, j] = pair[1]
+    if not np.any(frf):
+        raise InputError("every FRF value is zero: no response to fit", source=src)
     return freqs, frf
 
 
