@@ -33,7 +33,7 @@ from .test_fuzz import _fuzzer
 IDS = ["1", "2", "3"]
 DIRS = ["+x", "+y", "+z"]
 REFS = ["101", "102"]
-CASES_PER_READER = 6
+CASES_PER_READER = 8
 
 
 def _decay() -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +114,9 @@ def base(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bytes]:
 
 
 @pytest.mark.parametrize("name", READERS)
-def test_every_reader_keeps_the_contract_on_mutated_files(base: dict[str, bytes], tmp_path: Path, name: str) -> None:
+def test_every_reader_keeps_the_contract_on_mutated_files(
+    base: dict[str, bytes], tmp_path: Path, name: str, capfd: pytest.CaptureFixture[str]
+) -> None:
     fuzz = _fuzzer()
     reader = _read(name)
     assert _contract(reader, _write(tmp_path / name, base[name])) is None  # the unmutated file reads
@@ -126,6 +128,7 @@ def test_every_reader_keeps_the_contract_on_mutated_files(base: dict[str, bytes]
         if fault:
             bad.append(f"{name} [{what}]: {fault}")
     assert bad == []
+    assert capfd.readouterr().err == ""  # no library's own lines (npTDMS's logged warnings) on stderr
 
 
 def _write(path: Path, data: bytes) -> Path:
@@ -240,3 +243,18 @@ def test_mounts_axes_are_normalised_after_scaling_and_must_be_orthogonal(tmp_pat
     spec["mounts"][1]["id"] = spec["mounts"][0]["id"]
     with pytest.raises(InputError, match=r"mounts\.1\.id: duplicate mount id"):
         load_mounts(_write(tmp_path / "dup.json", json.dumps(spec).encode()))
+
+
+def test_a_truncated_tdms_is_one_error_and_no_nptdms_lines(base: dict[str, bytes], tmp_path: Path) -> None:
+    # in a process of its own: npTDMS's log handler holds the stderr of the moment it was imported
+    import subprocess
+    import sys
+
+    path = _write(tmp_path / "r.tdms", base["r.tdms"][: len(base["r.tdms"]) * 2 // 3])
+    code = (
+        "import sys\nfrom rigidid.errors import InputError\nfrom rigidid.io.records import read_record\n"
+        f"try:\n    read_record({str(path)!r}, {IDS!r})\nexcept InputError as exc:\n    print(exc)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True)
+    assert "r.tdms" in proc.stdout
+    assert proc.stderr == ""  # npTDMS logs "Last segment of file has less data than expected"
