@@ -9,9 +9,12 @@ that has pandas, polars and pyarrow to compare all of them):
 - pandas' C engine, in chunks of 16384 rows (rigidid's reader before this change), and whole;
 - pyarrow.csv: its streaming reader (``open_csv``, 1 MiB blocks) and ``read_csv`` whole;
 - polars: its streaming engine (``scan_csv(...).collect_batches``), ``read_csv`` whole, and
-  ``read_csv`` on 8 MiB chunks of lines (rigidid's reader now: memory bounded by a chunk).
+  ``read_csv`` on 8 MiB chunks of lines (rigidid's reader now: memory bounded by a chunk);
+- rigidid's own reader (:func:`rigidid.io.records.read_record`, parsing and checks), with polars
+  installed and with polars hidden (``sys.modules["polars"] = None``): what the optional
+  ``fast-csv`` extra buys. The file must decay (a record), its header ``time,<ids>``.
 
-Run: ``python benchmarks/csv_parsers.py /tmp/cases/record_32x1000000.csv [--repeat 3]``
+Run: ``python benchmarks/csv_parsers.py /tmp/cases/record_32x1000000.csv [--repeat 3] [--only rigidid]``
 """
 
 from __future__ import annotations
@@ -30,7 +33,14 @@ path, how = sys.argv[1], sys.argv[2]
 t0 = time.perf_counter()
 rows = 0
 try:
-    if how.startswith("pandas"):
+    if how.startswith("rigidid"):
+        if how == "rigidid read_record, pandas only":
+            sys.modules["polars"] = None  # import polars -> ImportError: the reader's pandas-only path
+        from rigidid.io.records import read_record
+        with open(path) as fh:
+            ids = fh.readline().strip().split(",")[1:]
+        rows = read_record(path, ids)[0].shape[0]
+    elif how.startswith("pandas"):
         import pandas as pd
         if how == "pandas C, chunks":
             for chunk in pd.read_csv(path, engine="c", chunksize=1 << 14, dtype=np.float64):
@@ -77,6 +87,8 @@ print(f"{wall:.3f} {peak:.0f} {rows}")
 """
 
 CONTENDERS = [
+    "rigidid read_record, polars",
+    "rigidid read_record, pandas only",
     "pandas C, chunks",
     "pandas C, whole",
     "pyarrow, streaming",
@@ -91,6 +103,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("csv", help="a record written by modes_speed.py (time and channels, comma-separated)")
     parser.add_argument("--repeat", type=int, default=3, help="interleaved runs per contender (medians)")
+    parser.add_argument("--only", default="", help="run only the contenders whose name starts with this")
     args = parser.parse_args()
     size = os.path.getsize(args.csv) / 1e6
     load = os.getloadavg()
@@ -100,7 +113,7 @@ def main() -> None:
     missing: dict[str, str] = {}
     for _ in range(args.repeat):
         for name in CONTENDERS:
-            if name in missing:
+            if name in missing or not name.startswith(args.only):
                 continue
             out = subprocess.run(
                 [sys.executable, "-c", CHILD, args.csv, name], capture_output=True, text=True, check=True
@@ -112,6 +125,8 @@ def main() -> None:
             results[name].append((float(wall), float(peak)))
     print(f"{'parser':<26} {'wall s':>7} {'peak MB':>8}")
     for name in CONTENDERS:
+        if not name.startswith(args.only):
+            continue
         if name in missing:
             print(f"{name:<26} {missing[name]}")
             continue

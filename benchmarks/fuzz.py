@@ -106,7 +106,7 @@ def _records(workdir: Path) -> dict[str, bytes]:
     import numpy as np
 
     from rigidid.cli import run
-    from rigidid.io.binary_records import write_binary
+    from rigidid.io.records.binary import write_binary
     from rigidid.io.uff import write_uff_test
 
     with _in(workdir), _captured():

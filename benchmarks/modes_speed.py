@@ -367,8 +367,8 @@ PYOMA_PYTHON = Path(__file__).resolve().parents[1] / ".pyoma-venv" / "bin" / "py
 def _case_files(folder: Path, channels: int, samples: int) -> tuple[Path, Path, Path, Path]:
     """The record as CSV, .npy, .npz and the layout (written once; kept in `folder`)."""
     from records_scenario import layout
-    from rigidid.io.binary_records import write_binary
     from rigidid.io.records import read_record
+    from rigidid.io.records.binary import write_binary
 
     ids = [f"s{i + 1}" for i in range(channels)]
     pos, dirs = layout(channels)

@@ -2,6 +2,17 @@
 
 from __future__ import annotations
 
+import os
+import sys
+
+# One BLAS thread per test process, set before numpy loads OpenBLAS (subprocess tests inherit
+# it): on a loaded 2-core machine OpenBLAS's threads spin against each other and the other
+# processes; measured there, a 51x51 eigh took 0.15 s with its threads and 0.8 ms with one.
+# Run the suite in parallel instead (pytest -n 2, pytest-xdist). An explicit setting wins.
+if "numpy" not in sys.modules:
+    for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_name, "1")
+
 from pathlib import Path
 
 import numpy as np

@@ -10,8 +10,8 @@ import pytest
 from scipy.io import loadmat, savemat
 
 from rigidid.errors import InputError
-from rigidid.io.binary_records import named_blocks, read_binary, write_binary
-from rigidid.io.streamed_records import read_record_streamed
+from rigidid.io.records.binary import named_blocks, read_binary, write_binary
+from rigidid.io.records.streamed import read_record_streamed
 
 IDS = ["a", "b c", "d"]
 N = 1003
@@ -131,7 +131,7 @@ def test_real_matlab_files_stream_to_what_loadmat_reads() -> None:
     """MATLAB-written v5/v7 files shipped with scipy's tests (big-endian, compressed): the same values."""
     import scipy.io.matlab
 
-    from rigidid.io.array_streams import _mat5_arrays, _stream_reader, is_mat73, scan_mat5
+    from rigidid.io.records.arrays import _mat5_arrays, _stream_reader, is_mat73, scan_mat5
 
     folder = Path(scipy.io.matlab.__file__).parent / "tests" / "data"
     files = sorted(folder.glob("test*_7.*_GLNX86.mat")) + sorted(folder.glob("big_endian.mat"))

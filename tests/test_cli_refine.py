@@ -112,11 +112,11 @@ def long_records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
 def test_the_refit_data_read_in_row_blocks_equal_the_whole_records(
     long_records: list[Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The second pass (io/refit_records) builds the refit's decays and noise levels the whole records give."""
+    """The second pass (io/records/refit) builds the refit's decays and noise levels the whole records give."""
     from rigidid import api
     from rigidid.core.timedomain import refine
     from rigidid.core.timedomain.preprocess import find_impact
-    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+    from rigidid.io.records.refit import locate_impacts, read_prepared_decays
 
     monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # the fit decimates (q > 1) and cuts the decays
     layout = api.load_layout(FOUR / "layout.json")
@@ -153,7 +153,7 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
     from rigidid import api
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     layout = api.load_layout(FOUR / "layout.json")
     modes, estimate = api.estimate_rigid_modes(layout, long_records)
     start = api.identify(layout, modes)
@@ -185,7 +185,7 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
     _patch(monkeypatch, "STREAM_REFIT_VALUES", 10**12)
     whole = CliRunner().invoke(app, args)
@@ -211,7 +211,7 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
 
 
 def test_the_report_spectrum_of_files_read_in_row_blocks_is_the_whole_records(long_records: list[Path]) -> None:
-    """The report's summed spectrum streamed (io/streamed_spectrum) equals summed_spectrum of the whole records."""
+    """The report's summed spectrum streamed (io/records/spectrum) equals summed_spectrum of the whole records."""
     from rigidid import api
     from rigidid.core.spectrum import summed_spectrum
 
@@ -234,7 +234,7 @@ def test_report_records_never_holds_the_raw_records(
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
 
-    monkeypatch.setattr(refine, "MAX_ROWS", 40_000)  # a smaller fit, for the suite's time
+    monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     _patch(monkeypatch, "STREAM_REFIT_VALUES", 0)
     seen: list[int] = []
     real = api.records_spectrum
@@ -270,7 +270,7 @@ def test_the_row_block_passes_read_csv_records_as_npy(long_records: list[Path], 
     """A CSV record (rows only estimated from its size) gives the row-block passes the .npy's numbers."""
     from rigidid import api
     from rigidid.core.timedomain import Impact
-    from rigidid.io.refit_records import locate_impacts, read_prepared_decays
+    from rigidid.io.records.refit import locate_impacts, read_prepared_decays
 
     layout = api.load_layout(FOUR / "layout.json")
     ids = [s.id for s in layout.sensors]

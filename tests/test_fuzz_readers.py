@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 from rigidid.errors import InputError
-from rigidid.io.binary_records import write_binary
 from rigidid.io.files import load_mounts
 from rigidid.io.frf import frf_csv_text, frf_uff_bytes, load_frf_csv, load_frf_uff, load_references
 from rigidid.io.records import read_record
-from rigidid.io.streamed_records import read_record_streamed
+from rigidid.io.records.binary import write_binary
+from rigidid.io.records.streamed import read_record_streamed
 from rigidid.io.uff import read_uff, write_uff_test
 
 from .conftest import SAMPLES

@@ -9,8 +9,8 @@ import pytest
 
 from rigidid import api
 from rigidid.errors import InputError
-from rigidid.io.binary_records import write_binary
 from rigidid.io.records import read_record
+from rigidid.io.records.binary import write_binary
 
 ROOT = Path(__file__).resolve().parents[1]
 ENGINE = ROOT / "samples" / "engine-on-mounts"
@@ -216,7 +216,7 @@ def test_a_file_growing_while_read_stops_with_one_line(tmp_path: Path, monkeypat
     import os
     from types import SimpleNamespace
 
-    from rigidid.io import csv_records
+    from rigidid.io.records import csv as csv_records
 
     t = np.arange(2000) / 100.0
     path = tmp_path / "live.csv"
@@ -237,7 +237,7 @@ def test_a_file_growing_while_read_stops_with_one_line(tmp_path: Path, monkeypat
 def test_wav_samples_are_read_as_stored_in_layout_order(tmp_path: Path, dtype: str) -> None:
     from scipy.io import wavfile
 
-    from rigidid.io.streamed_records import read_record_streamed
+    from rigidid.io.records.streamed import read_record_streamed
 
     rng = np.random.default_rng(6)
     n = 70_000  # longer than the streamed reader's head: read in row blocks

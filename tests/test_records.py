@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigidid.errors import InputError
-from rigidid.io import csv_records
+from rigidid.io.records import csv as csv_records
 from rigidid.io.records import read_record, write_record
 
 from .conftest import DATA

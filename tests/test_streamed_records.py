@@ -1,4 +1,4 @@
-"""Records read block by block and decimated as they arrive (io/streamed_records.py)."""
+"""Records read block by block and decimated as they arrive (io/records/streamed.py)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from rigidid import api
+from rigidid.core.timedomain import streaming
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, channel_energy, decimate
 from rigidid.errors import InputError
-from rigidid.io import streamed_records
-from rigidid.io.binary_records import write_binary
-from rigidid.io.records import read_record, write_record
-from rigidid.io.streamed_records import read_record_streamed
+from rigidid.io.records import read_record, sources, write_record
+from rigidid.io.records import streamed as streamed_records
+from rigidid.io.records.binary import write_binary
+from rigidid.io.records.streamed import read_record_streamed
 
 from .tolerances import STREAMED_DECIMATION, STREAMED_VS_WHOLE_FREQUENCY
 
@@ -34,8 +35,8 @@ def engine(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[str], l
 @pytest.fixture
 def small_blocks(monkeypatch: pytest.MonkeyPatch) -> None:
     """Pre-decimate records of a few thousand rows (the defaults need 2^18 rows)."""
-    monkeypatch.setattr(streamed_records, "HEAD_ROWS", 4096)
-    monkeypatch.setattr(streamed_records, "_BLOCK", 1000)
+    monkeypatch.setattr(streaming, "HEAD_ROWS", 4096)
+    monkeypatch.setattr(sources, "BLOCK_ROWS", 1000)
 
 
 def test_short_record_is_read_as_read_record_reads_it(engine: tuple[Path, list[str], list[Path]]) -> None:
@@ -190,8 +191,8 @@ def test_a_universal_file_beside_a_layout_is_named_not_parsed_as_csv(tmp_path: P
 @pytest.fixture
 def cascade_blocks(monkeypatch: pytest.MonkeyPatch, small_blocks: None) -> None:
     """Let the content spectrum complete (and the second stage start) within a record of 32768 rows."""
-    monkeypatch.setattr(streamed_records._Welch, "SPAN", 8192)
-    monkeypatch.setattr("rigidid.core.timedomain.estimate._MIN_DECIMATED_SAMPLES", 200)
+    monkeypatch.setattr(streaming.ContentWelch, "SPAN", 8192)
+    monkeypatch.setattr("rigidid.core.timedomain.estimate.MIN_DECIMATED_SAMPLES", 200)
 
 
 def test_second_stage_is_decimation_of_the_pre_decimated_record(
@@ -212,7 +213,7 @@ def test_second_stage_is_decimation_of_the_pre_decimated_record(
     from rigidid.core.timedomain.preprocess import content_from_spectrum
 
     f_high = content_from_spectrum(*cascaded.spectrum, 0.5 / dt)[1]
-    assert q2 == streamed_records.second_factor(f_high, dt, q0)
+    assert q2 == streaming.second_factor(f_high, dt, q0)
     # a record read with the first record's stages fixed is the same
     fixed = read_record_streamed(paths[0], ids, factor=q0, second=q2)
     np.testing.assert_allclose(fixed.data, cascaded.data, rtol=0.0, atol=STREAMED_DECIMATION)
@@ -244,7 +245,7 @@ def test_named_binary_records_are_read_in_row_blocks(
     """.npz and .h5 records stream in blocks to the same record, in the data/channels or one-array-per-sensor layout."""
     if suffix == ".h5":
         pytest.importorskip("h5py")
-    from rigidid.io.binary_records import named_blocks
+    from rigidid.io.records.binary import named_blocks
 
     folder, ids, paths = engine
     data, dt = read_record(paths[0], ids)

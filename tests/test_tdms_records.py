@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from rigidid.errors import InputError
-from rigidid.io.binary_records import named_blocks, read_binary
 from rigidid.io.records import read_record
+from rigidid.io.records.binary import named_blocks, read_binary
 
 nptdms = pytest.importorskip("nptdms")
 

@@ -122,6 +122,11 @@ REFINE_EXACT_REL = 1e-4
 """Output-error refinement from records with 1e-6 noise: inertia per mass relative to its largest entry,
 CG relative to half a metre (observed about 1e-6)."""
 
+REFINE_NOISE_FREE_ABS = 1e-9
+"""CG error (m) of the record refit on noise-free records, stopped by the optimiser's rounding
+floor (rigidid.core.optimize.ROUNDING_FLOOR). Observed 2.2e-11 (tests/core/test_refine.py); the
+margin is wide because where round-off stops the fit depends on the CPU."""
+
 FRF_UFF_ASCII_REL = 1.5e-12
 """FRFs through an ASCII UFF 58 (values 4E20.12, 13 digits) and back, relative to each value
 (tests/test_frf_uff_write.py; observed 4.9e-13 on four-mounts with 1 % noise). Binary 58b is exact."""

@@ -69,7 +69,7 @@ def convert(
             if records_format == "csv":
                 write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
             else:
-                from rigidid.io.binary_records import write_binary
+                from rigidid.io.records.binary import write_binary
 
                 write_binary(written[-1], np.arange(values.shape[0]) * dt, values, ids)
     return written

@@ -216,7 +216,7 @@ def _estimate_streamed(
 ) -> tuple[ModeTable, ModalEstimate]:
     """:func:`estimate_modes` on record files read in blocks and decimated as they arrive.
 
-    The first record chooses the pre-decimation factor (:mod:`rigidid.io.streamed_records`)
+    The first record chooses the pre-decimation factor (:mod:`rigidid.io.records.streamed`)
     or takes the user's `decimate` whole; the others share it. The estimate reports
     the total factor, the impacts in the files' rows.
     """
@@ -224,7 +224,7 @@ def _estimate_streamed(
     from rigidid.core.timedomain import estimate_modes as estimate
     from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
     from rigidid.errors import IdentificationError
-    from rigidid.io.streamed_records import read_records_streamed
+    from rigidid.io.records.streamed import read_records_streamed
 
     ids = [s.id for s in lay.sensors]
     f_limit = float(band[1]) if band is not None else None
@@ -461,7 +461,7 @@ def refine_records(
     stream_above : int, optional
         Records of more raw values than this (default :data:`STREAM_REFIT_VALUES`) (samples x sensors, all files,
         as their headers or sizes tell) are read in row blocks
-        (:func:`rigidid.io.refit_records.read_prepared_decays`: the pre-trigger
+        (:func:`rigidid.io.records.refit.read_prepared_decays`: the pre-trigger
         statistics and the decays at the fit's rate, nothing else held);
         smaller ones are read whole.
 
@@ -477,7 +477,7 @@ def refine_records(
     (:func:`~rigidid.core.timedomain.preprocess.find_impact`, as an estimation
     on the whole records would: `estimate`'s, from records decimated while
     read, are only as fine as that factor), by one more pass in row blocks
-    (:func:`rigidid.io.refit_records.locate_impacts`) holding the rows around
+    (:func:`rigidid.io.records.refit.locate_impacts`) holding the rows around
     `estimate`'s impacts. The records are read whole when that pass cannot
     prove its impacts, and when `result` leaves out a mode of `estimate` (an
     elastic one, subtracted from the raw records). The refit's decimation is
@@ -486,8 +486,7 @@ def refine_records(
     """
 
     from rigidid.core.timedomain.refine import refine_prepared
-    from rigidid.io.records import layout_ids
-    from rigidid.io.streamed_records import open_source
+    from rigidid.io.records import layout_ids, open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]
@@ -499,7 +498,7 @@ def refine_records(
     impacts = None
     if not unused and size > (STREAM_REFIT_VALUES if stream_above is None else stream_above):
         from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
-        from rigidid.io.refit_records import locate_impacts
+        from rigidid.io.records.refit import locate_impacts
 
         reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
         impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress)
@@ -510,7 +509,7 @@ def refine_records(
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(result, raw, replace(estimate, impacts=found), progress=progress)
     estimate = replace(estimate, impacts=tuple(impacts))
-    from rigidid.io.refit_records import read_prepared_decays
+    from rigidid.io.records.refit import read_prepared_decays
 
     ident = result.identification
     if progress is not None:
@@ -549,12 +548,11 @@ def records_spectrum(
     (ndarray, ndarray) or None
         Frequency (Hz) and summed power spectral density, as
         :func:`rigidid.core.spectrum.summed_spectrum` gives on the whole records
-        (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); the
+        (:func:`rigidid.io.records.spectrum.summed_spectrum_streamed`); the
         records read whole when one is shorter than a Welch segment (4096 rows).
     """
-    from rigidid.io.records import layout_ids
-    from rigidid.io.streamed_records import open_source
-    from rigidid.io.streamed_spectrum import summed_spectrum_streamed
+    from rigidid.io.records import layout_ids, open_source
+    from rigidid.io.records.spectrum import summed_spectrum_streamed
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     ids = [s.id for s in lay.sensors]

@@ -53,7 +53,7 @@ def report(
         ``progress(task, done, total)`` while the figures are drawn.
     spectrum : (ndarray, ndarray), optional
         That summed spectrum computed already (frequency in Hz, power), e.g. from record files read in row
-        blocks (:func:`rigidid.io.streamed_spectrum.summed_spectrum_streamed`); used instead of `records`.
+        blocks (:func:`rigidid.io.records.spectrum.summed_spectrum_streamed`); used instead of `records`.
 
     Returns
     -------

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from rigidid.core.geometry import frame_arrays, numerical_rank, sensor_matrix
 from rigidid.core.linalg import solve_rows
+from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.selection import project_rigid_batch
 from rigidid.core.statespace import state_matrices_batch
 
@@ -79,8 +80,11 @@ STATUS_MESSAGES: dict[int, str] = {
 _CHUNK = 4096
 """Tests identified together by :func:`estimate` (bounds memory: about 20 kB per test)."""
 
-_STEP_TOL = 1e-6
-"""A Levenberg-Marquardt step this small relative to ``1 + |g|`` ends the iterations."""
+_FLAT = 1e-10
+"""Levenberg-Marquardt stops once a Gauss-Newton step would lower the cost by less than this fraction."""
+
+_MAX_EVALUATIONS = 800
+"""Levenberg-Marquardt's budget of cost evaluations per test."""
 
 _POLISH_STEPS = 8
 """Gauss-Newton steps on the gradient after Levenberg-Marquardt (see :func:`solve_cg`)."""
@@ -334,46 +338,24 @@ class _VarPro:
         return np.einsum("bi,bi->b", r, r), (jac_t @ r[..., None])[..., 0], jac_t @ jac
 
 
-def _levenberg_marquardt(problem: _VarPro, g0: Array, max_iter: int = 400) -> tuple[Array, Array]:
-    """Minimise the cost of each test from `g0` (m, 3); returns CGs (m, 3) and costs (m,)."""
-    m = g0.shape[0]
-    g = g0.copy()
-    cost, grad, hess = problem.normal_equations(g)
-    damping = np.full(m, 1e-3)
-    active = np.isfinite(cost) & (cost > 0.0)
-    for _ in range(max_iter):
-        idx = np.flatnonzero(active)
-        if idx.size == 0:
-            break
-        h = hess[idx]
-        scale2 = np.maximum(np.einsum("bii->bi", h), 1e-30)
-        lhs = h + damping[idx, None, None] * (scale2[:, :, None] * np.eye(3))
-        step, solved = solve_rows(lhs, -grad[idx][..., None])
-        if not np.all(solved):
-            step[~solved] = -(np.linalg.pinv(lhs[~solved]) @ grad[idx][~solved][..., None])
-        step = step[..., 0]
-        sub = problem.take(idx)
-        trial = g[idx] + step
-        r_new = sub.evaluate(trial)[0]
-        cost_new = np.einsum("bi,bi->b", r_new, r_new)
-        better = cost_new < cost[idx]
-        acc, rej = idx[better], idx[~better]
-        tiny = np.linalg.norm(step, axis=1) <= _STEP_TOL * (1.0 + np.linalg.norm(g[idx], axis=1))
-        # rejected: more damping; give up past 1e12, or once the steps are below what can
-        # change the result (a stuck, converged test)
-        damping[rej] *= 4.0
-        active[rej[(damping[rej] >= 1e12) | tiny[~better]]] = False
-        if acc.size:
-            flat = cost[acc] - cost_new[better] <= 1e-10 * cost[acc]
-            g[acc] = trial[better]
-            cost[acc] = cost_new[better]
-            damping[acc] = np.maximum(damping[acc] / 5.0, 1e-12)
-            done = tiny[better] | flat | (cost_new[better] == 0.0)
-            active[acc[done]] = False
-            go = acc[~done]
-            if go.size:
-                _, grad[go], hess[go] = problem.take(go).normal_equations(g[go])
-    return g, cost
+def _levenberg_marquardt(problem: _VarPro, g0: Array, scale: Array) -> tuple[Array, Array]:
+    """Minimise the cost of each test from `g0` (m, 3); returns CGs (m, 3) and costs (m,).
+
+    :func:`rigidid.core.optimize.levenberg_marquardt`, stopped once the Gauss-Newton
+    decrement is below :data:`_FLAT` of the cost (or below the rounding floor of
+    `scale`, the data's ``|Q|^2 + w^2 |P|^2``): :func:`_polish` takes it from there.
+    """
+
+    def normal(g: Array, index: NDArray[np.int64]) -> tuple[Array, Array, Array]:
+        return problem.take(index).normal_equations(g)
+
+    def cost(g: Array, index: NDArray[np.int64]) -> Array:
+        r = problem.take(index).evaluate(g)[0]
+        out: Array = np.einsum("bi,bi->b", r, r)
+        return out
+
+    out = levenberg_marquardt(normal, cost, g0, max_evaluations=_MAX_EVALUATIONS, scale=scale, decrement=_FLAT)
+    return out.x, out.cost
 
 
 def _polish(problem: _VarPro, g: Array, cost: Array) -> tuple[Array, Array]:
@@ -504,7 +486,10 @@ def solve_cg(
     problem = _problem(stiffness, damping, damping_weight)
     starts = np.concatenate([_eq36_start(stiffness), np.zeros((b, 3))])
     both = problem.take(np.concatenate([np.arange(b), np.arange(b)]))
-    g_all, cost_all = _levenberg_marquardt(both, starts)
+    scale = np.sum(stiffness**2, axis=(1, 2))
+    if damping is not None and damping_weight > 0.0:
+        scale = scale + damping_weight**2 * np.sum(damping**2, axis=(1, 2))
+    g_all, cost_all = _levenberg_marquardt(both, starts, np.concatenate([scale, scale]))
     c1, c2 = cost_all[:b], cost_all[b:]
     second = (c2 < c1) | ~np.isfinite(c1)
     g = np.where(second[:, None], g_all[b:], g_all[:b])

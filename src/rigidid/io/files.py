@@ -205,7 +205,8 @@ def load_json(path: Path) -> Any:
     return data
 
 
-def _load_json_model(path: Path, model: type[M]) -> M:
+def load_json_model(path: Path, model: type[M]) -> M:
+    """Read a JSON file and validate it as `model`; :class:`InputError` names the first invalid field."""
     data = load_json(path)
     try:
         return model.model_validate(data)
@@ -239,7 +240,7 @@ def load_layout(path: str | os.PathLike[str], *, require_rank: bool = True) -> L
     from rigidid.core.geometry import layout_condition
 
     p = Path(path)
-    layout = _load_json_model(p, LayoutFile)
+    layout = load_json_model(p, LayoutFile)
     if not require_rank:
         return layout
     _, positions, directions = layout_arrays(layout)
@@ -272,7 +273,7 @@ def load_body(path: str | os.PathLike[str]) -> BodyFile:
     InputError
         As :func:`load_layout`.
     """
-    return _load_json_model(Path(path), BodyFile)
+    return load_json_model(Path(path), BodyFile)
 
 
 def load_mounts(path: str | os.PathLike[str]) -> MountsFile:

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from rigidid.errors import InputError
 from rigidid.io.dialect import plain_number
+from rigidid.io.uff_codes import FUNCTION_TYPES
 from rigidid.models import ReferencesFile
 from rigidid.units import check_same_units
 
@@ -52,9 +53,9 @@ def load_references(path: str | os.PathLike[str]) -> ReferencesFile:
     InputError
         Unreadable file, invalid JSON, or a field that fails validation (named).
     """
-    from rigidid.io.files import _load_json_model
+    from rigidid.io.files import load_json_model
 
-    return _load_json_model(Path(path), ReferencesFile)
+    return load_json_model(Path(path), ReferencesFile)
 
 
 def reference_arrays(refs: ReferencesFile) -> tuple[tuple[str, ...], NDArray[np.float64], NDArray[np.float64]]:
@@ -213,20 +214,80 @@ def _check_uff_record(dset: dict[str, Any], src: str, where: str) -> None:
 
 def _uff_units_factor(sets: list[dict[str, Any]], src: str, units: dict[str, str] | None) -> float:
     """Factor from rigidid's accelerance to the file's, from its dataset 164 (1 without one)."""
-    from rigidid.io.uff import _LENGTH_PER_M, _MASS_PER_KG, _units_from_164
+    from rigidid.io.uff import units_from_164
+    from rigidid.io.uff_codes import LENGTH_PER_M, MASS_PER_KG
 
     found = [d for d in sets if d.get("type") == 164]
     if not found:
         return 1.0
-    file_units = _units_from_164(found[0], src, "dataset 164")
+    file_units = units_from_164(found[0], src, "dataset 164")
     if units is not None:
         check_same_units(file_units, units, source=src, location="dataset 164")
     force = float(found[0].get("force", 0.0))
     if not force > 0.0:  # a standard code with zero factors: coherent or gravitational by the code
-        from rigidid.io.uff import _CODE_FACTORS
+        from rigidid.io.uff_codes import CODE_FACTORS
 
-        force = _CODE_FACTORS.get(int(found[0].get("units_code") or 0), (1.0, 1.0))[1]
-    return _MASS_PER_KG[file_units["mass"]] * _LENGTH_PER_M[file_units["length"]] / force
+        force = CODE_FACTORS.get(int(found[0].get("units_code") or 0), (1.0, 1.0))[1]
+    return MASS_PER_KG[file_units["mass"]] * LENGTH_PER_M[file_units["length"]] / force
+
+
+def _frf_dataset(
+    dset: dict[str, Any], where: str, src: str, s_index: dict[str, int], r_index: dict[str, int]
+) -> tuple[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.complex128]]]:
+    """(sensor, reference) indices and (frequencies, accelerance) of one dataset 58, checked (:func:`load_frf_uff`)."""
+    func = int(dset.get("func_type", 0))
+    if func == 3:
+        raise InputError(
+            "function type 3 is a cross spectrum, not an FRF: export H1/H2 FRFs (function type 4)",
+            source=src,
+            location=where,
+        )
+    if func != 4:
+        name = FUNCTION_TYPES.get(func, "unknown")
+        hint = ": time records are read with `--records` (identify, modes)" if func == 1 else ""
+        raise InputError(
+            f"function type {func} ({name}) is not an FRF (function type 4){hint}", source=src, location=where
+        )
+    kind = _ORDINATE_KINDS.get(int(dset.get("ordinate_spec_data_type", 12)))
+    if kind is None:
+        raise InputError(
+            f"ordinate type {dset.get('ordinate_spec_data_type')} is not acceleration (12), velocity (11) "
+            "or displacement (8)",
+            source=src,
+            location=where,
+        )
+    if int(dset.get("rsp_node", 0)) <= 0 or int(dset.get("ref_node", 0)) <= 0:
+        raise InputError(
+            f"the FRF names no response or reference node (response node {dset.get('rsp_node')}, reference "
+            f"node {dset.get('ref_node')}): it carries no geometry; name the nodes in the exporting tool",
+            source=src,
+            location=where,
+        )
+    _check_uff_record(dset, src, where)
+    rsp = _uff_id(int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0)), list(s_index))
+    ref = _uff_id(int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)), list(r_index))
+    if rsp is None:
+        raise InputError(
+            f"response node {dset.get('rsp_node')} direction {dset.get('rsp_dir')} is no sensor of the layout",
+            source=src,
+            location=where,
+        )
+    if ref is None:
+        raise InputError(
+            f"reference node {dset.get('ref_node')} direction {dset.get('ref_dir')} is not in the references",
+            source=src,
+            location=where,
+        )
+    x = np.asarray(dset["x"], dtype=float)
+    data = np.asarray(dset["data"], dtype=complex)
+    keep = x > 0.0
+    x, data = x[keep], data[keep]
+    w = 2.0 * np.pi * x
+    if kind == "mobility":
+        data = 1j * w * data
+    elif kind == "receptance":
+        data = -(w**2) * data
+    return (s_index[rsp], r_index[ref]), (x, data)
 
 
 def load_frf_uff(
@@ -269,10 +330,10 @@ def load_frf_uff(
         missing pair, pairs with other frequency lines, or a dataset 164 whose
         units differ from `units`.
     """
-    from rigidid.io.uff import _read_all
+    from rigidid.io.uff import read_all
 
     src = str(path)
-    sets = _read_all(Path(path))
+    sets = read_all(Path(path))
     s_index = {s: i for i, s in enumerate(sensor_ids)}
     r_index = {r: j for j, r in enumerate(reference_ids)}
     found: dict[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.complex128]]] = {}
@@ -282,63 +343,14 @@ def load_frf_uff(
             continue
         n58 += 1
         where = f"dataset 58 #{n58}"
-        func = int(dset.get("func_type", 0))
-        if func == 3:
+        key, frf_pair = _frf_dataset(dset, where, src, s_index, r_index)
+        if key in found:
             raise InputError(
-                "function type 3 is a cross spectrum, not an FRF: export H1/H2 FRFs (function type 4)",
+                f"a second FRF for response {sensor_ids[key[0]]!r} and reference {reference_ids[key[1]]!r}",
                 source=src,
                 location=where,
             )
-        if func != 4:
-            from rigidid.io.uff import _FUNCTION_TYPES
-
-            name = _FUNCTION_TYPES.get(func, "unknown")
-            hint = ": time records are read with `--records` (identify, modes)" if func == 1 else ""
-            raise InputError(
-                f"function type {func} ({name}) is not an FRF (function type 4){hint}", source=src, location=where
-            )
-        kind = _ORDINATE_KINDS.get(int(dset.get("ordinate_spec_data_type", 12)))
-        if kind is None:
-            raise InputError(
-                f"ordinate type {dset.get('ordinate_spec_data_type')} is not acceleration (12), velocity (11) "
-                "or displacement (8)",
-                source=src,
-                location=where,
-            )
-        if int(dset.get("rsp_node", 0)) <= 0 or int(dset.get("ref_node", 0)) <= 0:
-            raise InputError(
-                f"the FRF names no response or reference node (response node {dset.get('rsp_node')}, reference "
-                f"node {dset.get('ref_node')}): it carries no geometry; name the nodes in the exporting tool",
-                source=src,
-                location=where,
-            )
-        _check_uff_record(dset, src, where)
-        rsp = _uff_id(int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0)), list(s_index))
-        ref = _uff_id(int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)), list(r_index))
-        if rsp is None:
-            raise InputError(
-                f"response node {dset.get('rsp_node')} direction {dset.get('rsp_dir')} is no sensor of the layout",
-                source=src,
-                location=where,
-            )
-        if ref is None:
-            raise InputError(
-                f"reference node {dset.get('ref_node')} direction {dset.get('ref_dir')} is not in the references",
-                source=src,
-                location=where,
-            )
-        x = np.asarray(dset["x"], dtype=float)
-        data = np.asarray(dset["data"], dtype=complex)
-        keep = x > 0.0
-        x, data = x[keep], data[keep]
-        w = 2.0 * np.pi * x
-        if kind == "mobility":
-            data = 1j * w * data
-        elif kind == "receptance":
-            data = -(w**2) * data
-        if (s_index[rsp], r_index[ref]) in found:
-            raise InputError(f"a second FRF for response {rsp!r} and reference {ref!r}", source=src, location=where)
-        found[(s_index[rsp], r_index[ref])] = (x, data)
+        found[key] = frf_pair
     if not found:
         raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
     factor = _uff_units_factor(sets, src, units)
@@ -396,9 +408,9 @@ def _uff_node_code(sid: str, direction: NDArray[np.float64], what: str) -> tuple
     The direction must lie along a global axis (UFF 58 states nothing else
     without a local coordinate system); an axis in the id must be that one.
     """
-    from rigidid.io.uff import _ID_PATTERN, _dir_code
+    from rigidid.io.uff_codes import ID_PATTERN, dir_code
 
-    match = _ID_PATTERN.match(sid)
+    match = ID_PATTERN.match(sid)
     if match is None or int(match.group(1)) <= 0:
         raise InputError(
             f"{what} id {sid!r} is not a UFF node and direction (ids such as 12 or 12+x are): "
@@ -419,7 +431,7 @@ def _uff_node_code(sid: str, direction: NDArray[np.float64], what: str) -> tuple
         named = named.lower() if named[0] in "+-" else "+" + named.lower()
         if named != axis:
             raise InputError(f"{what} id {sid!r} names the axis {named} but its direction is {axis}", source=what + "s")
-    return int(match.group(1)), _dir_code(axis)
+    return int(match.group(1)), dir_code(axis)
 
 
 def _uff_force_factor(units: dict[str, str]) -> tuple[float, dict[str, Any]]:
@@ -429,10 +441,11 @@ def _uff_force_factor(units: dict[str, str]) -> tuple[float, dict[str, Any]]:
     file's is per the force unit of its 164 system (lbf for in/lb and ft/lb, a
     gravitational system). The factor is 1 for coherent systems.
     """
-    from rigidid.io.uff import _LENGTH_PER_M, _MASS_PER_KG, _write_164
+    from rigidid.io.uff import write_164
+    from rigidid.io.uff_codes import LENGTH_PER_M, MASS_PER_KG
 
-    dset = _write_164(units)
-    factor = _MASS_PER_KG[units["mass"]] * _LENGTH_PER_M[units["length"]] / float(dset["force"])
+    dset = write_164(units)
+    factor = MASS_PER_KG[units["mass"]] * LENGTH_PER_M[units["length"]] / float(dset["force"])
     return factor, dset
 
 

@@ -81,7 +81,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -93,8 +92,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError, RigididError, RigididWarning
 from rigidid.io.atomic import atomic_path
+from rigidid.io.uff_codes import (
+    AXES,
+    CODE_FACTORS,
+    FUNCTION_TYPES,
+    ID_PATTERN,
+    LENGTH_PER_M,
+    MASS_PER_KG,
+    STANDARD_UNITS,
+    dir_code,
+)
 from rigidid.io.uff_eigen import EigenConvention, eigen_convention, stated_frequency
 from rigidid.io.uff_systems import CoordinateSystemError, CoordinateSystems
+from rigidid.units import G0
 
 if TYPE_CHECKING:
     from rigidid.core.identify import Identification
@@ -113,34 +123,6 @@ CArray = NDArray[np.complex128]
 
 ModeRow = tuple[int, float, float, str, float, float]
 """One ``modes.csv`` row: ``(mode, frequency_hz, damping_ratio, sensor_id, real, imag)``."""
-
-_AXES = "xyz"
-_ID_PATTERN = re.compile(r"^\s*(\d+)\s*([+-]?[xyz])?\s*$", re.IGNORECASE)
-_G0 = 9.80665
-_LENGTH_PER_M = {"m": 1.0, "cm": 100.0, "mm": 1000.0, "in": 1.0 / 0.0254, "ft": 1.0 / 0.3048}
-_MASS_PER_KG = {"kg": 1.0, "g": 1000.0, "lb": 1.0 / 0.45359237}
-_LBF_PER_N = 1.0 / (0.45359237 * _G0)
-_POUNDAL_PER_N = 1.0 / (0.45359237 * 0.3048)
-# standard UFF unit codes -> (length, force) factors per SI unit, for files that leave the factors at zero
-_CODE_FACTORS = {
-    1: (1.0, 1.0),
-    2: (1.0 / 0.3048, _LBF_PER_N),
-    3: (1.0, 1.0 / _G0),
-    4: (1.0 / 0.3048, _POUNDAL_PER_N),
-    5: (1000.0, 1000.0),
-    6: (100.0, 100.0),
-    7: (1.0 / 0.0254, _LBF_PER_N),
-    8: (1000.0, 1.0 / _G0),
-}
-# (length, mass) -> UFF units code, force factor, description, temperature factor and offset
-_STANDARD_UNITS: dict[tuple[str, str], tuple[int, float, str, float, float]] = {
-    ("m", "kg"): (1, 1.0, "SI: meter (newton)", 1.0, 273.15),
-    ("ft", "lb"): (2, _LBF_PER_N, "BG: foot (pound f)", 1.8, 459.67),
-    ("mm", "kg"): (5, 1000.0, "MM: mm (milli newton)", 1.0, 273.15),
-    ("cm", "kg"): (6, 100.0, "CM: cm (centi newton)", 1.0, 273.15),
-    ("in", "lb"): (7, _LBF_PER_N, "IN: inch (pound f)", 1.8, 459.67),
-}
-
 
 class UffRecord(NamedTuple):
     """The time records of one impact.
@@ -201,11 +183,7 @@ def _pyuff() -> Any:
 
 
 def _dir_name(code: int) -> str:
-    return ("+" if code > 0 else "-") + _AXES[abs(code) - 1]
-
-
-def _dir_code(direction: str) -> int:
-    return (_AXES.index(direction[1]) + 1) * (1 if direction[0] == "+" else -1)
+    return ("+" if code > 0 else "-") + AXES[abs(code) - 1]
 
 
 def _axis_direction(value: Any, where: str, source: str | None) -> str:
@@ -213,7 +191,7 @@ def _axis_direction(value: Any, where: str, source: str | None) -> str:
     if isinstance(value, str):
         key = value.strip().lower()
         key = key if key[:1] in "+-" else "+" + key
-        if len(key) == 2 and key[1] in _AXES:
+        if len(key) == 2 and key[1] in AXES:
             return key
         raise InputError(f"unknown direction {value!r}", source=source, location=where)
     v = np.asarray(value, dtype=float).reshape(-1)
@@ -225,7 +203,7 @@ def _axis_direction(value: Any, where: str, source: str | None) -> str:
             location=where,
         )
     i = int(nonzero[0])
-    return ("+" if v[i] > 0 else "-") + _AXES[i]
+    return ("+" if v[i] > 0 else "-") + AXES[i]
 
 
 def _sensor_ids(sensors: Sequence[tuple[int, int]]) -> list[str]:
@@ -238,7 +216,7 @@ def _sensor_ids(sensors: Sequence[tuple[int, int]]) -> list[str]:
 def _assign_nodes(positions: Array, sensor_ids: Sequence[str]) -> list[int]:
     """Node number of every sensor: from ids ``"12"``/``"12+z"`` when consistent, else by position."""
     scale = max(1.0, float(np.max(np.abs(positions)))) if positions.size else 1.0
-    parsed = [_ID_PATTERN.match(sid) for sid in sensor_ids]
+    parsed = [ID_PATTERN.match(sid) for sid in sensor_ids]
     if all(parsed):
         nodes = [int(m.group(1)) for m in parsed if m]
         where: dict[int, Array] = {}
@@ -262,7 +240,8 @@ def _assign_nodes(positions: Array, sensor_ids: Sequence[str]) -> list[int]:
     return result
 
 
-def _units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, str]:
+def units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, str]:
+    """The layout units (``{"length": ..., "mass": ...}``) a dataset 164 states, by its factors or its code."""
     length_f = float(dset.get("length", 0.0))
     force_f = float(dset.get("force", 0.0))
     code = dset.get("units_code")
@@ -272,8 +251,8 @@ def _units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, 
             source=source,
             location=where,
         )
-    if not (length_f > 0.0 and force_f > 0.0) and int(code) in _CODE_FACTORS:
-        length_f, force_f = _CODE_FACTORS[int(code)]
+    if not (length_f > 0.0 and force_f > 0.0) and int(code) in CODE_FACTORS:
+        length_f, force_f = CODE_FACTORS[int(code)]
 
     def match(value: float, table: dict[str, float]) -> str | None:
         for name, ref in table.items():
@@ -281,10 +260,10 @@ def _units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, 
                 return name
         return None
 
-    length = match(length_f, _LENGTH_PER_M)
+    length = match(length_f, LENGTH_PER_M)
     mass = None
     if length is not None and force_f > 0.0:
-        mass = match(force_f / length_f, _MASS_PER_KG) or match(force_f * _G0, _MASS_PER_KG)
+        mass = match(force_f / length_f, MASS_PER_KG) or match(force_f * G0, MASS_PER_KG)
     if length is None or mass is None:
         raise InputError(
             f"units code {code} (length factor {length_f:.6g}, force factor {force_f:.6g} per SI unit) "
@@ -295,14 +274,15 @@ def _units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, 
     return {"length": length, "mass": mass}
 
 
-def _write_164(units: dict[str, str]) -> dict[str, Any]:
+def write_164(units: dict[str, str]) -> dict[str, Any]:
+    """The dataset 164 (pyuff's dict) of the layout's units (``{"length": ..., "mass": ...}``)."""
     try:
         length, mass = units["length"], units["mass"]
-        length_f, mass_f = _LENGTH_PER_M[length], _MASS_PER_KG[mass]
+        length_f, mass_f = LENGTH_PER_M[length], MASS_PER_KG[mass]
     except KeyError as exc:
         raise InputError(f"unknown unit {exc.args[0]!r}; length m/cm/mm/in/ft, mass kg/g/lb", source="units") from None
-    if (length, mass) in _STANDARD_UNITS:
-        code, force_f, text, temp, offset = _STANDARD_UNITS[(length, mass)]
+    if (length, mass) in STANDARD_UNITS:
+        code, force_f, text, temp, offset = STANDARD_UNITS[(length, mass)]
     else:  # a coherent user system whose mass unit is the layout's
         code, force_f, text, temp, offset = 9, mass_f * length_f, f"US: {length} {mass} s", 1.0, 273.15
     return {
@@ -435,7 +415,7 @@ class _Reader:
             raise self.error(str(exc), exc.where) from None
 
     def set_units(self, dset: dict[str, Any], where: str) -> None:
-        units = _units_from_164(dset, self.source, where)
+        units = units_from_164(dset, self.source, where)
         if self.units is not None and units != self.units:
             raise self.error(
                 f"units {units['length']}/{units['mass']} contradict {self.units['length']}/{self.units['mass']} "
@@ -480,11 +460,12 @@ class _Reader:
         v = self.systems.axis(disp_cs, code)
         for i in range(3):  # an axis of the global system stays a name (+x, -z, ...)
             if abs(abs(v[i]) - 1.0) <= 1e-15 and np.count_nonzero(v) == 1:
-                return ("+" if v[i] > 0 else "-") + _AXES[i]
+                return ("+" if v[i] > 0 else "-") + AXES[i]
         return [float(c) for c in v]
 
 
-def _read_all(path: Path) -> list[dict[str, Any]]:
+def read_all(path: Path) -> list[dict[str, Any]]:
+    """Every dataset of a universal file, as pyuff's dicts (binary 58s read by :mod:`rigidid.io.uff_scan`)."""
     pyuff = _pyuff()
     src = str(path)
     if not path.exists():
@@ -608,37 +589,6 @@ def _time_axis(reader: _Reader, dset: dict[str, Any], where: str) -> tuple[float
     return first, step, n
 
 
-_FUNCTION_TYPES = {
-    0: "general or unknown",
-    1: "time response",
-    2: "auto spectrum",
-    3: "cross spectrum",
-    4: "frequency response function (FRF)",
-    5: "transmissibility",
-    6: "coherence",
-    7: "auto correlation",
-    8: "cross correlation",
-    9: "power spectral density (PSD)",
-    10: "energy spectral density",
-    11: "probability density function",
-    12: "spectrum",
-    13: "cumulative frequency distribution",
-    14: "peaks valley",
-    15: "stress/cycles",
-    16: "strain/cycles",
-    17: "orbit",
-    18: "mode indicator function",
-    19: "force pattern",
-    20: "partial power",
-    21: "partial coherence",
-    22: "eigenvalue",
-    23: "eigenvector",
-    24: "shock response spectrum",
-    25: "finite impulse response filter",
-    26: "multiple coherence",
-    27: "order function",
-    28: "phase compensation",
-}
 _NOT_READ = {2414: "analysis results", 2412: "elements", 82: "trace lines", 2400: "model header", 1858: "qualifiers"}
 _GEOMETRY_TYPES = (15, 18, 151, 164, 2411, 2420)
 
@@ -658,7 +608,7 @@ def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) ->
             "FRFs are read by `rigidid identify LAYOUT --frf FILE --references REFS.json --method massline`",
             here,
         )
-    name = _FUNCTION_TYPES.get(func, "unknown")
+    name = FUNCTION_TYPES.get(func, "unknown")
     return reader.error(
         f"function type {func} ({name}) is not a time record; rigidid reads time responses (function type 1) "
         "and mode shapes (dataset 55)",
@@ -669,7 +619,7 @@ def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) ->
 def _read_into(reader: _Reader, path: Path, label: str, kinds: tuple[int, ...] | None) -> None:
     """Read the datasets of `path` into `reader` (only `kinds` when given); `label` prefixes locations."""
     counts: dict[int, int] = {}
-    for dset in _read_all(path):
+    for dset in read_all(path):
         kind = int(dset["type"])
         counts[kind] = counts.get(kind, 0) + 1
         where = f"{label}dataset {kind} #{counts[kind]}"
@@ -787,7 +737,7 @@ def read_uff(
                 "no units: the file has no dataset 164; give the units (--units LENGTH,MASS, e.g. mm,kg)"
             )
         given = {"length": str(units.get("length")), "mass": str(units.get("mass"))}
-        if given["length"] not in _LENGTH_PER_M or given["mass"] not in _MASS_PER_KG:
+        if given["length"] not in LENGTH_PER_M or given["mass"] not in MASS_PER_KG:
             raise InputError(
                 f"unknown units {given['length']}/{given['mass']}; length m/cm/mm/in/ft, mass kg/g/lb", source="units"
             )
@@ -1071,13 +1021,13 @@ def write_uff_test(
     ids, positions, directions = _layout_sensors(layout)
     node_list = _assign_nodes(positions, ids)
     node_of = dict(zip(ids, node_list, strict=True))
-    codes = {sid: _dir_code(d) for sid, d in zip(ids, directions, strict=True)}
+    codes = {sid: dir_code(d) for sid, d in zip(ids, directions, strict=True)}
     axis_owner: dict[tuple[int, int], str] = {}
     for sid in ids:
         key = (node_of[sid], abs(codes[sid]))
         if key in axis_owner:
             raise InputError(
-                f"sensors {axis_owner[key]} and {sid} share node {key[0]} and axis {_AXES[key[1] - 1]}",
+                f"sensors {axis_owner[key]} and {sid} share node {key[0]} and axis {AXES[key[1] - 1]}",
                 source="layout",
             )
         axis_owner[key] = sid
@@ -1090,7 +1040,7 @@ def write_uff_test(
             "db_app": "rigidid",
             "program": "rigidid",
         },
-        _write_164(units),
+        write_164(units),
     ]
     unique: dict[int, Array] = {}
     for sid, p in zip(ids, positions, strict=True):
@@ -1273,7 +1223,7 @@ def write_uff(
             "db_app": "rigidid",
             "program": "rigidid",
         },
-        _write_164(units),
+        write_164(units),
         _nodes_dataset(all_nodes, all_xyz),
     ]
     outline = [sensor_nodes[i] for i in sensor_outline(sensor_xyz)]

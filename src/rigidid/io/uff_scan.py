@@ -13,7 +13,7 @@ is.
 
 Only the 58b datasets are decoded here, into the dictionaries pyuff gives
 (the same keys, the same values); every other dataset is left to pyuff
-(:func:`rigidid.io.uff._read_all` passes it those datasets alone). When the
+(:func:`rigidid.io.uff.read_all` passes it those datasets alone). When the
 file departs from that layout (a byte count that does not end on a
 delimiter, an ID line that cannot be read), :func:`scan` returns None and
 pyuff reads the whole file as before.

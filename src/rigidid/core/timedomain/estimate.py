@@ -48,8 +48,8 @@ METHODS: tuple[str, ...] = ("ar", "era")
 DEFAULT_METHOD: Method = "era"
 """The default estimator (see the module notes of :func:`estimate_modes` for why)."""
 
-_DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest frequency kept
-_MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
+DECIMATION_MARGIN = 4.0  # new Nyquist frequency >= this times the highest frequency kept
+MIN_DECIMATED_SAMPLES = 1000  # automatic decimation leaves at least this many samples per record
 _MIN_BLOCK_ROWS = 20  # ERA: block rows of the Hankel matrix, at least
 _ROW_PERIODS = 2.0  # ERA: block rows span this many periods of the lowest mode
 _MAX_GRAM = 384  # ERA: block rows x channels fitted, at most (the Gram matrix is its square)
@@ -412,9 +412,9 @@ def decimation_factors(
     f_high = content[1]
     if band is not None:
         f_high = min(float(band[1]), f_high)
-    first = decimation_for(f_high, dt, margin=_DECIMATION_MARGIN)
+    first = decimation_for(f_high, dt, margin=DECIMATION_MARGIN)
     shortest = min(d.shape[0] for d in decays)
-    factors = [max(1, min(first, shortest // _MIN_DECIMATED_SAMPLES))]
+    factors = [max(1, min(first, shortest // MIN_DECIMATED_SAMPLES))]
     while factors[-1] > 1:
         factors.append(max(1, factors[-1] // 3))
     return factors

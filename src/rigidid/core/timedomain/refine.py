@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
+from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
@@ -65,7 +66,6 @@ _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by 
 _STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
 _GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
-_GEODESIC_ALPHA = 0.75  # largest 2 |acceleration| / |step| accepted
 
 
 @dataclass(frozen=True)
@@ -100,9 +100,10 @@ class Refinement:
         Residual evaluations of the optimiser.
     converged : bool
         Whether the optimiser met its convergence test (Gauss-Newton decrement below
-        0.05 residual variances, or the cost stalled at the boundary of positive
-        definite J, K, C with the decrement below 4) rather than stopping at its
-        evaluation budget; False when the start was only evaluated.
+        0.05 residual variances or below the rounding floor of the data, or the cost
+        stalled at the boundary of positive definite J, K, C with the decrement below 4)
+        rather than stopping at its evaluation budget; False when the start was only
+        evaluated.
     """
 
     center_of_gravity: Array
@@ -364,7 +365,7 @@ def prepare_decays(
     -----
     The pre-trigger is ``r[:onset - 2]``; its level per channel is the
     RMS about each record's mean, scaled by the fit filter's noise gain
-    (:func:`pretrigger_sigma`). :mod:`rigidid.io.refit_records` builds the same
+    (:func:`pretrigger_sigma`). :mod:`rigidid.io.records.refit` builds the same
     from record files read in row blocks.
     """
     p = records[0].shape[1]
@@ -446,20 +447,14 @@ def _projector(design: Array) -> Any:
 
 
 def _levenberg_marquardt(
-    fun: Any, jacobian: Any, theta0: Array, max_evaluations: int
+    fun: Any, jacobian: Any, theta0: Array, max_evaluations: int, residuals: int, scale: float | None = None
 ) -> tuple[Array, int, Array, Array, bool]:
-    """Minimise ``|r(theta)|^2`` by Levenberg-Marquardt with geodesic acceleration.
+    """Minimise ``|r(theta)|^2`` by :func:`rigidid.core.optimize.levenberg_marquardt` with geodesic acceleration.
 
     `fun(theta)` gives the residual, `jacobian(theta)` the residual and its Jacobian (computed
     only at accepted points: the expensive call; `fun` costs about a fifteenth of it here).
-    Each iteration solves the 51x51 damped normal equations ``(J^T J + mu D) v = -J^T r``
-    (Marquardt's scaling ``D = diag(J^T J)``), then adds half the geodesic acceleration
-    ``a``, ``(J^T J + mu D) a = -J^T r''_v``, with the second directional derivative
-    ``r''_v`` from a central difference along ``v`` (two residual evaluations), and tries
-    ``v + a / 2``. A step whose acceleration is large against it (``2 |a| / |v| > 0.75`` in
-    the ``D`` norm) is refused untried. The damping follows Nielsen's rule: times
-    ``max(1/3, 1 - (2 rho - 1)^3)`` after a step that lowers the cost (``rho`` the actual
-    over the predicted decrease), times 2, 4, 8... after each refused one.
+    The geodesic acceleration's second directional derivative ``r''_v`` is a central
+    difference along the step ``v`` (two residual evaluations).
 
     Stops, converged, when the Gauss-Newton decrement ``g^T (J^T J)^+ g`` (``g = J^T r``)
     over the residual variance ``|r|^2 / (n - n_theta)`` falls below :data:`_DECREMENT`:
@@ -467,69 +462,46 @@ def _levenberg_marquardt(
     standard error; or when the decrement is below 4 and the last step lowered the cost by
     less than :data:`_STALL` variances: a minimum on the boundary of the positive
     (semi-)definite J, K, C, where the Gauss-Newton step points out of the parameterisation's
-    reach (a weakly damped direction whose estimate would be negative). Stops unconverged
-    after `max_evaluations` residual evaluations (may overrun by two) or when the damping
-    exceeds 1e10 (no step lowers the cost).
+    reach (a weakly damped direction whose estimate would be negative); or when the
+    decrement is below the rounding floor of `scale` (``|y|^2`` of the weighted data; the
+    cost at the start by default): exact data. Stops unconverged after `max_evaluations`
+    residual evaluations (may overrun by three) or when no step lowers the cost.
+    `residuals` is the length of ``r`` (the variance's degrees of freedom).
 
     Returns
     -------
     theta, evaluations, residual, jacobian, converged
     """
-    theta = theta0
-    r, jm = jacobian(theta)
-    cost = float(r @ r)
-    nfev = 1
-    mu, nu = 1e-3, 2.0
-    dof = max(r.size - theta.size, 1)
-    converged = False
-    drop = math.inf  # decrease of the cost by the last accepted step
-    while nfev < max_evaluations and mu < 1e10:
-        jtj = jm.T @ jm
-        g = jm.T @ r
-        u, sv, vt = np.linalg.svd(jtj)  # the pseudo-inverse intervals.parameter_covariance uses
-        gn = -(vt.T / np.where(sv > 1e-12 * sv[0], sv, np.inf)) @ (u.T @ g)
-        variance = max(cost / dof, 1e-300)
-        decrement = -float(g @ gn) / variance
-        if decrement <= _DECREMENT or (drop <= _STALL * variance and decrement <= _STALL_DECREMENT):
-            converged = True
-            break
-        d = np.maximum(np.diag(jtj), 1e-12 * max(float(np.max(np.diag(jtj))), 1e-300))
-        try:
-            lhs = np.linalg.cholesky(jtj + mu * np.diag(d))
-        except np.linalg.LinAlgError:
-            mu, nu = mu * nu, 2.0 * nu
-            continue
+    last: dict[str, Array] = {}
 
-        def solve(b: Array, lower: Array = lhs) -> Array:
-            return np.asarray(np.linalg.solve(lower.T, np.linalg.solve(lower, b)))
+    def normal(x: Array, index: Any) -> tuple[Array, Array, Array]:
+        r, jm = jacobian(x[0])
+        last.update(theta=x[0].copy(), r=r, jm=jm)
+        return np.array([r @ r]), (jm.T @ r)[None], (jm.T @ jm)[None]
 
-        step = solve(-g)
+    def residual(theta: Array) -> Array | None:
         try:
-            h = _GEODESIC_H
-            rvv = (fun(theta + h * step) - 2.0 * r + fun(theta - h * step)) / h**2
-            acc = solve(-(jm.T @ rvv))
+            return np.asarray(fun(theta))
         except np.linalg.LinAlgError:
-            acc = np.zeros_like(step)
-        nfev += 2
-        ratio = 2.0 * math.sqrt(float(acc @ (d * acc)) / max(float(step @ (d * step)), 1e-300))
-        predicted = -float(2.0 * g @ step + step @ jtj @ step)
-        cost_new = math.inf
-        trial = theta + step + 0.5 * acc
-        if ratio <= _GEODESIC_ALPHA:
-            try:
-                r_new = fun(trial)
-                cost_new = float(r_new @ r_new)
-            except np.linalg.LinAlgError:
-                pass
-            nfev += 1
-        if cost_new < cost:
-            rho = min((cost - cost_new) / predicted, 1.0) if predicted > 0.0 else 0.0
-            theta, cost, drop = trial, cost_new, cost - cost_new
-            r, jm = jacobian(theta)
-            mu, nu = max(mu * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12), 2.0
-        else:
-            mu, nu = mu * nu, 2.0 * nu
-    return theta, nfev, r, jm, converged
+            return None
+
+    def cost(x: Array, index: Any) -> Array:
+        r = residual(x[0])
+        return np.array([math.inf if r is None else float(r @ r)])
+
+    def acceleration(x: Array, step: Array, index: Any) -> Array:
+        h = _GEODESIC_H
+        ahead, behind = residual(x[0] + h * step[0]), residual(x[0] - h * step[0])
+        if ahead is None or behind is None:
+            return np.zeros_like(step)
+        out: Array = (last["jm"].T @ ((ahead - 2.0 * last["r"] + behind) / h**2))[None]
+        return out
+
+    best = levenberg_marquardt(
+        normal, cost, theta0[None], max_evaluations=max_evaluations, scale=None if scale is None else np.array([scale]),
+        residuals=residuals, decrement=_DECREMENT, stall=(_STALL, _STALL_DECREMENT), acceleration=acceleration,
+    )  # fmt: skip
+    return best.x[0], int(best.evaluations[0]), last["r"], last["jm"], bool(best.converged[0])
 
 
 def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray, dphiw: CArray, dlam: CArray) -> Array:
@@ -729,7 +701,8 @@ def refine_prepared(
         return _evaluate(theta, data, pos_l, dirs, omega, False)[0]
 
     if max_evaluations > 0:
-        theta, nfev, r, jm, converged = _levenberg_marquardt(fun, both, theta0, max_evaluations)
+        n_res, scale = sum(d.size for d in data.decays), sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
+        theta, nfev, r, jm, converged = _levenberg_marquardt(fun, both, theta0, max_evaluations, n_res, scale)
     else:
         theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)

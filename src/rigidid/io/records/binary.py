@@ -14,7 +14,7 @@ The layouts (also in ``docs/FORMATS.md``):
     floats; mode shapes compare channels.
 ``.tdms``
     One group of channels named by sensor id, plus optionally ``time``;
-    else the channels' ``wf_increment`` (:mod:`rigidid.io.tdms_records`).
+    else the channels' ``wf_increment`` (:mod:`rigidid.io.records.tdms`).
 ``.npz``, ``.mat``, ``.h5``/``.hdf5``
     Named arrays (``.h5``: datasets at the root of the file), either
 
@@ -51,14 +51,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
 from rigidid.io.guard import guarded, reading
+from rigidid.io.records.columns import RESERVED_FIELDS, channel_names
 
 __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_blocks", "read_binary", "write_binary"]
 
 Array = NDArray[np.float64]
 
 BINARY_SUFFIXES = (".npy", ".npz", ".mat", ".h5", ".hdf5", ".wav", ".tdms")
-
-_RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 
 
 @dataclass(frozen=True)
@@ -107,20 +106,6 @@ def _scalar(value: Any, src: str, name: str) -> float:
     return number
 
 
-def _names(value: Any, src: str) -> list[str]:
-    arr = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
-    if arr.dtype.kind in "SU" and arr.ndim == 2:  # MATLAB char matrix: one name per row
-        return ["".join(str(c) for c in row).strip() for row in arr]
-    out = []
-    for item in np.ravel(arr):
-        if isinstance(item, np.ndarray):  # MATLAB cell array element
-            item = item.item() if item.size == 1 else "".join(str(c) for c in np.ravel(item))
-        if isinstance(item, bytes):
-            item = item.decode("utf-8", errors="replace")
-        out.append(str(item).strip())
-    return out
-
-
 def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> RawRecord:
     """A record from named arrays (npz, mat, h5 root)."""
     time: Array | None = None
@@ -146,7 +131,7 @@ def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> Ra
             raise InputError(
                 "'data' needs 'channels', the names of its columns", source=src, location=_field("channels")
             )
-        names = _names(fields["channels"], src)
+        names = channel_names(fields["channels"])
         if len(names) != data.shape[1]:
             if len(names) == data.shape[0] and data.shape[1] != len(names):
                 data = data.T  # channels x samples, as MATLAB users often store it
@@ -156,7 +141,7 @@ def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> Ra
                 )
         field = _field("data")
     else:
-        names = [k for k in fields if k not in _RESERVED and not k.startswith("__")]
+        names = [k for k in fields if k not in RESERVED_FIELDS and not k.startswith("__")]
         if not names:
             raise InputError("no channels: give 'data' and 'channels', or one array per sensor id", source=src)
         columns = []
@@ -357,7 +342,7 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
 def _named_blocks(p: Path, rows: int) -> BlockRecord | None:
     suffix = p.suffix.lower()
     if suffix in (".npz", ".h5", ".hdf5", ".mat"):
-        from rigidid.io.array_streams import open_blocks
+        from rigidid.io.records.arrays import open_blocks
 
         opened = open_blocks(p, rows)
         if opened is None:
@@ -367,7 +352,7 @@ def _named_blocks(p: Path, rows: int) -> BlockRecord | None:
     if suffix == ".wav":
         return _wav_blocks(p, rows)
     if suffix == ".tdms":
-        from rigidid.io.tdms_records import open_tdms
+        from rigidid.io.records.tdms import open_tdms
 
         try:
             names, n, dt, parts = open_tdms(p, rows)
@@ -423,7 +408,7 @@ def _read_binary(p: Path, src: str) -> RawRecord:
 
         if not zipfile.is_zipfile(p):
             raise InputError("not a .npz file (not a zip archive, or truncated)", source=src)
-        from rigidid.io.array_streams import npz_headers
+        from rigidid.io.records.arrays import npz_headers
 
         with zipfile.ZipFile(p) as zf:
             npz_headers(zf, src)
@@ -437,7 +422,7 @@ def _read_binary(p: Path, src: str) -> RawRecord:
         rate, data = _wav(p, src, mmap=False)
         return RawRecord(None, _wav_floats(data), None, 1.0 / rate, "channels")
     if suffix == ".tdms":
-        from rigidid.io.tdms_records import open_tdms
+        from rigidid.io.records.tdms import open_tdms
 
         names, _, dt, parts = open_tdms(p, 1 << 16)
         pieces = list(parts)
@@ -447,7 +432,7 @@ def _read_binary(p: Path, src: str) -> RawRecord:
     if suffix == ".mat":
         from scipy.io import loadmat
 
-        from rigidid.io.array_streams import is_mat73, mat73_fields
+        from rigidid.io.records.arrays import is_mat73, mat73_fields
 
         if is_mat73(p):  # MATLAB v7.3 is HDF5
             try:

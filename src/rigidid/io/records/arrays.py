@@ -1,6 +1,6 @@
 """Named arrays of ``.npz``, ``.mat`` (v5 and v7.3) and ``.h5`` files read in row blocks.
 
-The record layouts are those of :mod:`rigidid.io.binary_records`: ``data``
+The record layouts are those of :mod:`rigidid.io.records.binary`: ``data``
 plus ``channels``, or one 1-D array per sensor id; ``time`` or a scalar
 ``dt``/``sample_rate``. This module finds where each array's values sit and
 reads them a block of samples at a time, so the memory held is one block,
@@ -43,13 +43,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError
+from rigidid.io.records.columns import RESERVED_FIELDS, channel_names
 
 __all__ = ["MatVar", "is_mat73", "mat73_fields", "npz_headers", "open_blocks", "scan_mat5"]
 
 Array = NDArray[np.float64]
 Reader = Callable[[int], Array]  # next `count` samples, (count, m)
 
-_RESERVED = {"time", "dt", "sample_rate", "data", "channels"}
 _CHUNK = 1 << 16
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -255,7 +255,7 @@ def _plan(
         n = shape[axis]
         plan = _Plan(names, n, dt, "field 'data'", time_part, [("data", axis)])
     else:
-        names = [k for k in shapes if k not in _RESERVED and not k.startswith("__")]
+        names = [k for k in shapes if k not in RESERVED_FIELDS and not k.startswith("__")]
         if not names:
             return None
         lengths = {_vector_length(shapes[k]) for k in names}
@@ -587,12 +587,10 @@ def _h5_record(path: Path, rows: int, mat73: bool) -> tuple[_Plan, Iterator[Any]
         extra = {k: v for k, v in fh.attrs.items() if k in ("dt", "sample_rate")}
         if "data" in datasets:
             extra.update({k: v for k, v in datasets["data"].attrs.items() if k in ("dt", "sample_rate")})
-    from rigidid.io.binary_records import _names
-
     def small(key: str) -> Any:
         return _mat73_value(fh, datasets[key]) if mat73 else datasets[key][()]
 
-    plan = _plan(shapes, small, lambda v: _names(v, str(path)), extra) if ok else None
+    plan = _plan(shapes, small, channel_names, extra) if ok else None
     if plan is None:
         fh.close()
         return None
@@ -652,8 +650,6 @@ def open_blocks(path: Path, rows: int) -> tuple[_Plan, Iterator[Any]] | None:
 
     else:
         return None
-    from rigidid.io.binary_records import _names
-
     shapes = {k: a.shape for k, a in arrays.items()}
     if suffix == ".mat":
         shapes = {**shapes_small, **shapes}
@@ -664,7 +660,7 @@ def open_blocks(path: Path, rows: int) -> tuple[_Plan, Iterator[Any]] | None:
             item.close()
         return None
     try:
-        plan = _plan(shapes, small, lambda v: _names(v, str(path)), {})
+        plan = _plan(shapes, small, channel_names, {})
     except (ValueError, OSError, NotImplementedError, KeyError):
         plan = None
     if plan is None or any(name not in arrays for name, _ in plan.parts):

@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
 
 from rigidid.errors import InputError
 from rigidid.io.dialect import column_key
 
-__all__ = ["NON_SENSOR_PREFIXES", "column", "match_columns", "row"]
+__all__ = ["NON_SENSOR_PREFIXES", "RESERVED_FIELDS", "channel_names", "column", "match_columns", "row"]
+
+RESERVED_FIELDS = frozenset({"time", "dt", "sample_rate", "data", "channels"})
+"""Names of a binary record's arrays that are not channels (``.npz``, ``.mat``, ``.h5``)."""
 
 NON_SENSOR_PREFIXES = ("force", "hammer", "trigger", "excitation", "tacho", "impact", "load_cell")
 """Column names (matched without case and unit suffix) that are not sensors and are left out."""
@@ -89,3 +95,18 @@ def column_order(names: Sequence[str] | None, count: int, wanted: Sequence[str],
             )
         return list(range(count))
     return match_columns(names, wanted, src, where)[0]
+
+
+def channel_names(value: Any) -> list[str]:
+    """Channel names as a file stores them: an array of strings or bytes, a MATLAB cell array or char matrix."""
+    arr = np.asarray(value, dtype=object) if not isinstance(value, np.ndarray) else value
+    if arr.dtype.kind in "SU" and arr.ndim == 2:  # MATLAB char matrix: one name per row
+        return ["".join(str(c) for c in row).strip() for row in arr]
+    out = []
+    for item in np.ravel(arr):
+        if isinstance(item, np.ndarray):  # MATLAB cell array element
+            item = item.item() if item.size == 1 else "".join(str(c) for c in np.ravel(item))
+        if isinstance(item, bytes):
+            item = item.decode("utf-8", errors="replace")
+        out.append(str(item).strip())
+    return out

@@ -1,0 +1,743 @@
+"""Records processed as their rows arrive: streaming decimation, content spectrum, impact location, prepared decays.
+
+Every function here takes a record as blocks of rows in order (an iterable of
+arrays ``(rows, channels)``, from :mod:`rigidid.io.records.sources` or any other
+producer) and its sample interval; none opens a file. Each gives what the
+whole-record routine of :mod:`~rigidid.core.timedomain.preprocess` or
+:mod:`~rigidid.core.timedomain.refine` gives, holding one block and its result:
+
+- :class:`StreamingDecimation`: the record decimated by a *pre-factor* ``q0``
+  chosen from its head (and, with ``cascade``, by a second stage chosen from
+  the content spectrum of the first :data:`READ_CONTENT_ROWS` rows of decay);
+  :class:`ContentWelch` that spectrum fed block by block;
+- :func:`locate_impact`: :func:`~rigidid.core.timedomain.preprocess.find_impact`
+  on the raw rows around a known impact, the rest bounded by block maxima;
+- :func:`decay_pass` / :func:`prepared_decays`:
+  :func:`~rigidid.core.timedomain.refine.prepare_decays` of records in blocks;
+- :func:`record_power` / :func:`power_density`:
+  :func:`rigidid.core.spectrum.summed_spectrum` of records in blocks.
+
+How ``q0`` is chosen, when the caller does not fix it: from the first
+:data:`HEAD_ROWS` rows of the first record, the impact is located and the
+content range of the decay after it measured, exactly as the estimation does
+it on the whole record (:func:`~rigidid.core.timedomain.preprocess.find_impact`,
+:func:`~rigidid.core.timedomain.preprocess.content_range`); ``q0`` is
+:data:`PRE_SAFETY` times smaller than the factor that content would give (so
+the new Nyquist frequency stays 16 times above the highest frequency seen in
+the head, not 4), keeps at least :data:`PULSE_SAMPLES` samples per
+:data:`PULSE_WIDTH` (the impact is still located to a fraction of its pulse)
+and is at most :data:`MAX_PRE_FACTOR`. Records of at most :data:`HEAD_ROWS`
+rows are not pre-decimated (``q0 = 1``).
+
+References
+----------
+.. [1] "Determination of rigid body characteristics from time domain modal test
+   data", Journal of Sound and Vibration, 1994 (the records of Section 3).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.core.timedomain import estimate
+from rigidid.core.timedomain.preprocess import (
+    FIR_HALF_LENGTH,
+    Decimator,
+    Impact,
+    channel_energy,
+    content_from_spectrum,
+    content_spectrum,
+    decimation_for,
+    energy_bound,
+    find_impact,
+    segment_power,
+)
+from rigidid.core.timedomain.refine import MAX_ROWS, PreparedDecays, cut_decays, fit_factor, pretrigger_sigma
+from rigidid.errors import InputError
+
+__all__ = [
+    "AFTER_ROWS",
+    "HEAD_ROWS",
+    "MAX_PRE_FACTOR",
+    "PRE_SAFETY",
+    "PULSE_SAMPLES",
+    "PULSE_WIDTH",
+    "READ_CONTENT_ROWS",
+    "ContentWelch",
+    "DecayPass",
+    "Decimated",
+    "StreamingDecimation",
+    "chunk_maxima",
+    "decay_pass",
+    "head_content",
+    "locate_impact",
+    "locate_impacts",
+    "power_density",
+    "pre_factor",
+    "prepared_decays",
+    "record_power",
+    "second_factor",
+    "spectra_content",
+]
+
+Array = NDArray[np.float64]
+Blocks = Iterable[Array]
+Spectrum = tuple[Array, Array]
+
+READ_CONTENT_ROWS = 1 << 18
+"""Rows of free decay the reader's content spectrum covers (2^18; the estimation's own spectrum of a
+whole record covers 2^16): the second stage's factor comes from it, and a longer span resolves
+the modes' leakage better at high rates (8 x 10^7 rows at 500 kHz: content to 1709 Hz against
+1831 Hz, a second stage of 3 against 2, 18 MB held against 27 MB)."""
+
+HEAD_ROWS = 1 << 16
+"""Rows of the first record from which the pre-factor is chosen (held raw until then)."""
+
+MAX_PRE_FACTOR = 64
+"""Largest pre-decimation factor."""
+
+PULSE_WIDTH = 0.005
+"""The impact pulse width the estimation assumes by default (s)."""
+
+PULSE_SAMPLES = 16
+"""The pre-decimated record keeps at least this many samples per :data:`PULSE_WIDTH`."""
+
+PRE_SAFETY = 4
+"""The pre-factor is this many times below the factor the head's content allows."""
+
+AFTER_ROWS = 1 << 16
+"""Raw rows held after the estimate's decay start (at least): where the largest channel energy is sought."""
+
+_THRESHOLD = 0.01  # find_impact's defaults, as the estimation uses them
+_CHUNK = 128  # rows per maximum kept outside the window (the energy bound's resolution)
+
+
+class ContentWelch:
+    """``content_spectrum`` of the decay ``record[start : start + READ_CONTENT_ROWS]`` fed block by block.
+
+    The segments (4096 samples, half overlap, Hann window, mean removed) are
+    transformed as soon as they are complete; each channel's sum is divided by
+    the variance of its whole part at the end, as
+    :func:`~rigidid.core.timedomain.preprocess.content_spectrum` does.
+
+    Parameters
+    ----------
+    start : int
+        Raw row (from 0) where the free decay starts.
+    dt : float
+        Sample interval (s).
+    channels : int
+        Columns of every block.
+    """
+
+    SEG = 4096
+    SPAN = READ_CONTENT_ROWS
+
+    def __init__(self, start: int, dt: float, channels: int) -> None:
+        self.start, self.dt = start, dt
+        self.window = np.hanning(self.SEG + 2)[1:-1]
+        self.power = np.zeros((channels, self.SEG // 2 + 1))
+        self.segments = 0
+        self.sums = np.zeros(channels)
+        self.squares = np.zeros(channels)
+        self.count = 0
+        self.buffer = np.empty((0, channels))
+        self.buffer_at = start  # raw row of buffer[0]
+        self.next = start  # raw row where the next segment starts
+
+    def add(self, values: Array, first_row: int) -> None:
+        """Feed raw rows ``first_row ...`` (blocks in order)."""
+        end = self.start + self.SPAN
+        lo, hi = max(first_row, self.start), min(first_row + values.shape[0], end)
+        if hi <= lo:
+            return
+        part = values[lo - first_row : hi - first_row]
+        self.sums += part.sum(axis=0)
+        self.squares += np.einsum("ij,ij->j", part, part)
+        self.count += part.shape[0]
+        self.buffer = np.concatenate([self.buffer, part]) if self.buffer.shape[0] else part
+        starts = []
+        while self.next + self.SEG <= hi:
+            starts.append(self.next - self.buffer_at)
+            self.next += self.SEG // 2
+        if starts:
+            self.power += segment_power(self.buffer, np.asarray(starts), self.window).T
+            self.segments += len(starts)
+        drop = self.next - self.buffer_at
+        self.buffer = self.buffer[drop:].copy()
+        self.buffer_at = self.next
+
+    def complete(self, rows: int) -> bool:
+        """Whether the spectrum is final once `rows` raw rows have been fed."""
+        return rows >= self.start + self.SPAN
+
+    def spectrum(self) -> Spectrum | None:
+        """Frequencies and the summed normalised spectrum (None: decay shorter than a segment)."""
+        if self.segments == 0 or self.count < self.SEG:
+            return None
+        var = self.squares / self.count - (self.sums / self.count) ** 2
+        keep = var > 0.0
+        total = (self.power[keep] / self.segments / var[keep, None]).sum(axis=0)
+        freqs: Array = np.asarray(np.fft.rfftfreq(self.SEG, self.dt), dtype=float)
+        return freqs, total
+
+
+def head_content(head: Array, time: Array) -> tuple[float, Spectrum, int] | None:
+    """Sample interval, content spectrum of the decay in the head and the decay's start (None: none found).
+
+    Parameters
+    ----------
+    head : ndarray, shape (n, channels)
+        The first rows of the record.
+    time : ndarray, shape (n,)
+        Their sample times (s).
+    """
+    dt = float(time[-1] - time[0]) / (time.shape[0] - 1)
+    if not dt > 0.0:
+        return None
+    try:
+        start = find_impact(head, dt).start
+    except InputError:  # an all-zero head: the checks after reading will say what is wrong
+        return None
+    freqs, total = content_spectrum([head[start:]], dt)
+    return (dt, (freqs, total), start) if total.size else None
+
+
+def pre_factor(dt: float, spectrum: Spectrum, f_limit: float | None) -> int:
+    """The pre-decimation factor from the content of the head (see the module documentation).
+
+    Parameters
+    ----------
+    dt : float
+        The raw sample interval (s).
+    spectrum : (ndarray, ndarray)
+        :func:`head_content`'s spectrum.
+    f_limit : float, optional
+        Upper edge of the user's band (Hz).
+    """
+    f_high = content_from_spectrum(*spectrum, 0.5 / dt)[1]
+    if f_limit is not None:
+        f_high = min(f_high, f_limit)
+    first = decimation_for(f_high, dt)
+    cap = max(1, min(first // PRE_SAFETY, int(PULSE_WIDTH / (PULSE_SAMPLES * dt)), MAX_PRE_FACTOR))
+    # a divisor of the factor the content gives, if one is near the cap: the two stages then add up to it
+    divisor = next((d for d in range(cap, 0, -1) if first % d == 0), 1)
+    return divisor if 2 * divisor >= cap else cap
+
+
+def second_factor(f_high: float, dt: float, factor: int, f_limit: float | None = None) -> int:
+    """The factor the estimation decimates a record pre-decimated by `factor` by (its first choice).
+
+    Parameters
+    ----------
+    f_high : float
+        Highest frequency standing out of the noise (Hz, ``content_range``).
+    dt : float
+        The raw sample interval (s).
+    factor : int
+        Pre-decimation factor.
+    f_limit : float, optional
+        Upper edge of the user's band (Hz).
+
+    Returns
+    -------
+    int
+        ``decimation_for(min(f_high, f_limit), dt * factor)`` with the
+        estimation's margin: what
+        :func:`~rigidid.core.timedomain.estimate.decimation_factors` tries
+        first on a long record.
+    """
+    if f_limit is not None:
+        f_high = min(f_high, f_limit)
+    return decimation_for(f_high, dt * factor, margin=estimate.DECIMATION_MARGIN)
+
+
+def spectra_content(spectra: Sequence[Spectrum | None], dt: float) -> tuple[float, float] | None:
+    """The content range from the spectra measured on the raw records (None: let the estimation measure it).
+
+    Parameters
+    ----------
+    spectra : sequence of (ndarray, ndarray) or None
+        Each record's :meth:`ContentWelch.spectrum`.
+    dt : float
+        The raw sample interval (s).
+    """
+    if any(s is None for s in spectra) or len({s[1].shape for s in spectra if s is not None}) != 1:
+        return None
+    total = np.sum([s[1] for s in spectra if s is not None], axis=0)
+    return content_from_spectrum(spectra[0][0], total, 0.5 / dt) if spectra[0] is not None else None
+
+
+class _Rows:
+    """Output rows appended in place; the buffer grows by a quarter when a row count was underestimated."""
+
+    def __init__(self, capacity: int, channels: int) -> None:
+        self.out = np.empty((capacity, channels))
+        self.capacity, self.filled = capacity, 0
+
+    def add(self, done: Array) -> None:
+        if self.filled + done.shape[0] > self.capacity:  # the row count of a CSV was estimated from its size
+            self.capacity = max(self.filled + done.shape[0], int(self.capacity * 1.25))
+            grown = np.empty((self.capacity, self.out.shape[1]))
+            grown[: self.filled] = self.out[: self.filled]
+            self.out = grown
+        self.out[self.filled : self.filled + done.shape[0]] = done
+        self.filled += done.shape[0]
+
+    def view(self) -> Array:
+        return self.out[: self.filled]
+
+
+@dataclass(frozen=True)
+class Decimated:
+    """A record after :class:`StreamingDecimation`.
+
+    Attributes
+    ----------
+    data : ndarray, shape (m, channels)
+        The record decimated by `factor`.
+    factor : int
+        Total decimation factor (1: the record as fed).
+    offset : int
+        Raw row (from 0) of ``data[0]``; row ``k`` of `data` is raw row ``offset + k factor``.
+    stages : (int, int)
+        The pre-factor and the second stage's factor; `factor` is their product.
+    energy : ndarray, shape (m,)
+        ``channel_energy(data)``.
+    spectrum : (ndarray, ndarray) or None
+        The content spectrum of the first :data:`READ_CONTENT_ROWS` raw rows of
+        decay (:class:`ContentWelch`); None for a record of at most
+        :data:`HEAD_ROWS` rows.
+    """
+
+    data: Array
+    factor: int
+    offset: int
+    stages: tuple[int, int]
+    energy: Array
+    spectrum: Spectrum | None
+
+
+class StreamingDecimation:
+    """A record decimated as its blocks arrive, in one or two stages (module documentation).
+
+    Parameters
+    ----------
+    rows : int
+        The record's rows as known before reading (a CSV's estimated from its
+        size): sizes the output buffer and bounds the factors.
+    channels : int
+        Columns of every block.
+    factor : int, optional
+        Pre-decimation factor; default: chosen from the first :data:`HEAD_ROWS`
+        rows (:func:`pre_factor`).
+    f_limit : float, optional
+        Upper edge of the user's band (Hz): caps the content the factors keep.
+    cascade : bool
+        Start a second stage (:func:`second_factor`) once the content spectrum
+        is complete, when the record is long enough (at least twice the rows
+        the estimation requires) and `factor` is not given.
+    second : int, optional
+        A second-stage factor fixed by the caller, applied from the first row.
+    keep_rows : int, optional
+        An automatic pre-factor leaves at least this many of `rows`.
+
+    Notes
+    -----
+    :meth:`run` feeds the blocks, :meth:`finish` ends the record: the output is
+    ``decimate(record, q0)`` (and ``decimate(., q2)`` of it), the same
+    polyphase sums as :func:`~rigidid.core.timedomain.preprocess.decimate` on
+    the whole record.
+    """
+
+    def __init__(
+        self,
+        rows: int,
+        channels: int,
+        *,
+        factor: int | None = None,
+        f_limit: float | None = None,
+        cascade: bool = False,
+        second: int | None = None,
+        keep_rows: int | None = None,
+    ) -> None:
+        self.hint, self.channels, self.factor, self.f_limit = rows, channels, factor, f_limit
+        self.cascade, self.second, self.keep_rows = cascade, second, keep_rows
+        self.rows = 0  # raw rows fed
+        self.welch: ContentWelch | None = None
+        self.stage2: Decimator | None = None
+        self.auto = False
+        self.total = 1
+
+    def run(self, blocks: Iterable[tuple[Array, Array]], check: Callable[[Array, Array], None] | None = None) -> None:
+        """Feed every block ``(time, values)``; `check` sees each before it is used."""
+        blocks = iter(blocks)
+        pending: list[tuple[Array, Array]] = []
+        held = 0  # hold the head raw: its content chooses the factor and is the estimation's
+        for t, values in blocks:
+            pending.append((t, values))
+            held += t.shape[0]
+            if held > HEAD_ROWS:
+                break
+        self._start(pending, held)
+        for t, values in pending:
+            self._feed(t, values, check)
+        pending.clear()
+        for t, values in blocks:
+            self._feed(t, values, check)
+
+    def _start(self, pending: list[tuple[Array, Array]], held: int) -> None:
+        """Choose the pre-factor from the head (longer records only) and set up the stages."""
+        if held > HEAD_ROWS:  # longer than the head (a shorter record is fed whole, not pre-decimated)
+            head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
+            found = head_content(head, np.concatenate([t for t, _ in pending])[:HEAD_ROWS])
+            del head
+            if found is not None:
+                self.welch = ContentWelch(found[2], found[0], self.channels)
+                if self.factor is None:
+                    self.factor = pre_factor(found[0], found[1], self.f_limit)
+                    if self.keep_rows is not None:
+                        self.factor = max(1, min(self.factor, self.hint // max(1, self.keep_rows)))
+        factor = self.factor = 1 if self.factor is None else self.factor
+        self.auto = self.cascade and self.second is None and factor > 1
+        self.stream = Decimator(factor, self.channels)
+        if self.second is not None and self.second > 1 and factor > 1:
+            self.stage2 = Decimator(self.second, self.channels)
+        self.total = factor * (self.stage2.factor if self.stage2 is not None else 1)
+        self.out = _Rows(self.hint // self.total + 2 * FIR_HALF_LENGTH + 16, self.channels)
+
+    def _feed(self, t: Array, values: Array, check: Callable[[Array, Array], None] | None) -> None:
+        if check is not None:
+            check(t, values)
+        if self.welch is not None:
+            self.welch.add(values, self.rows)
+        self.rows += t.shape[0]
+        done = self.stream.push(values)
+        self.out.add(done if self.stage2 is None else self.stage2.push(done))
+        if self.auto and self.welch is not None and self.welch.complete(self.rows):
+            self.auto = False  # the content is known: start the second stage on what is held
+            self._second_stage(self.welch)
+
+    def _second_stage(self, welch: ContentWelch) -> None:
+        spectrum = welch.spectrum()
+        if spectrum is None:
+            return
+        factor = int(self.factor or 1)
+        q2 = second_factor(content_from_spectrum(*spectrum, 0.5 / welch.dt)[1], welch.dt, factor, self.f_limit)
+        if q2 > 1 and (self.hint - welch.start) // factor >= 2 * q2 * estimate.MIN_DECIMATED_SAMPLES:
+            self.stage2 = Decimator(q2, self.channels)
+            held = self.stage2.push(self.out.view())
+            self.total = factor * q2
+            self.out = _Rows(max(self.hint // self.total + 2 * FIR_HALF_LENGTH + 16, held.shape[0]), self.channels)
+            self.out.add(held)
+
+    def finish(self) -> Decimated:
+        """End of the record: the decimated rows and where they sit.
+
+        Raises
+        ------
+        InputError
+            A record too short for a stage's filter.
+        """
+        self.stream.finish()
+        if self.stage2 is not None:
+            self.stage2.finish()
+        factor = int(self.factor or 1)
+        data = self.out.view()
+        offset = FIR_HALF_LENGTH * factor if factor > 1 else 0
+        if self.stage2 is not None:
+            offset += FIR_HALF_LENGTH * self.total
+        spectrum = self.welch.spectrum() if self.welch is not None else None
+        stages = (factor, self.total // factor)
+        return Decimated(data, self.total, offset, stages, channel_energy(data), spectrum)
+
+
+def chunk_maxima(mags: Array) -> Array:
+    """``max |x|`` per channel of every 128 rows of `mags` (shape (n, p)), shape (chunks, p)."""
+    n = mags.shape[0]
+    whole = n // _CHUNK * _CHUNK
+    parts = [mags[:whole].reshape(-1, _CHUNK, mags.shape[1]).max(axis=1)] if whole else []
+    if whole < n:
+        parts.append(mags[whole:].max(axis=0, keepdims=True))
+    return np.concatenate(parts) if parts else np.zeros((0, mags.shape[1]))
+
+
+def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) -> Impact | None:
+    """:func:`find_impact` on a raw record, from its rows ``lo:hi`` and every block's maxima; None if unsure.
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray, shape (rows, channels)
+        The raw record, in order.
+    channels : int
+        Columns of every block.
+    dt : float
+        Sample interval (s).
+    lo, hi : int
+        The raw rows held (where the impact and the largest energy must lie).
+
+    Returns
+    -------
+    Impact or None
+        In the record's rows; None when the rows held cannot prove it (a
+        larger energy, or one above the onset threshold, outside them).
+    """
+    peaks = np.zeros(channels)
+    held: list[Array] = []
+    before: list[Array] = []  # max |x| per channel of each block part before the window
+    after: list[Array] = []  # ... and after it
+    row = 0
+    for values in blocks:
+        stop = row + values.shape[0]
+        mags = np.abs(values)
+        peaks = np.maximum(peaks, mags.max(axis=0))
+        if row < lo:
+            before.append(chunk_maxima(mags[: min(stop, lo) - row]))
+        if stop > lo and row < hi:
+            held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
+        if stop > hi:
+            after.append(chunk_maxima(mags[max(0, hi - row) :]))
+        row = stop
+    if not held:
+        return None
+    window = np.concatenate(held)
+    energy = channel_energy(window, peaks)
+    top = float(energy.max()) if energy.size else 0.0
+    if top <= 0.0:
+        return None
+
+    def bound(parts: list[Array]) -> float:  # no row of these chunks has a larger energy
+        return float(max(energy_bound(m, peaks).max() for m in parts)) if parts else 0.0
+
+    # the largest energy lies in the window, no row before it reaches the threshold
+    if bound(after) > top or bound(before) > _THRESHOLD * top:
+        return None
+    found = find_impact(window, dt, threshold=_THRESHOLD, pulse_width=PULSE_WIDTH, energy=energy)
+    pulse = max(2, round(PULSE_WIDTH / dt))
+    if found.onset + pulse > window.shape[0] or found.start >= window.shape[0] - 1:
+        return None  # the pulse window or the decay start run past the rows held
+    return Impact(lo + found.onset, lo + found.peak, lo + found.start)
+
+
+def locate_impacts(
+    records: Callable[[int], Blocks], channels: int, dt: float, near: Sequence[Impact], reach: int
+) -> list[Impact] | None:
+    """The impacts :func:`find_impact` finds on raw records, each read once in blocks.
+
+    Parameters
+    ----------
+    records : callable
+        ``records(i)``: the blocks of record ``i`` (read when called).
+    channels : int
+        Columns of every block.
+    dt : float
+        The raw sample interval (s).
+    near : sequence of Impact
+        Where the decimated records put each impact (in raw rows).
+    reach : int
+        Raw rows the true onset may lie before ``near.onset`` and the true
+        decay start after ``near.start`` (the decimation filters' reach).
+
+    Returns
+    -------
+    list of Impact or None
+        None when the rows held cannot prove one of them (:func:`locate_impact`).
+
+    Notes
+    -----
+    Per record, the raw rows ``near.onset - reach ... near.start + max(reach,
+    AFTER_ROWS)`` are held (the largest energy can come a cycle of the slowest
+    mode after the impact) and, outside them, ``max |x|`` per channel of every
+    128 rows. The energy weights (``1 / max |x|`` per channel,
+    :func:`channel_energy`) come from the whole record; the rows outside the
+    window are bounded by their blocks' maxima, as
+    :func:`~rigidid.core.timedomain.preprocess.impact_from_blocks` does.
+    """
+    found = []
+    for i, impact in enumerate(near):
+        lo, hi = max(0, impact.onset - reach), impact.start + max(reach, AFTER_ROWS)
+        one = locate_impact(records(i), channels, dt, lo, hi)
+        if one is None:
+            return None
+        found.append(one)
+    return found
+
+
+@dataclass(frozen=True)
+class DecayPass:
+    """What one pass over a record gives the refit (:func:`decay_pass`).
+
+    Attributes
+    ----------
+    rows : int
+        Rows counted.
+    pre_count : int
+        Pre-trigger rows.
+    pre_m2 : ndarray, shape (p,)
+        Their squared deviations from their mean, per channel.
+    decay : ndarray, shape (m, p)
+        ``decimate(record[start:], factor)``, at most `cap` rows of it.
+    """
+
+    rows: int
+    pre_count: int
+    pre_m2: Array
+    decay: Array
+
+
+def decay_pass(blocks: Blocks, channels: int, start: int, pre_end: int, factor: int, cap: int) -> DecayPass:
+    """The pre-trigger statistics of rows ``:pre_end`` and the decimated decay from row `start` of a record.
+
+    The pre-trigger count and squared deviations from the mean are merged
+    block by block (Chan, Golub and LeVeque's pairwise update, so no
+    cancellation); the decay is decimated by a streaming
+    :class:`~rigidid.core.timedomain.preprocess.Decimator` fed from row
+    `start` (the same polyphase sums as on the whole record).
+    """
+    stream = Decimator(factor, channels)
+    n_pre, mean, m2 = 0, np.zeros(channels), np.zeros(channels)
+    parts: list[Array] = []
+    held = 0
+    row = 0
+    for values in blocks:
+        stop = row + values.shape[0]
+        if row < pre_end:  # pre-trigger statistics, merged block by block
+            x = values[: min(stop, pre_end) - row]
+            n_b = x.shape[0]
+            mean_b = x.mean(axis=0)
+            m2_b = ((x - mean_b) ** 2).sum(axis=0)
+            total = n_pre + n_b
+            delta = mean_b - mean
+            m2 = m2 + m2_b + delta**2 * (n_pre * n_b / total)
+            mean = mean + delta * (n_b / total)
+            n_pre = total
+        if stop > start and held < cap:
+            out = stream.push(values[max(0, start - row) :])
+            if out.shape[0]:
+                out = out[: cap - held]
+                parts.append(np.array(out, dtype=float))
+                held += out.shape[0]
+        row = stop
+    if held < cap:
+        stream.finish()
+    decay = np.concatenate(parts) if parts else np.zeros((0, channels))
+    return DecayPass(row, n_pre, m2, decay)
+
+
+def prepared_decays(
+    records: Callable[[int], Blocks],
+    rows: Sequence[int],
+    channels: int,
+    dt: float,
+    *,
+    starts: Sequence[int],
+    onsets: Sequence[int],
+    factor: int,
+) -> PreparedDecays:
+    """:func:`~rigidid.core.timedomain.refine.prepare_decays` of records read in blocks.
+
+    Parameters
+    ----------
+    records : callable
+        ``records(i)``: the blocks of record ``i`` (read when called; a record
+        may be read twice).
+    rows : sequence of int
+        Each record's rows as known before reading (a CSV's from its size).
+    channels : int
+        Columns of every block.
+    dt : float
+        The raw sample interval (s).
+    starts, onsets : sequence of int
+        Per record, the impact's free-decay start and onset (raw rows from 0).
+    factor : int
+        The modal estimate's total decimation factor.
+
+    Returns
+    -------
+    PreparedDecays
+        The same as ``prepare_decays(records, dt, starts, onsets, factor)`` on
+        the whole records.
+
+    Notes
+    -----
+    The fit's factor (:func:`~rigidid.core.timedomain.refine.fit_factor`)
+    depends on the records' lengths: it is taken from `rows` and checked
+    against the rows counted; when they ask another factor the records are
+    read once more. At most :data:`~rigidid.core.timedomain.refine.MAX_ROWS`
+    values of the decays are held.
+    """
+    cap = MAX_ROWS // channels + 1  # no decay keeps more (cut_decays)
+    known = list(rows)
+    for _ in range(2):
+        q = fit_factor([n - s for n, s in zip(known, starts, strict=True)], channels, max(1, factor))
+        read = [
+            decay_pass(records(i), channels, s, max(0, o - 2), q, cap)
+            for i, (s, o) in enumerate(zip(starts, onsets, strict=True))
+        ]
+        counted = [r.rows for r in read]
+        if fit_factor([n - s for n, s in zip(counted, starts, strict=True)], channels, max(1, factor)) == q:
+            break
+        known = counted
+    decays = cut_decays([r.decay for r in read], channels)
+    sigma, noise_from = pretrigger_sigma([r.pre_count for r in read], [r.pre_m2 for r in read], len(read), q)
+    return PreparedDecays(decays, sigma, dt * q, noise_from)
+
+
+def record_power(blocks: Blocks, channels: int, window: Array) -> Array:
+    """Sum over channels of the mean of ``|rfft((x_s - mean) w)|^2`` over every Welch segment of one record.
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray, shape (rows, channels)
+        The record, in order.
+    channels : int
+        Columns of every block.
+    window : ndarray, shape (n,)
+        The segment's window (its length is the segment's); segments overlap by half.
+
+    Raises
+    ------
+    ValueError
+        A record shorter than one segment.
+    """
+    n = window.shape[0]
+    step = n - n // 2
+    power = np.zeros((n // 2 + 1, channels))
+    count = 0
+    buffer = np.empty((0, channels))
+    base = 0  # row of buffer[0]
+    following = 0  # row of the next segment's start
+    for values in blocks:
+        part = np.concatenate([buffer, values]) if buffer.shape[0] else values
+        last = base + part.shape[0] - n  # the last start whose segment is complete
+        if last >= following:
+            starts = np.arange(following, last + 1, step, dtype=np.intp)
+            power += segment_power(np.array(part, dtype=float), starts - base, window)
+            count += starts.size
+            following = int(starts[-1]) + step
+        keep = max(0, following - base)
+        buffer = np.array(part[keep:], dtype=float)
+        base += keep
+    if count == 0:
+        raise ValueError(f"shorter than one segment of {n} rows")
+    return np.asarray(power.sum(axis=1) / count)
+
+
+def power_density(total: Array, window: Array, dt: float) -> tuple[Array, Array]:
+    """Frequencies and the one-sided density from the summed :func:`record_power` of the records.
+
+    Returns
+    -------
+    frequency_hz : ndarray, shape (n // 2 + 1,)
+    power : ndarray, shape (n // 2 + 1,)
+        Summed one-sided power spectral density (channel unit squared per Hz),
+        as :func:`rigidid.core.spectrum.summed_spectrum`.
+    """
+    n = window.shape[0]
+    density = total / ((1.0 / dt) * float(np.sum(window * window)))
+    density[1 : (n + 1) // 2] *= 2.0  # one-sided: DC (and Nyquist for even n) once
+    return np.asarray(np.fft.rfftfreq(n, dt), dtype=float), density

@@ -1,0 +1,247 @@
+"""Impact records read block by block and decimated as they arrive: memory bounded by the result.
+
+:func:`read_record_streamed` is :func:`rigidid.io.records.read_record` for the
+modal estimation: it runs the same checks (columns, numbers, finite, uniform
+time, no dead channel, decay) block by block while it reads
+(:mod:`rigidid.io.records.checks`), and feeds every block to
+:class:`~rigidid.core.timedomain.streaming.StreamingDecimation`, so the
+full-rate record is never held whole. What it returns is the record decimated
+by a *pre-factor* ``q0`` (chosen from the head of the first record, see
+:mod:`rigidid.core.timedomain.streaming`); the estimation then chooses its own
+factor on that (decimation in two stages, ``q0`` while reading and the rest
+after). The choice depends on the first
+:data:`~rigidid.core.timedomain.streaming.HEAD_ROWS` rows only, so it is the
+same whatever the file's format; shorter records are not pre-decimated (the
+same data as :func:`~rigidid.io.records.read_record`). The records of one
+estimation share the first record's ``q0``.
+
+Time is checked block by block against the median step of the first block
+(:class:`~rigidid.io.records.checks.TimeCheck`). The decay check runs on the
+pre-decimated record; its rows are mapped back to the file's lines.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.core.timedomain.streaming import Decimated, StreamingDecimation, second_factor, spectra_content
+from rigidid.errors import InputError
+from rigidid.io.records.checks import MIN_ROWS, TimeCheck, check_decay, layout_ids
+from rigidid.io.records.columns import column as _column
+from rigidid.io.records.columns import row as _where
+from rigidid.io.records.sources import BlockSource, open_source
+from rigidid.progress import ProgressCallback
+
+__all__ = ["StreamedRecord", "read_record_streamed", "read_records_streamed"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class StreamedRecord:
+    """A record after streamed reading and pre-decimation.
+
+    Attributes
+    ----------
+    data : ndarray, shape (m, sensors)
+        The record decimated by `factor`, columns in layout order.
+    dt : float
+        Sample interval of `data` (s): `factor` times the file's.
+    factor : int
+        Total decimation factor while reading (1: the record as read).
+    offset : int
+        Raw row (from 0) of ``data[0]``; row ``k`` of `data` is raw row
+        ``offset + k factor``.
+    rows : int
+        Data rows in the file.
+    energy : ndarray, shape (m,)
+        ``channel_energy(data)`` (computed once, for the decay check and the impact).
+    spectrum : (ndarray, ndarray) or None
+        ``content_spectrum`` of the first 2^18 raw samples of the free decay
+        (:data:`~rigidid.core.timedomain.streaming.READ_CONTENT_ROWS`; the impact located in the
+        first :data:`~rigidid.core.timedomain.streaming.HEAD_ROWS` rows), accumulated while
+        reading, at the file's sample rate (the estimation's own spectrum of a whole record
+        covers 2^16). None for a record of at most ``HEAD_ROWS``
+        rows (read whole, the estimation measures it).
+    stages : (int, int)
+        The pre-factor and the second stage's factor (1: none; see the
+        `cascade` option of :func:`read_record_streamed`); `factor` is their
+        product.
+    """
+
+    data: Array
+    dt: float
+    factor: int
+    offset: int
+    rows: int
+    energy: Array
+    spectrum: tuple[Array, Array] | None = None
+    stages: tuple[int, int] = (1, 1)
+
+
+
+def read_record_streamed(
+    path: str | os.PathLike[str],
+    sensor_ids: Sequence[str],
+    *,
+    factor: int | None = None,
+    f_limit: float | None = None,
+    progress: ProgressCallback | None = None,
+    cascade: bool = False,
+    second: int | None = None,
+    keep_rows: int | None = None,
+) -> StreamedRecord:
+    """Read one impact record block by block, checking it and decimating it as it arrives.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A CSV or binary record (the formats of :func:`rigidid.io.records.read_record`).
+    sensor_ids : sequence of str
+        The layout's sensor ids.
+    factor : int, optional
+        Pre-decimation factor; default: chosen from the head of the record
+        (module documentation).
+    f_limit : float, optional
+        Highest frequency of interest (Hz, the upper edge of the user's band):
+        caps the content the pre-factor must keep.
+    progress : ProgressCallback, optional
+        ``("reading <file name>", bytes or rows done, total)``.
+    cascade : bool
+        Decimate in a second stage while reading too, by the factor the
+        estimation would choose (:func:`~rigidid.core.timedomain.streaming.second_factor`), as
+        soon as the content spectrum is complete (2^18 rows of decay): only the
+        record at the estimation's rate is then held. Applied only when the
+        record is long enough (at least twice the rows the estimation
+        requires) and `factor` is not given; ``stages`` says whether it was.
+    second : int, optional
+        A second-stage factor fixed by the caller (the first record's, for
+        the others), applied from the first row.
+    keep_rows : int, optional
+        An automatic pre-factor leaves at least this many rows of the record
+        (of its rows as the file's size tells them): for a caller that
+        decimates further by a factor of its own (the refit, which fits the
+        decays at the smallest factor its row budget allows).
+
+    Returns
+    -------
+    StreamedRecord
+
+    Raises
+    ------
+    InputError
+        The errors of :func:`rigidid.io.records.read_record`, naming the file,
+        row and column; and a record too short for `factor`.
+    """
+    src = str(path)
+    wanted = layout_ids(sensor_ids, src)
+    source = open_source(Path(path), wanted, progress)
+    times = TimeCheck(source.line_of, source.time_tokens, src)
+    peaks = np.zeros(len(wanted))
+
+    def check(t: Array, values: Array) -> None:
+        times.add(t)
+        np.maximum(peaks, np.max(np.abs(values), axis=0), out=peaks)
+
+    stream = StreamingDecimation(source.rows, len(wanted), factor=factor, f_limit=f_limit,
+                                 cascade=cascade, second=second, keep_rows=keep_rows)  # fmt: skip
+    stream.run(source.blocks, check)
+    dt = _checked_dt(source, times, peaks, wanted, src)
+    try:
+        done = stream.finish()
+    except InputError as exc:
+        raise InputError(exc.message, source=src) from None
+    _check_streamed_decay(done, source.line_of(times.rows), src)
+    return StreamedRecord(
+        done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages
+    )
+
+
+def _checked_dt(source: BlockSource, times: TimeCheck, peaks: Array, wanted: list[str], src: str) -> float:
+    """The sample interval once every block is read; raise for too few rows or a channel that reads zero."""
+    n = times.rows
+    if n < MIN_ROWS:
+        last = source.line_of(n)(n - 1) if n else 1
+        raise InputError(f"{n} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(last))
+    dt = times.dt() if source.dt is None else float(source.dt)
+    for i, name in enumerate(wanted):
+        if not peaks[i] > 0.0:
+            raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
+    return dt
+
+
+def _check_streamed_decay(done: Decimated, line_of: Callable[[int], int], src: str) -> None:
+    """:func:`~rigidid.io.records.checks.check_decay` on the decimated record, its rows named by the file's lines."""
+    data, total, offset = done.data, done.factor, done.offset
+    check_decay(data, lambda k: line_of(offset + (k if k >= 0 else data.shape[0] + k) * total), src, done.energy)
+
+
+def read_records_streamed(
+    paths: Sequence[str | os.PathLike[str]],
+    sensor_ids: Sequence[str],
+    factor: int | None = None,
+    f_limit: float | None = None,
+    progress: ProgressCallback | None = None,
+    *,
+    cascade: bool = False,
+    keep_rows: int | None = None,
+) -> tuple[list[StreamedRecord], tuple[float, float] | None]:
+    """The records of one estimation, read with :func:`read_record_streamed` at one rate.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        One record per impact.
+    sensor_ids : sequence of str
+        The layout's sensor ids.
+    factor : int, optional
+        The user's decimation factor (no second stage then).
+    f_limit : float, optional
+        Upper edge of the user's band (Hz).
+    progress : ProgressCallback, optional
+        Reading progress.
+    cascade : bool
+        Let the first record choose a second stage (``cascade`` of
+        :func:`read_record_streamed`); the others take it. When the content
+        of all records together asks the estimation for another factor than
+        the first record's alone, they are read again without it.
+    keep_rows : int, optional
+        See :func:`read_record_streamed` (the first record's pre-factor is
+        everyone's).
+
+    Returns
+    -------
+    records : list of StreamedRecord
+        At one total factor.
+    content : (float, float) or None
+        ``content_range`` of the records' free decays from the spectra measured
+        while reading (None: some record too short for it).
+
+    Raises
+    ------
+    InputError
+        As :func:`read_record_streamed`; records of different sample intervals.
+    """
+    first = read_record_streamed(paths[0], sensor_ids, factor=factor, f_limit=f_limit, progress=progress,
+                                 cascade=cascade and factor is None, keep_rows=keep_rows)  # fmt: skip
+    q0, q2 = first.stages
+    streamed = [first]
+    streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
+    total = streamed[0].factor
+    dts = [r.dt for r in streamed]
+    if max(dts) - min(dts) > 1e-9 * max(dts):
+        raise InputError(
+            f"records have different sample intervals ({min(dts) / total:.6g} to {max(dts) / total:.6g} s)",
+            source="records",
+        )
+    content = spectra_content([r.spectrum for r in streamed], dts[0] / total)
+    if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
+        del streamed, first
+        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False, keep_rows=keep_rows)
+    return streamed, content
