@@ -185,6 +185,7 @@ HOSTILE: list[tuple[str, str, Callable[[bytes], bytes], str]] = [
     ("wav zero channels", "r.wav", lambda d: d[:22] + bytes(2) + d[24:], "r.wav: header"),
     ("csv 1_0", "r.csv", lambda d: d.replace(b"\n0.5,", b"\n1_0,", 1), "'1_0' is not a number"),
     ("frf csv arabic digit", "f.csv", lambda d: d.replace(b"\n1.0,", "\n\u0661,".encode(), 1), "not a number"),
+    ("frf csv huge cell", "f.csv", lambda d: d + b"9" * 200_000, "not valid CSV: field larger than field limit"),
     ("frf uff rotation", "f.uff", lambda d: _uff_direction(d, 4), "is a rotation about x"),
     ("frf uff direction 0", "f.uff", lambda d: _uff_direction(d, 0), "is not a UFF direction code"),
 ]  # fmt: skip

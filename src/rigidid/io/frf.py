@@ -66,6 +66,14 @@ def reference_arrays(refs: ReferencesFile) -> tuple[tuple[str, ...], NDArray[np.
     return ids, positions, directions
 
 
+def _rows(reader: csv.DictReader[str], src: str) -> Any:
+    """The rows of a CSV reader; a malformed line (a cell above the field limit...) one InputError naming it."""
+    try:
+        yield from reader
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV: {exc}", source=src, location=f"row {reader.line_num}") from None
+
+
 def load_frf_csv(
     path: str | os.PathLike[str], sensor_ids: Sequence[str], reference_ids: Sequence[str]
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
@@ -100,7 +108,10 @@ def load_frf_csv(
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read: {exc}", source=src) from None
     reader = csv.DictReader(io.StringIO(text))
-    header = [h.strip() for h in (reader.fieldnames or [])]
+    try:
+        header = [h.strip() for h in (reader.fieldnames or [])]
+    except csv.Error as exc:  # a cell above the csv module's field limit, a NUL...
+        raise InputError(f"not valid CSV: {exc}", source=src, location="row 1") from None
     missing = [c for c in FRF_COLUMNS if c not in header]
     if missing:
         raise InputError(f"missing column {missing[0]!r} (need {', '.join(FRF_COLUMNS)})", source=src, location="row 1")
@@ -108,7 +119,7 @@ def load_frf_csv(
     s_index = {s: i for i, s in enumerate(sensor_ids)}
     r_index = {r: j for j, r in enumerate(reference_ids)}
     values: dict[tuple[int, int], dict[float, complex]] = {}
-    for n, row in enumerate(reader, start=2):
+    for n, row in enumerate(_rows(reader, src), start=2):
         if None in row or any(v is None for v in row.values()):
             cells = len(header) + len(row.get(None) or []) - sum(v is None for v in row.values())
             raise InputError(f"{cells} fields, the header has {len(header)}", source=src, location=f"row {n}")
