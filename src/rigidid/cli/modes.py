@@ -65,10 +65,15 @@ def modes(
         from rigidid.progress import terminal_progress
 
         modal = ModalOptions(modal_method, n_modes, band, max_order, decimate)
-        with terminal_progress() as progress:
-            table, estimate = api.estimate_records_modes(
-                layout, records or [], modal, units=parse_units(units, layout), geometry=geometry, progress=progress
-            )
+        try:
+            with terminal_progress() as progress:
+                table, estimate = api.estimate_records_modes(
+                    layout, records or [], modal, units=parse_units(units, layout), geometry=geometry, progress=progress
+                )
+        except InputError as exc:  # name the option the user typed, the deprecated one included
+            if exc.source == "modal_method" and method is not None:
+                exc.source = "--method"
+            raise
         text = modes_csv_text(table)
         with OutputSet() as outs:  # every output or none
             if json_path is not None:
