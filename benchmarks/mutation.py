@@ -10,7 +10,7 @@ any other pytest exit (collection error, no tests) stops the run.
 
 Usage, from the repository root::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 28
+    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 29
     PYTHONPATH=src python benchmarks/mutation.py --only mounts-norm-axis frf-residual-dof
     python benchmarks/mutation.py --list
 """
@@ -243,6 +243,22 @@ MUTANTS: tuple[Mutant, ...] = (
         "poles: CArray = np.log(z) * dt",
         "discrete to continuous poles: dividing by the sample interval",
         ("tests/core/test_timedomain.py",),
+    ),
+    Mutant(
+        "layout-antiparallel",
+        "core/layout_check.py",
+        "cosang = np.abs(lay.directions @ lay.directions.T)",
+        "cosang = lay.directions @ lay.directions.T",
+        "a reversed sensor next to another taken for a different direction (axes are lines, not senses)",
+        ("tests/core/test_mutants.py::test_a_reversed_sensor_next_to_another_is_as_redundant_as_a_parallel_one",),
+    ),
+    Mutant(
+        "undamped-pole-frequency",
+        "core/statespace.py",
+        "result: CArray = w * (-z + 1j * np.sqrt(1.0 - z * z))",
+        "result: CArray = w * (-z + 1j)",
+        "the damped natural frequency taken for the undamped one",
+        ("tests/core/test_statespace.py",),
     ),
     Mutant(
         "lm-unfloored-scaling",

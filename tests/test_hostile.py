@@ -214,7 +214,10 @@ def test_identify_leaves_a_device_target_a_device(tmp_path: Path) -> None:
         (["simulate", "{B}", "{FL}", "--records", "rec", "--sample-rate", "1e9"], "--sample-rate/--duration:"),
         (["simulate", "{B}", "{FL}", "--records", "afile"], "afile: is not a folder"),
         (["report", "{L}", "{M}", "-o", "r.html", "--png", "afile/x"], "afile/x: cannot make the folder"),
-        (["report", "{L}", "{M}", "-o", "r.html", "--body", "{B}"], "body.json: units: units m,kg differ"),
+        (
+            ["report", "{L}", "{M}", "-o", "r.html", "--body", "{B}"],
+            "body.json: units: units (m, kg) differ from the layout's units",
+        ),
         (["plan", "{FL}", "--draws", "20", "--json", "adir"], "adir: is a directory"),
         (["convert", "{U}", "-o", "afile"], "afile: is not a folder"),
     ],

@@ -14,6 +14,7 @@ from rigidid.core.frf import accelerance, random_elastic_modes
 from rigidid.core.frfmodes import with_nonrigid_residual
 from rigidid.core.geometry import sensor_matrix, transfer_matrix
 from rigidid.core.identify import model_modes
+from rigidid.core.layout_check import check_layout
 from rigidid.core.massline import _noise_residual, mass_line
 from rigidid.core.mounts import _OutputError, mount_rates, torque_roll_axis
 from rigidid.core.noise import NoiseLevels, apply_noise, draw_normals, shape_noise_from_residuals
@@ -283,3 +284,18 @@ def test_pretrigger_noise_after_decimation_is_the_decimated_noise(factor: int) -
     level, source = pretrigger_sigma([x.shape[0]], [np.sum((x - x.mean(axis=0)) ** 2, axis=0)], 1, factor)
     assert source == "pretrigger"
     np.testing.assert_allclose(level, np.std(decimate(x, factor), axis=0), rtol=0.02)
+
+
+# --- layout_check (mutant layout-antiparallel) ------------------------------------------------
+
+
+def test_a_reversed_sensor_next_to_another_is_as_redundant_as_a_parallel_one() -> None:
+    # a sensor measures along a line, not a sense: two sensors 1 cm apart along +x and -x read
+    # the same motion (one negated) exactly as +x and +x do, and both pairs are flagged
+    rng = np.random.default_rng(8)
+    pos, dirs = random_layout(rng, 8)
+    pos[1], dirs[0], dirs[1] = pos[0] + 0.01, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]
+    same = {f.sensors for f in check_layout(pos, dirs).findings if f.code == "redundant-pair"}
+    dirs[1] = [-1.0, 0.0, 0.0]
+    reversed_ = {f.sensors for f in check_layout(pos, dirs).findings if f.code == "redundant-pair"}
+    assert (1, 2) in same and reversed_ == same

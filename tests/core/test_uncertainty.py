@@ -286,13 +286,19 @@ def _simulated_test(rng: np.random.Generator, noise: NoiseLevels) -> tuple[Body,
 
 @pytest.mark.slow
 def test_calibration_of_95_percent_intervals(record_property: Callable[[str, object], None]) -> None:
-    """200 simulated tests: the intervals hold the true CG and principal moments 90-99 % of the time."""
+    """200 simulated tests: the intervals hold the true CG and principal moments 90-99 % of the time.
+
+    150 draws per test: a percentile interval from N draws holds a little less than its
+    nominal 95 % (its end points are themselves Monte Carlo estimates); measured on these 200
+    tests, CG 0.952 and moments 0.933 with 150 draws against 0.962 and 0.947 with 300,
+    inside the band either way, at half the time.
+    """
     noise = NoiseLevels(frequency=0.001, damping=0.05, shape=0.01, position=0.01, angle_deg=1.0)
     rng = np.random.default_rng(2024)
     hits_cg, hits_moments = [], []
     for k in range(200):
         body, pos, dirs, modes = _simulated_test(rng, noise)
-        result = propagate(pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=300, seed=k)
+        result = propagate(pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=150, seed=k)
         truth = np.linalg.eigvalsh(body.inertia_tensor)
         cg = result.center_of_gravity
         hits_cg.append((cg.low <= body.center_of_gravity) & (body.center_of_gravity <= cg.high))

@@ -346,11 +346,16 @@ def _levenberg_marquardt(problem: _VarPro, g0: Array, scale: Array) -> tuple[Arr
     `scale`, the data's ``|Q|^2 + w^2 |P|^2``): :func:`_polish` takes it from there.
     """
 
+    m = g0.shape[0]
+
+    def rows(index: NDArray[np.int64]) -> _VarPro:  # the optimiser's indices are ascending
+        return problem if index.size == m else problem.take(index)
+
     def normal(g: Array, index: NDArray[np.int64]) -> tuple[Array, Array, Array]:
-        return problem.take(index).normal_equations(g)
+        return rows(index).normal_equations(g)
 
     def cost(g: Array, index: NDArray[np.int64]) -> Array:
-        r = problem.take(index).evaluate(g)[0]
+        r = rows(index).evaluate(g)[0]
         out: Array = np.einsum("bi,bi->b", r, r)
         return out
 
