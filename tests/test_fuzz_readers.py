@@ -182,6 +182,7 @@ HOSTILE: list[tuple[str, str, Callable[[bytes], bytes], str]] = [
     ("npz lying size", "r.npz", _lying_npz, "its zip entry holds"),
     ("npz huge header", "r.npz", lambda d: _huge_npz(), "its zip entry holds"),
     ("wav format field", "r.wav", lambda d: d[:34] + bytes([48]) + d[35:], "not a WAV file"),
+    ("wav no data chunk", "r.wav", lambda d: d.replace(b"data", b"dxta", 1), "not a WAV file scipy reads (no data"),
     ("wav zero channels", "r.wav", lambda d: d[:22] + bytes(2) + d[24:], "r.wav: header"),
     ("csv 1_0", "r.csv", lambda d: d.replace(b"\n0.5,", b"\n1_0,", 1), "'1_0' is not a number"),
     ("frf csv arabic digit", "f.csv", lambda d: d.replace(b"\n1.0,", "\n\u0661,".encode(), 1), "not a number"),

@@ -269,10 +269,11 @@ def _wav(path: Path, src: str, mmap: bool) -> tuple[float, Any]:
         raise InputError(
             "its channel count, block size and bit depth disagree (0 bytes per sample)", source=src, location="header"
         ) from None
-    except (ValueError, TypeError) as exc:  # TypeError: a format field scipy maps to no data type
+    except (ValueError, TypeError, UnboundLocalError) as exc:  # a format field scipy maps to no type; no data chunk
         if mmap:
             raise ValueError(str(exc)) from None
-        raise InputError(f"not a WAV file scipy reads ({str(exc).splitlines()[0]})", source=src) from None
+        reason = "no data chunk" if isinstance(exc, UnboundLocalError) else str(exc).splitlines()[0]
+        raise InputError(f"not a WAV file scipy reads ({reason})", source=src) from None
     except OSError as exc:
         raise InputError(f"cannot read it as WAV ({exc})", source=src) from None
     if not float(rate) > 0.0:
