@@ -260,3 +260,12 @@ def test_a_truncated_tdms_is_one_error_and_no_nptdms_lines(base: dict[str, bytes
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True)
     assert "r.tdms" in proc.stdout
     assert proc.stderr == ""  # npTDMS logs "Last segment of file has less data than expected"
+
+
+def test_a_dataset_55_missing_a_values_line_is_one_line(base: dict[str, bytes], tmp_path: Path) -> None:
+    lines = base["local.unv"].decode().split("\n")
+    start = next(i for i, line in enumerate(lines) if line.strip() == "55" and lines[i - 1].strip() == "-1")
+    end = next(i for i in range(start, len(lines)) if lines[i].strip() == "-1")
+    path = _write(tmp_path / "cut.unv", "\n".join(lines[: end - 1] + lines[end:]).encode())  # the last values line
+    with pytest.raises(InputError, match=r"cut\.unv: dataset 55 #1: 8 nodes but 7, 7, 7 values per direction"):
+        read_uff(path)

@@ -800,8 +800,16 @@ def _sensors_from_modes(
     for dset, where in reader.modes:
         if int(dset.get("analysis_type", 0)) not in (2, 3, 7):
             continue
-        vectors = np.column_stack([np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)])
-        for node, vec in zip(np.asarray(dset.get("node_nums", []), dtype=int), vectors, strict=True):
+        columns = [np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)]
+        node_nums = np.asarray(dset.get("node_nums", []), dtype=int).reshape(-1)
+        if any(c.shape != node_nums.shape for c in columns):  # a line lost from the node-by-node values
+            raise reader.error(
+                f"{node_nums.size} nodes but {', '.join(str(c.size) for c in columns)} values per direction "
+                "(a damaged or truncated dataset)",
+                where,
+            )
+        vectors = np.column_stack(columns)
+        for node, vec in zip(node_nums, vectors, strict=True):
             for axis in range(3):
                 key = (int(node), axis + 1)
                 if vec[axis] != 0 and key not in sensors:
