@@ -177,6 +177,7 @@ def _uff_direction(data: bytes, code: int) -> bytes:
 
 
 HOSTILE: list[tuple[str, str, Callable[[bytes], bytes], str]] = [
+    ("npy header unclosed", "r.npy", lambda d: d.replace(b"}", b" ", 1), "r.npy: not a"),  # numpy's TokenError
     ("npz truncated", "r.npz", lambda d: d[: len(d) * 7 // 10], "not a .npz file"),
     ("npz bad CRC", "r.npz", lambda d: d[:400] + bytes([d[400] ^ 0xFF]) + d[401:], "r.npz"),
     ("npz lying size", "r.npz", _lying_npz, "its zip entry holds"),
@@ -269,3 +270,9 @@ def test_a_dataset_55_missing_a_values_line_is_one_line(base: dict[str, bytes], 
     path = _write(tmp_path / "cut.unv", "\n".join(lines[: end - 1] + lines[end:]).encode())  # the last values line
     with pytest.raises(InputError, match=r"cut\.unv: dataset 55 #1: 8 nodes but 7, 7, 7 values per direction"):
         read_uff(path)
+
+
+def test_an_unclosed_npy_header_is_one_line_when_streamed(base: dict[str, bytes], tmp_path: Path) -> None:
+    path = _write(tmp_path / "r.npy", base["r.npy"].replace(b"}", b" ", 1))  # numpy's tokenizer: TokenError
+    with pytest.raises(InputError, match=r"r\.npy: not a"):
+        read_record_streamed(path, IDS)

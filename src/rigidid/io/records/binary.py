@@ -202,7 +202,7 @@ def npy_blocks(path: str | os.PathLike[str], rows: int) -> tuple[int, int, Any] 
                 shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
             else:
                 return None
-        except (ValueError, OSError, EOFError):
+        except Exception:  # a damaged header (numpy's tokenizer raises TokenError too): read_binary names it
             return None
         offset = fh.tell()
     if fortran or dtype != np.dtype("<f8") or len(shape) != 2 or shape[1] < 2:
