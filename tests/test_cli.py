@@ -127,7 +127,7 @@ def test_simulate_then_identify_round_trip(tmp_path: Path) -> None:
 
 
 def test_simulate_noise_is_seeded() -> None:
-    args = ("simulate", ENGINE / "body.json", ENGINE / "layout.json", "--shape-noise", "0.01", "--seed", "3")
+    args = ("simulate", ENGINE / "body.json", ENGINE / "layout.json", "--add-shape-noise", "0.01", "--seed", "3")
     a, b = run(*args), run(*args)
     exact = run("simulate", ENGINE / "body.json", ENGINE / "layout.json")
     assert a.returncode == 0 and a.stdout == b.stdout and a.stdout != exact.stdout

@@ -32,8 +32,8 @@ def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     folder = tmp_path_factory.mktemp("records")
     out = run(
-        "simulate", FOUR / "body.json", FOUR / "layout.json", "-o", folder / "exact.csv", "--records", folder,
-        "--record-noise", "0.01", "--seed", "3", "--sample-rate", "256", "--duration", "4", "--pretrigger", "0.2",
+        "simulate", FOUR / "body.json", FOUR / "layout.json", "-o", folder / "exact.csv", "--write-records", folder,
+        "--add-record-noise", "0.01", "--seed", "3", "--sample-rate", "256", "--duration", "4", "--pretrigger", "0.2",
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
     return sorted(folder.glob("record-*.csv"))
@@ -289,3 +289,27 @@ def test_the_row_block_passes_read_csv_records_as_npy(long_records: list[Path], 
     spectra = [api.records_spectrum([p], layout) for p in (long_records[0], csv)]
     assert spectra[0] is not None and spectra[1] is not None
     np.testing.assert_allclose(spectra[1][1], spectra[0][1], rtol=0.0, atol=STREAMED_DECAY_ATOL * spectra[0][1].max())
+
+
+def test_warnings_describe_the_refined_answer_not_its_start(tmp_path: Path) -> None:
+    """Findings about the structured start (damping not PSD...) go when the refinement replaces it (issue 22)."""
+    from rigidid.core.identify import physical_checks
+
+    out = run(
+        "simulate", FOUR / "body.json", FOUR / "layout.json", "-o", tmp_path / "exact.csv", "--records", tmp_path,
+        "--record-noise", "0.05", "--seed", "1", "--sample-rate", "256", "--duration", "4", "--pretrigger", "0.2",
+    )  # fmt: skip
+    records = sorted(tmp_path.glob("record-*.csv"))
+    start = run("identify", FOUR / "layout.json", "--records", *records, "--no-refine", "--json", "-")
+    out = run("identify", FOUR / "layout.json", "--records", *records, "--json", "-")
+    assert out.returncode == 0 and start.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert "uncertainty_records_crb" in data and "standard_errors" not in data
+    keys = ("inertia_per_mass", "stiffness_per_mass", "damping_per_mass")
+    found = physical_checks(*(np.array(data[k]) for k in keys))
+    start_warnings = json.loads(start.stdout)["diagnostics"]["warnings"]
+    about_start = [w for w in start_warnings if w not in found and "sensor" not in w]
+    assert any("semi-definite" in w for w in about_start)  # the start's damping is not PSD here
+    for w in data["diagnostics"]["warnings"]:
+        assert w not in about_start, w
+    assert not [line for line in out.stderr.splitlines() if any(w in line for w in about_start)]

@@ -19,7 +19,7 @@ def engine_records(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     folder = tmp_path_factory.mktemp("records")
     out = run(
         "simulate", ENGINE / "body.json", ENGINE / "layout.json", "-o", folder / "exact.csv",
-        "--records", folder, "--record-noise", "0.01", "--seed", "7",
+        "--write-records", folder, "--add-record-noise", "0.01", "--seed", "7",
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
     return sorted(folder.glob("record-*.csv"))

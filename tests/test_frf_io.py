@@ -59,8 +59,8 @@ def test_bad_frf_csv_names_its_fault(tmp_path: Path, text: str, message: str) ->
 
 def test_simulate_frf_then_identify_massline_from_the_command_line(tmp_path: Path) -> None:
     frf = tmp_path / "frf.csv"
-    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", tmp_path / "m.csv", "--frf", frf,
-               "--references", REFS, "--frf-noise", "0.01", "--seed", "1")  # fmt: skip
+    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", tmp_path / "m.csv", "--write-frf", frf,
+               "--references", REFS, "--add-frf-noise", "0.01", "--seed", "1")  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "FRFs (2000 lines)" in done.stderr
     done = run("identify", FOUR / "layout.json", "--frf", frf, "--references", REFS, "--method", "massline",
@@ -133,8 +133,8 @@ def test_a_real_h1_export_without_nodes_is_refused_saying_why(tmp_path: Path) ->
 
 def test_identify_residues_takes_the_poles_from_the_modes_file(tmp_path: Path) -> None:
     frf, modes = tmp_path / "frf.csv", tmp_path / "modes.csv"
-    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", modes, "--frf", frf,
-               "--references", REFS, "--frf-noise", "0.01", "--seed", "3")  # fmt: skip
+    done = run("simulate", FOUR / "body.json", FOUR / "layout.json", "-o", modes, "--write-frf", frf,
+               "--references", REFS, "--add-frf-noise", "0.01", "--seed", "3")  # fmt: skip
     assert done.returncode == 0, done.stderr
     done = run("identify", FOUR / "layout.json", modes, "--frf", frf, "--references", REFS, "--method", "residues",
                "--mass", "41", "--json", "-")  # fmt: skip

@@ -146,7 +146,7 @@ def test_the_format_comes_from_the_option_or_the_suffix() -> None:
 def test_simulate_frf_uff_then_identify_massline(tmp_path: Path, test_files: tuple[Path, Path]) -> None:
     layout, refs = test_files
     frf = tmp_path / "frf.unv"
-    done = run("simulate", FOUR / "body.json", layout, "-o", tmp_path / "m.csv", "--frf", frf,
+    done = run("simulate", FOUR / "body.json", layout, "-o", tmp_path / "m.csv", "--write-frf", frf,
                "--references", refs, "--frf-format", "uff-ascii")  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert b"    58 " in frf.read_bytes()[:400] and b"58b" not in frf.read_bytes()
@@ -162,7 +162,9 @@ def test_simulate_refuses_a_reference_uff_cannot_name(tmp_path: Path, test_files
     layout, _ = test_files
     refs = DATA / "frf" / "references.json"  # ids h1, h2, h3
     frf = tmp_path / "frf.uff"
-    done = run("simulate", FOUR / "body.json", layout, "-o", tmp_path / "m.csv", "--frf", frf, "--references", refs)
+    done = run(
+        "simulate", FOUR / "body.json", layout, "-o", tmp_path / "m.csv", "--write-frf", frf, "--references", refs
+    )
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "error:" in done.stderr
     assert str(refs) in done.stderr and "reference id 'h1' is not a UFF node" in done.stderr

@@ -209,10 +209,10 @@ def test_identify_leaves_a_device_target_a_device(tmp_path: Path) -> None:
         (["identify", "{L}", "{M}", "--mass", "1e308", "--json", "o.json"], "--mass: must be at most 1e+100"),
         (["identify", "{L}", "{M}", "--seed", "-1", "--uncertainty", "5"], "--seed: must be from 0"),
         (["identify", "{L}", "{M}", "--bogus"], "rigidid identify: No such option: --bogus"),
-        (["simulate", "{B}", "{FL}", "--shape-noise", "inf", "-o", "m.csv"], "--shape-noise: must be a finite number"),
-        (["simulate", "{B}", "{FL}", "--records", "rec", "-o", "nodir/m.csv"], "nodir/m.csv: cannot write"),
-        (["simulate", "{B}", "{FL}", "--records", "rec", "--sample-rate", "1e9"], "--sample-rate/--duration:"),
-        (["simulate", "{B}", "{FL}", "--records", "afile"], "afile: is not a folder"),
+        (["simulate", "{B}", "{FL}", "--add-shape-noise", "inf", "-o", "m.csv"], "--add-shape-noise: must be a finite"),
+        (["simulate", "{B}", "{FL}", "--write-records", "rec", "-o", "nodir/m.csv"], "nodir/m.csv: cannot write"),
+        (["simulate", "{B}", "{FL}", "--write-records", "rec", "--sample-rate", "1e9"], "--sample-rate/--duration:"),
+        (["simulate", "{B}", "{FL}", "--write-records", "afile"], "afile: is not a folder"),
         (["report", "{L}", "{M}", "-o", "r.html", "--png", "afile/x"], "afile/x: cannot make the folder"),
         (
             ["report", "{L}", "{M}", "-o", "r.html", "--body", "{B}"],
@@ -236,7 +236,7 @@ def test_cli_refuses_in_one_line_and_writes_nothing(tmp_path: Path, args: list[s
 
 
 def test_records_errors_name_the_option_and_files(tmp_path: Path) -> None:
-    status, _, err = cli(tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--records", "rec",
+    status, _, err = cli(tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--write-records", "rec",
                          "--sample-rate", "128", "--duration", "4", "-o", "m.csv")  # fmt: skip
     assert status == 0, err
     recs = ["rec/record-1.csv", "rec/record-2.csv"]
@@ -318,9 +318,10 @@ def test_full_disk_is_one_line(tmp_path: Path) -> None:
         (["convert", "{U}", "-o", ""], "-o: empty output path"),
         (["identify", "{L}", "{M}", "--units", "in,lb"], "--units: is for a UFF file without dataset 164"),
         (["identify", "{L}", "{M}", "--mass", "1e-320"], "--mass: must be at least 1e-100"),
-        (["simulate", "{B}", "{FL}", "--frequency-noise", "10"], "--frequency-noise: too large"),
-        (["simulate", "{B}", "{FL}", "--frf", "f.csv", "--references", "r.json", "--frf-noise", "inf"],
-         "--frf-noise: must be a finite number"),
+        (["simulate", "{B}", "{FL}", "--add-frequency-noise", "10"], "--add-frequency-noise: too large"),
+        (["simulate", "{B}", "{FL}", "--write-frf", "f.csv", "--references", "r.json", "--add-frf-noise", "inf"],
+         "--add-frf-noise: must be a finite number"),
+        (["simulate", "{B}", "{FL}", "--write-records", ""], "--write-records: empty output path"),
         (["modes", "{FL}", "--frf", "f.csv", "--references", "r.json", "--max-order", "1001"],
          "--max-order: must be from 1 to 1000"),
         (["identify", "{FL}", "--records", "--frf", "f.csv", "--references", "r.json"], "give --records or --frf"),
@@ -335,15 +336,3 @@ def test_round_two_options_and_targets_are_refused_in_one_line(tmp_path: Path, a
     assert status == 2
     assert message in one_error(err)
     assert list(tmp_path.iterdir()) == []
-
-
-def test_simulate_with_mounts_names_the_files_not_the_body(tmp_path: Path) -> None:
-    mounts = tmp_path / "m.json"
-    two = [{"position": [x, 0, 0], "stiffness": [1e4, 1e4, 1e4]} for x in (0.3, -0.3)]  # a mechanism: no 6 modes
-    mounts.write_text(json.dumps({"units": {"length": "m", "mass": "kg"}, "mounts": two}))
-    status, _, err = cli(
-        tmp_path, "simulate", FOUR / "body.json", FOUR / "layout.json", "--mounts", mounts, "-o", "s.csv"
-    )
-    assert status == 2
-    assert one_error(err) == (f"rigidid: error: {FOUR / 'body.json'}, {mounts}: the body on its mounts must have six "
-                              "stable, underdamped modes")  # fmt: skip

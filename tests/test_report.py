@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import re
 import struct
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,8 @@ import pytest
 
 from rigidid.core.geometry import sensor_outline
 from rigidid.core.identify import Identification, identify
+from rigidid.core.noise import NoiseLevels
+from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
 from rigidid.errors import InputError, PhysicalPlausibilityWarning
 from rigidid.reporting import render_report, save_pngs
 
@@ -46,20 +49,26 @@ def stabilisation(ident: Identification) -> list[tuple[int, np.ndarray, np.ndarr
     return entries
 
 
-UNCERTAINTY: dict[str, Any] = {
-    "center_of_gravity": {
-        "estimate": [-0.31, -0.19, -1.63],
-        "std": [0.03, 0.028, 0.065],
-        "ci95": [[-0.37, -0.26], [-0.25, -0.14], [-1.76, -1.51]],
-    },
-    "principal_moments": {
-        "estimate": [2454.0, 3115.0, 5070.0],
-        "std": [107.0, 64.0, 177.0],
-        "ci95": [[2261.0, 2668.0], [2988.0, 3233.0], [4757.0, None]],
-    },
-    "draws": 200,
-    "failed": 0,
-}
+def _interval(estimate: list[float], std: list[float]) -> IntervalEstimate:
+    est, sd = np.array(estimate), np.array(std)
+    return IntervalEstimate(est, sd, est - 1.96 * sd, est + 1.96 * sd)
+
+
+UNCERTAINTY = Uncertainty(
+    center_of_gravity=_interval([-0.31, -0.19, -1.63], [0.03, 0.028, 0.065]),
+    inertia=IntervalEstimate(
+        np.diag([2454.0, 3115.0, 5070.0]), np.full((3, 3), 50.0), np.diag([2300.0] * 3), np.diag([5200.0] * 3)
+    ),
+    principal_moments=_interval([2454.0, 3115.0, 5070.0], [107.0, 64.0, 177.0]),
+    stiffness_diagonal=_interval([4.3e5, 4.4e5, 8.6e5, 2.1e7, 2.2e7, 3.9e7], [1e3] * 6),
+    damping_diagonal=_interval([1.0e3, 1.1e3, 2.0e3, 3.0e4, 3.1e4, 5.0e4], [10.0] * 6),
+    per_mass=False,
+    noise=NoiseLevels(frequency=0.001, damping=0.05, shape=5.238479517691258e-11),
+    draws=200,
+    failed=0,
+    implausible=0,
+    seed=0,
+)
 
 
 @pytest.fixture(scope="module")
@@ -125,9 +134,17 @@ def test_report_holds_the_results_with_units(
     assert "x-z block [lb/s], coupling blocks [lb·in/s], rx-rz block [lb·in²/s]" in report
     assert "mass 136 lb" in report
     assert "damping matrix is not positive semi-definite" in report  # the warning is shown
-    # the uncertainty table: a None bound is shown as a dash, the run counts as a caption
-    assert "4\u2009757 \u2026 \u2013" in report
-    assert "draws: 200; failed: 0" in report
+    # the uncertainty table: in the units of the tables above, its caption in words and rounded numbers
+    table = report[report.index(">Uncertainty<") :]
+    table = table[: table.index("</table>")]
+    assert "200 draws of the measurement errors (0 failed, 0 implausible, seed 0)" in table
+    assert "shape 5.24e-09 %" in table and "5.238479517691258e-11" not in table  # no raw floats
+    k_zz = 8.6e5 / 386.08858  # lb/s^2 -> lbf/in
+    matrix = report[report.index(">Stiffness matrix at the CG<") :]
+    rotation = re.search(r"rx-rz block \[([^\]]+)\]", matrix)
+    assert rotation is not None and f'<td class="label">{rotation.group(1)}</td>' in table  # as the matrix
+    assert '<td class="label">lbf/in</td>' in table and "lb/s²" not in table
+    assert f"<td>{k_zz:,.1f}</td>".replace(",", "\u2009") in table  # 2 227.5 lbf/in
 
 
 def test_decoupling_numbers_are_in_the_report(report: str) -> None:
@@ -197,8 +214,7 @@ def test_save_pngs_writes_the_figures(
     [
         ({"stabilisation": [(10, [1.0, 2.0], [True])]}, "2 frequencies but 1 stable flags"),
         ({"stabilisation": [(10, [1.0])]}, "expected \\(order, frequencies, stable flags\\)"),
-        ({"uncertainty": {"center_of_gravity": {"estimate": [1, 2, 3], "std": [1, 2], "ci95": [[0, 1]] * 3}}},
-         "do not match in shape"),
+        ({"uncertainty": replace(UNCERTAINTY, center_of_gravity=_interval([1, 2], [1, 2]))}, "not three numbers"),
         ({"units": {"length": "in"}}, "units need 'length' and 'mass'"),
         ({"sensor_ids": ["1", "2"]}, "6 positions, 6 directions and 2 sensor ids"),
     ],

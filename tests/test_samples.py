@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from .conftest import SAMPLES
-from .tolerances import CSV_DIGITS_REL, GOLDEN_REL
+from .tolerances import CSV_DIGITS_REL, GOLDEN_REL, STANDARD_ERROR_REL
 
 CASES = sorted(p.parent for p in SAMPLES.glob("*/expected.json"))
 
@@ -139,5 +139,13 @@ def test_regression_against_expected_json(sample: tuple[Path, dict[str, Any]]) -
     golden = dict(_numbers(expected))
     for group, keys in groups.items():
         scale = max(max(abs(golden[k]) for k in keys), 1.0 if group.startswith(".diagnostics") else 0.0) or 1.0
+        tolerance = GOLDEN_REL
+        if group.startswith(".standard_errors."):
+            # statistics: compared to the figure they qualify; on exact samples they come from
+            # rounding-level noise (the measured shape noise) and only their size is stable
+            figure = groups.get(group.replace(".standard_errors", "", 1), [])
+            floor = 1e-6 * max(abs(golden[k]) for k in figure) if figure else 1e-4
+            scale = max(max(abs(golden[k]) for k in keys), floor)
+            tolerance = STANDARD_ERROR_REL
         worst = max(abs(actual[k] - golden[k]) for k in keys)
-        assert worst <= GOLDEN_REL * scale, f"{case.name}{group}: {worst / scale:.2e} of its scale"
+        assert worst <= tolerance * scale, f"{case.name}{group}: {worst / scale:.2e} of its scale"

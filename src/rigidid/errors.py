@@ -16,6 +16,7 @@ from dataclasses import dataclass
 __all__ = [
     "DampingUnitWarning",
     "ElasticModeWarning",
+    "FrfMisfitWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -112,6 +113,14 @@ class ElasticModeWarning(RigididWarning):
     """A mode estimated from the records looks elastic (its shape fits rigid-body motion far worse than the others')."""
 
 
+class ClippedChannelWarning(RigididWarning):
+    """A record's channel is clipped (flat tops at its peak): it is left out of the fit, named."""
+
+
+class FrfMisfitWarning(RigididWarning):
+    """An FRF route's model misfits the FRFs by more than their noise explains (its answer may be off)."""
+
+
 class RefinementWarning(RigididWarning):
     """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""
 
@@ -141,3 +150,11 @@ def noted(into: list[str], *categories: type[Warning]) -> Iterator[None]:
         if issubclass(w.category, categories) and str(w.message) not in into:
             into.append(str(w.message))
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+class ModelMisfitWarning(RigididWarning):
+    """The rigid-body model explains the modes only to several times the stated noise (chi-square misfit)."""
+
+
+class UnitsWarning(RigididWarning):
+    """The data imply an implausible body (density, size): the units or the layout are probably wrong."""

@@ -45,6 +45,7 @@ __all__ = [
     "result_to_dict",
     "scaled_modes_to_dict",
     "sensor_plan_to_dict",
+    "standard_errors_to_dict",
     "uncertainty_to_dict",
 ]
 
@@ -169,6 +170,8 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         out.update(scaled_modes_to_dict(result.scaled, ident.mass))
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
+    if result.standard_errors is not None:
+        out["standard_errors"] = standard_errors_to_dict(result, force_unit)
     if result.record_spread is not None:
         out["uncertainty_records"] = record_spread_to_dict(result.record_spread)
     if result.record_bound is not None:
@@ -239,18 +242,14 @@ def _force_keys(result: IdentifyResult, force_unit: str | None) -> dict[str, Any
 
 def mounts_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
     """Per-mount rates in force units (per mass without a mass), with the fit's residual and uniqueness."""
-    from rigidid.units import force_units
+    from rigidid.units import rate_units
 
     assert result.mounts is not None
     m = result.mounts
     rates = m.rates
-    length, mass = result.units["length"], result.units["mass"]
-    if result.identification.mass is None:
-        factor, units = 1.0, {"stiffness": "1/s^2 (per mass)", "damping": "1/s (per mass)"}
-    else:
-        fu = force_units(length, mass, force_unit)
-        factor = fu.factor
-        units = {"stiffness": f"{fu.force}/{length}", "damping": f"{fu.force} s/{length}"}
+    per_mass = result.identification.mass is None
+    factor, k_unit, c_unit = rate_units(result.units["length"], result.units["mass"], force_unit, per_mass=per_mass)
+    units = {"stiffness": k_unit, "damping": c_unit}
     damping = rates.damping if rates.damping is not None else np.full_like(rates.stiffness, np.nan)
     return {
         "units": units,
@@ -344,6 +343,55 @@ def uncertainty_to_dict(result: Uncertainty) -> dict[str, Any]:
     }
 
 
+def standard_errors_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dict[str, Any]:
+    """JSON form of the default linearised standard errors (:func:`rigidid.core.linearised.standard_errors`).
+
+    Returns
+    -------
+    dict
+        ``method`` (``"linearised"``), ``weighted``, ``noise``, ``misfit``,
+        ``misfit_dof``, ``inflation``, ``failed``, and the standard errors of
+        ``center_of_gravity``, ``inertia_tensor``, ``principal_moments``,
+        ``principal_axes_deg``, ``stiffness_matrix``, ``damping_matrix`` (names as
+        the result's: ``_per_mass`` keys without a mass), with ``mounts``
+        (``stiffness``, ``damping`` per mount, in the units of the result's
+        ``mounts``) and ``torque_roll_axis_deg`` when those were computed.
+    """
+    from rigidid.units import force_units
+
+    err = result.standard_errors
+    assert err is not None
+    per = err.per_mass
+    out: dict[str, Any] = {
+        "method": "linearised",
+        "weighted": err.weighted,
+        "noise": noise_to_dict(err.noise),
+        "misfit": err.misfit,
+        "misfit_dof": err.misfit_dof,
+        "inflation": err.inflation,
+        "failed": err.failed,
+        "center_of_gravity": _vec(err.center_of_gravity),
+        ("inertia_per_mass" if per else "inertia_tensor"): _rows(err.inertia),
+        ("principal_moments_per_mass" if per else "principal_moments"): _vec(err.principal_moments),
+        "principal_axes_deg": _vec(err.principal_axes_deg),
+        ("stiffness_per_mass" if per else "stiffness_matrix"): _rows(err.stiffness),
+        ("damping_per_mass" if per else "damping_matrix"): _rows(err.damping),
+    }
+    m = result.mounts
+    if m is not None and m.stiffness_std is not None:
+        factor = 1.0
+        if result.identification.mass is not None:
+            factor = force_units(result.units["length"], result.units["mass"], force_unit).factor
+        damp = m.damping_std if m.damping_std is not None else np.full_like(m.stiffness_std, np.nan)
+        out["mounts"] = [
+            {"id": m.ids[k], "stiffness": _vec(factor * m.stiffness_std[k]), "damping": _plain(factor * damp[k])}
+            for k in range(len(m.ids))
+        ]
+    if result.torque_roll_axis_std_deg is not None:
+        out["torque_roll_axis_deg"] = result.torque_roll_axis_std_deg
+    return out
+
+
 def record_spread_to_dict(spread: RecordSpread) -> dict[str, Any]:
     """JSON form of record-segment intervals: per quantity ``{"estimate", "std", "ci95"}``, and
     ``method``, ``segments``, ``used``."""
@@ -365,8 +413,9 @@ def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
-    ``converged`` and per quantity
-    ``{"estimate", "std", "ci95"}``."""
+    ``converged``, per quantity ``{"estimate", "std", "ci95"}``, and, when the sensors'
+    tolerances were propagated, ``sensor_budget`` (per source, ``noise`` first, the std of
+    ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
         "normalised_cost": bound.normalised_cost,
@@ -376,7 +425,18 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         "evaluations": bound.evaluations,
         "converged": bound.converged,
     }
-    return {**head, **_body_intervals(bound)}
+    out = {**head, **_body_intervals(bound)}
+    if bound.sensor_budget is not None:
+        inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
+        out["sensor_budget"] = {
+            source: {
+                "center_of_gravity": parts["center_of_gravity"].tolist(),
+                inertia: parts["inertia_per_mass"].tolist(),
+            }
+            for source, parts in bound.sensor_budget.items()
+        }
+        out["tolerances"] = bound.tolerances
+    return out
 
 
 def layout_report_to_dict(report: LayoutReport) -> dict[str, Any]:
@@ -594,6 +654,16 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         "mass_given": None,
         "mass_difference": None,
         "mass_difference_relative": None,
+        "misfit_noise_units": None if ml.misfit_noise_units is None else float(ml.misfit_noise_units),
+        "misfit_where": ml.misfit_where,
+        "intervals": None
+        if ml.intervals is None
+        else {
+            "method": ml.intervals.method,
+            "mass": interval_to_dict(ml.intervals.mass),
+            "center_of_gravity": interval_to_dict(ml.intervals.center_of_gravity),
+            "inertia_tensor": interval_to_dict(ml.intervals.inertia_tensor),
+        },
     }
     if result.mass_given is not None:
         out["mass_given"] = float(result.mass_given)

@@ -107,6 +107,30 @@ class SensorSpec(_Strict):
         return (x / n, y / n, z / n)
 
 
+class TestBlock(_Strict):
+    """``layout.json``'s optional ``test``: what was measured, when and by whom (shown in the report)."""
+
+    __test__ = False  # not a pytest test class
+
+    id: Annotated[str, Field(max_length=200, description="the test's id")] | None = None
+    specimen: Annotated[str, Field(max_length=500, description="what was tested (part, serial number)")] | None = None
+    date: Annotated[str, Field(max_length=100, description="date of the measurement, e.g. 2026-11-26")] | None = None
+    operator: Annotated[str, Field(max_length=200, description="who measured")] | None = None
+    notes: Annotated[str, Field(max_length=5000, description="anything else (set-up, conditions)")] | None = None
+
+
+class SensorTolerances(_Strict):
+    """Bounds of the sensors' errors (half-widths of rectangular distributions): a type-B budget.
+
+    A field left out takes the default of :data:`rigidid.core.sensor_budget.DEFAULT_BOUNDS`.
+    """
+
+    sensitivity: Annotated[float, Field(ge=0.0, le=0.5, description="relative sensitivity error")] | None = None
+    orientation_deg: Annotated[float, Field(ge=0.0, le=20.0, description="tilt per normal axis, deg")] | None = None
+    transverse: Annotated[float, Field(ge=0.0, le=0.5, description="largest transverse sensitivity")] | None = None
+    position: Annotated[float, Field(ge=0.0, description="position error per axis (length unit)")] | None = None
+
+
 class LayoutFile(_Strict):
     """``layout.json``: the sensors of a test and, optionally, the body's mass."""
 
@@ -114,6 +138,10 @@ class LayoutFile(_Strict):
     units: Units
     mass: Annotated[float, Field(gt=0.0, description="mass of the body (mass unit)")] | None = None
     sensors: Annotated[list[SensorSpec], Field(min_length=1)]
+    test: TestBlock | None = Field(default=None, description="test metadata for the report (all optional)")
+    tolerances: SensorTolerances | None = Field(
+        default=None, description="the sensors' error bounds, propagated into the records' intervals (type B)"
+    )
 
     @field_validator("mass")
     @classmethod
@@ -320,6 +348,32 @@ class Interval(_Strict):
     ci95: Any
 
 
+class StandardErrorMount(_Strict):
+    """Standard errors of one mount's rates (units of the result's ``mounts``)."""
+
+    id: str
+    stiffness: list[float]
+    damping: list[float | None]
+
+
+class StandardErrorsResult(BaseModel):
+    """Default linearised standard errors; quantity keys as the result's (``_per_mass`` without a mass)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, defer_build=True)
+
+    method: Literal["linearised"]
+    weighted: bool = Field(description="whether the estimate is the noise-weighted one")
+    noise: dict[str, float] = Field(description="the standard deviations propagated")
+    misfit: float | None = Field(description="chi-square misfit of eq. (18) in noise units, null if not computed")
+    misfit_dof: int
+    inflation: float = Field(description="sqrt(max(1, misfit / misfit_dof)); every standard error is scaled by it")
+    failed: int
+    center_of_gravity: list[float]
+    principal_axes_deg: list[float]
+    mounts: list[StandardErrorMount] | None = None
+    torque_roll_axis_deg: float | None = None
+
+
 class UncertaintyResult(BaseModel):
     """Uncertainty intervals (``identify --uncertainty N``); quantity keys end in ``_per_mass`` without a mass."""
 
@@ -375,6 +429,15 @@ class RecordBoundResult(BaseModel):
         "variances, or stalled at the J, K, C > 0 boundary) rather than stopping at its evaluation budget",
     )
     center_of_gravity: Interval
+    sensor_budget: dict[str, dict[str, list[float] | list[list[float]]]] | None = Field(
+        default=None,
+        description="standard deviation of center_of_gravity and inertia_tensor from each source: noise (the "
+        "refit's bound) and the sensors' sensitivity, orientation, transverse sensitivity and position "
+        "tolerances (type B); std is their root sum of squares",
+    )
+    tolerances: dict[str, float] | None = Field(
+        default=None, description="the sensor error bounds the budget used (position in the layout's length unit)"
+    )
 
 
 class ScaledModesResult(_Strict):
@@ -411,6 +474,9 @@ class ResultFile(_Strict):
     energy_distribution: EnergyDistribution
     diagnostics: Diagnostics
     uncertainty: UncertaintyResult | None = None
+    standard_errors: StandardErrorsResult | None = Field(
+        default=None, description="default linearised standard errors of the structured route's figures"
+    )
     uncertainty_records: RecordSpreadResult | None = None
     uncertainty_records_crb: RecordBoundResult | None = Field(
         default=None, description="with --records and --refine: Cramér-Rao bound at the output-error fit"

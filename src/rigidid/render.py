@@ -8,13 +8,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.jsonout import noise_to_dict
 from rigidid.results import IdentifyResult, PlanResult
 
 if TYPE_CHECKING:
     from rich.console import Group
     from rich.table import Table
 
+    from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import ReferenceReport
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.results import MassLineResult
@@ -153,23 +153,25 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
     """Per-mount rates along each mount's axes, and the torque roll axis, when asked for."""
     from rich.table import Table
 
-    from rigidid.jsonout import mounts_to_dict
+    from rigidid.units import rate_units
 
     tables = []
     if result.mounts is not None:
-        data = mounts_to_dict(result, force_unit)
-        units = data["units"]
+        mounts = result.mounts
+        rates = mounts.rates
+        per_mass = result.identification.mass is None
+        factor, k_unit, c_unit = rate_units(result.units["length"], result.units["mass"], force_unit, per_mass=per_mass)
         table = Table(
-            title=f"Mounts: rates along their axes (stiffness {units['stiffness']}, damping {units['damping']})",
-            caption=f"fit residual {data['stiffness_residual']:.2e} of |K|; {data['statement']}",
+            title=f"Mounts: rates along their axes (stiffness {k_unit}, damping {c_unit})",
+            caption=f"fit residual {rates.stiffness_residual:.2e} of |K|; {rates.statement}",
             title_justify="left",
             caption_justify="left",
         )
         for name in ("mount", "k1", "k2", "k3", "c1", "c2", "c3"):
             table.add_column(name, justify="right")
-        for m in data["mounts"]:
-            damping = [_fmt(v) if v is not None else "-" for v in m["damping"]]
-            table.add_row(m["id"], *(_fmt(v) for v in m["stiffness"]), *damping)
+        for k, name in enumerate(mounts.ids):
+            damping = ["-"] * 3 if rates.damping is None else [_fmt(factor * v) for v in rates.damping[k]]
+            table.add_row(name, *(_fmt(factor * v) for v in rates.stiffness[k]), *damping)
         tables.append(table)
     if result.mount_model is not None:
         fit = result.mount_model
@@ -238,11 +240,13 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
     tables = []
     if result.uncertainty is not None:
         unc = result.uncertainty
-        caption = _noise_caption(noise_to_dict(unc.noise), length)
+        caption = _noise_caption(unc.noise, length)
         caption += f"; {unc.failed} draws failed" if unc.failed else ""
         caption += f"; {unc.implausible} draws physically implausible" if unc.implausible else ""
         title = f"Uncertainty ({unc.draws} Monte Carlo draws, 95 % intervals)"
         tables.append(_interval_table(result, unc, title, caption, force_unit))
+    if result.standard_errors is not None and result.uncertainty is None:
+        tables.append(_standard_error_table(result, force_unit))
     if result.record_spread is not None:
         spread = result.record_spread
         title = (
@@ -259,6 +263,39 @@ def _uncertainty_tables(result: IdentifyResult, force_unit: str | None) -> list[
         )
         tables.append(_interval_table(result, bound, title, caption, force_unit))
     return tables
+
+
+def _standard_error_table(result: IdentifyResult, force_unit: str | None) -> Table:
+    """The default linearised standard errors, as the interval table (estimate +- 1.96 std)."""
+    from types import SimpleNamespace
+
+    from rigidid.core.uncertainty import IntervalEstimate
+
+    err = result.standard_errors
+    assert err is not None
+    ident = result.identification
+    scale = 1.0 if ident.mass is None else ident.mass
+
+    def interval(value: NDArray[np.float64], std: NDArray[np.float64]) -> IntervalEstimate:
+        return IntervalEstimate(value, std, value - 1.96 * std, value + 1.96 * std)
+
+    unc = SimpleNamespace(
+        per_mass=err.per_mass,
+        center_of_gravity=interval(ident.center_of_gravity, err.center_of_gravity),
+        inertia=interval(scale * ident.inertia_per_mass, err.inertia),
+        principal_moments=interval(scale * ident.principal_moments_per_mass, err.principal_moments),
+        stiffness_diagonal=interval(scale * np.diag(ident.stiffness_per_mass), np.diag(err.stiffness)),
+    )
+    axes = ", ".join(f"{v:.2g}" for v in err.principal_axes_deg)
+    caption = _noise_caption(err.noise, result.units["length"])
+    caption += f"; principal axes +- {axes} deg (1 std)"
+    if result.torque_roll_axis_std_deg is not None:
+        caption += f"; torque roll axis +- {result.torque_roll_axis_std_deg:.2g} deg"
+    if err.misfit is not None:
+        caption += f"; misfit {err.misfit:.3g} on {err.misfit_dof} degrees of freedom"
+        caption += f" (std scaled by {err.inflation:.3g})" if err.inflation > 1.0 else ""
+    title = "Standard errors (linearised at the estimate, 95 % intervals; --uncertainty N for Monte Carlo)"
+    return _interval_table(result, unc, title, caption, force_unit)
 
 
 def _modes_table(result: IdentifyResult) -> Table:
@@ -399,16 +436,16 @@ def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str, 
     return table
 
 
-def _noise_caption(noise: dict[str, float], length: str) -> str:
+def _noise_caption(noise: NoiseLevels, length: str) -> str:
     parts = [
-        f"frequency {100 * noise['frequency']:.3g} %",
-        f"damping {100 * noise['damping']:.3g} %",
-        f"shape {100 * noise['shape']:.3g} %",
+        f"frequency {100 * noise.frequency:.3g} %",
+        f"damping {100 * noise.damping:.3g} %",
+        f"shape {100 * noise.shape:.3g} %",
     ]
-    if noise.get("position"):
-        parts.append(f"position {noise['position']:.3g} {length}")
-    if noise.get("angle_deg"):
-        parts.append(f"direction {noise['angle_deg']:.3g} deg")
+    if noise.position:
+        parts.append(f"position {noise.position:.3g} {length}")
+    if noise.angle_deg:
+        parts.append(f"direction {noise.angle_deg:.3g} deg")
     return "standard deviations assumed: " + ", ".join(parts)
 
 
@@ -458,7 +495,7 @@ def plan_tables(plan: PlanResult) -> Group:
         fig = plan.prediction.figures
         pred = Table(
             title="Predicted uncertainty (standard deviation)",
-            caption=_noise_caption(noise_to_dict(plan.prediction.uncertainty.noise), length),
+            caption=_noise_caption(plan.prediction.uncertainty.noise, length),
             title_justify="left",
             caption_justify="left",
         )

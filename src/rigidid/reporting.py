@@ -40,7 +40,7 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,9 +61,14 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from rigidid.core.identify import Identification
+    from rigidid.core.mounts import TorqueRollAxis
+    from rigidid.core.record_spread import RecordSpread
+    from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.timedomain.stabilisation import OrderPoles
+    from rigidid.core.uncertainty import Uncertainty
+    from rigidid.results import Mounts, TestInfo
 
-__all__ = ["FIGURE_NAMES", "render_report", "save_pngs"]
+__all__ = ["FIGURE_NAMES", "identified_mount_labels", "render_report", "save_pngs", "stiffness_labels"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -78,6 +83,9 @@ _AXIS_COLOURS = ("#2e8b57", "#d68910", "#7d3c98")
 _MOUNT_COLOUR = "#333333"
 _ROLL_COLOUR = "#e67e22"
 _MODE_COLOUR = "#c0392b"
+
+Intervals: TypeAlias = "Uncertainty | RecordSpread | RecordBound"
+"""The typed intervals a report shows: Monte Carlo, record segments, the refit's Cramér-Rao bound."""
 
 Stabilisation = Sequence["tuple[int, ArrayLike, ArrayLike] | OrderPoles"]
 """``[(order, frequency_hz (n,), stable (n,) bool), ...]`` or ``OrderPoles``: one entry per model order."""
@@ -207,20 +215,21 @@ def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
     ax3.scatter(*pos.T, color=_SENSOR_COLOUR, s=28, depthshade=False)
     ax3.quiver(*pos.T, *(scene.arrow * scene.directions).T, color=_SENSOR_COLOUR, lw=1.6, arrow_length_ratio=0.3)
     for p, text in scene.labels:
-        ax3.text(*(p + 0.025 * scene.size), text, fontsize=9, color=_SENSOR_COLOUR)
+        ax3.text(*(p + 0.025 * scene.size), text, fontsize=10, color=_SENSOR_COLOUR)
     ax3.scatter(*g, color=_CG_COLOUR, s=120, marker="*", depthshade=False, zorder=5)
-    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * scene.size])), "CG", fontsize=10, color=_CG_COLOUR, fontweight="bold")
+    ax3.text(*(g - np.array([0.0, 0.0, 0.06 * scene.size])), "CG", fontsize=12, color=_CG_COLOUR, fontweight="bold")
     for k in range(3):
         ax3.quiver(*g, *(scene.tips[k] - g), color=_AXIS_COLOURS[k], lw=2.2, arrow_length_ratio=0.15)
         ax3.text(*scene.tips[k], f" {k + 1}", fontsize=11, color=_AXIS_COLOURS[k], fontweight="bold")
     if scene.mounts.size:
         ax3.scatter(*scene.mounts.T, color=_MOUNT_COLOUR, marker="^", s=60, depthshade=False)
-        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
-            ax3.text(*(m - np.array([0.0, 0.0, 0.05 * scene.size])), text, fontsize=8, color=_MOUNT_COLOUR)
+        for k, m in enumerate(scene.mounts):
+            ax3.text(*(m - np.array([0.0, 0.0, 0.05 * scene.size])), _mount_tag(k), fontsize=11,
+                     color=_MOUNT_COLOUR, fontweight="bold")  # fmt: skip
     if scene.roll_axis is not None:
         ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
         ax3.plot(*ends.T, color=_ROLL_COLOUR, lw=2.0, ls="--")
-        ax3.text(*ends[1], " torque roll axis", fontsize=9, color=_ROLL_COLOUR)
+        ax3.text(*ends[1], " torque roll axis", fontsize=10, color=_ROLL_COLOUR)
     _equal_3d(ax3, everything, zoom=1.2)
     ax3.set_xlabel(f"x [{length}]")
     ax3.set_ylabel(f"y [{length}]")
@@ -228,7 +237,9 @@ def _layout_3d(ax3: Any, scene: _Scene, everything: Array, length: str) -> None:
     ax3.view_init(elev=18, azim=-60)
 
 
-def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tuple[Array, Array], length: str) -> None:
+def _projection(
+    ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tuple[Array, Array], length: str
+) -> tuple[list[Any], Array]:
     """One orthographic view onto the plane of axes `a` and `b`, at the shared scale `limits` (centre, half)."""
     pos, dirs, g, arrow = scene.positions, scene.directions, scene.g, scene.arrow
     ring = pos[scene.outline]
@@ -248,8 +259,7 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
             ax.scatter([p[a]], [p[b]], s=130, facecolors="none", edgecolors=_SENSOR_COLOUR, zorder=2)
             if float(towards @ d) < 0.0:
                 ax.scatter([p[a]], [p[b]], s=60, marker="x", color=_SENSOR_COLOUR, zorder=4)
-    for p, text in scene.labels:
-        ax.annotate(text, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=9, color=_SENSOR_COLOUR)
+    labels: list[Any] = []  # placed afterwards, in this order of priority (_place_labels)
     for k in range(3):
         tip = scene.tips[k]
         if np.hypot(tip[a] - g[a], tip[b] - g[b]) > 0.05 * float(np.linalg.norm(tip - g)):
@@ -260,31 +270,28 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
                 arrowprops={"arrowstyle": "-|>", "color": _AXIS_COLOURS[k], "lw": 2.0},
                 zorder=4,
             )
-            ax.annotate(
-                str(k + 1),
-                (tip[a], tip[b]),
-                xytext=(3, 3),
-                textcoords="offset points",
-                fontsize=11,
-                color=_AXIS_COLOURS[k],
-                fontweight="bold",
-            )
+            labels.append(ax.annotate(
+                str(k + 1), (tip[a], tip[b]), xytext=(3, 3), textcoords="offset points", fontsize=12,
+                color=_AXIS_COLOURS[k], fontweight="bold",
+            ))  # fmt: skip
     ax.scatter([g[a]], [g[b]], color=_CG_COLOUR, marker="*", s=180, zorder=5)
-    ax.annotate(
-        "CG",
-        (g[a], g[b]),
-        xytext=(7, -14),
-        textcoords="offset points",
-        fontsize=10,
-        color=_CG_COLOUR,
+    labels.insert(0, ax.annotate(
+        "CG", (g[a], g[b]), xytext=(7, -14), textcoords="offset points", fontsize=12, color=_CG_COLOUR,
         fontweight="bold",
-    )
+    ))  # fmt: skip
     if scene.mounts.size:
         ax.scatter(scene.mounts[:, a], scene.mounts[:, b], color=_MOUNT_COLOUR, marker="^", s=60, zorder=2)
-        for m, text in zip(scene.mounts, scene.mount_labels, strict=False):
+        for k, m in enumerate(scene.mounts):
+            labels.append(ax.annotate(
+                _mount_tag(k), (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=11,
+                color=_MOUNT_COLOUR, fontweight="bold",
+            ))  # fmt: skip
+    for p, text in scene.labels:
+        labels.append(
             ax.annotate(
-                text, (m[a], m[b]), xytext=(6, -12), textcoords="offset points", fontsize=8, color=_MOUNT_COLOUR
+                text, (p[a], p[b]), xytext=(5, 5), textcoords="offset points", fontsize=10, color=_SENSOR_COLOUR
             )
+        )
     if scene.roll_axis is not None:
         ends = g[None, :] + 0.45 * scene.size * np.outer([-1.0, 1.0], scene.roll_axis)
         ax.plot(ends[:, a], ends[:, b], color=_ROLL_COLOUR, lw=1.6, ls="--", zorder=2)
@@ -295,7 +302,50 @@ def _projection(ax: Any, scene: _Scene, a: int, b: int, title: str, limits: tupl
     ax.set_xlabel(f"{'xyz'[a]} [{length}]")
     ax.set_ylabel(f"{'xyz'[b]} [{length}]")
     ax.grid(True, color="#e3e7ec", lw=0.8)
-    ax.set_title(title, fontsize=11)
+    ax.set_title(title, fontsize=12)
+    points = np.vstack([pos[:, [a, b]], g[None, [a, b]], scene.mounts.reshape(-1, 3)[:, [a, b]]])
+    return labels, points
+
+
+def _mount_tag(k: int) -> str:
+    """The short name of mount `k` on the figures (``M1``...); its rates are listed beside the figure."""
+    return f"M{k + 1}"
+
+
+_LABEL_SPOTS = (
+    ((6, 6), "left", "bottom"), ((6, -6), "left", "top"), ((-6, 6), "right", "bottom"), ((-6, -6), "right", "top"),
+    ((0, 12), "center", "bottom"), ((0, -12), "center", "top"), ((14, 0), "left", "center"),
+    ((-14, 0), "right", "center"), ((8, 20), "left", "bottom"), ((-8, 20), "right", "bottom"),
+    ((8, -20), "left", "top"), ((-8, -20), "right", "top"), ((0, 30), "center", "bottom"),
+    ((0, -30), "center", "top"),
+)  # fmt: skip
+"""Where a label may sit beside its point (offset in points, alignment), tried in this order."""
+
+
+def _place_labels(ax: Any, labels: Sequence[Any], points: Array, renderer: Any) -> int:
+    """Move each label to the first spot beside its point that overlaps no label placed before and no marker.
+
+    Labels come in order of priority; a label with no free spot keeps the first one. Returns how many
+    labels found no free spot (0 when none overlap).
+    """
+    from matplotlib.transforms import Bbox
+
+    marker = 5.0 * renderer.points_to_pixels(1.0)  # half the size of a marker, in pixels
+    taken = [Bbox.from_extents(x - marker, y - marker, x + marker, y + marker)
+             for x, y in ax.transData.transform(points)]  # fmt: skip
+    crowded = 0
+    for label in labels:
+        for offset, ha, va in (*_LABEL_SPOTS, _LABEL_SPOTS[0]):
+            label.xyann = offset
+            label.set_horizontalalignment(ha)
+            label.set_verticalalignment(va)
+            box = label.get_window_extent(renderer).expanded(1.04, 1.08)
+            if not any(box.overlaps(other) for other in taken):
+                break
+        else:
+            crowded += 1
+        taken.append(label.get_window_extent(renderer))
+    return crowded
 
 
 def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, length: str) -> None:
@@ -313,17 +363,18 @@ def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, len
         *(Line2D([], [], color=_AXIS_COLOURS[k], lw=2.2, label=f"principal axis {k + 1}") for k in range(3)),
     ]  # fmt: skip
     if scene.mounts.size:
-        label = "mount (stiffness per axis)" if scene.mount_labels else "mount"
-        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label=label))
+        handles.append(Line2D([], [], color=_MOUNT_COLOUR, marker="^", ms=8, lw=0, label="mount M1, M2, ..."))
     if scene.roll_axis is not None:
         handles.append(Line2D([], [], color=_ROLL_COLOUR, lw=2.0, ls="--", label="torque roll axis (J⁻¹t, CG)"))
-    notes.legend(handles=handles, loc="upper left", fontsize=10, frameon=False)
+    notes.legend(handles=handles, loc="upper left", fontsize=11, frameon=False)
+    mounts = "".join(f"\n  {_mount_tag(k)} {text}" for k, text in enumerate(scene.mount_labels[: len(scene.mounts)]))
     text = (
         f"CG = ({', '.join(_num(float(v), 4) for v in scene.g)}) {length}\n"
         f"principal moments [{moment_unit}]:\n  "
         + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
+        + (f"\nmounts:{mounts}" if mounts else "")
     )
-    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=10, va="bottom", family="DejaVu Sans")
+    notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=11, va="bottom", family="DejaVu Sans")
 
 
 def _unit(v: ArrayLike) -> Array:
@@ -381,11 +432,16 @@ def _layout_figure(
     top = fig.add_subplot(grid[1, 0])
     front = fig.add_subplot(grid[2, 0], sharex=top)
     side = fig.add_subplot(grid[2, 1], sharey=front)
-    for ax, (a, b), label in ((top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"),
-                              (side, (1, 2), "side view (y-z)")):  # fmt: skip
-        _projection(ax, scene, a, b, label, (centre, half), length)
+    views = [(ax, *_projection(ax, scene, a, b, label, (centre, half), length))
+             for ax, (a, b), label in ((top, (0, 1), "top view (x-y)"), (front, (0, 2), "front view (x-z)"),
+                                       (side, (1, 2), "side view (y-z)"))]  # fmt: skip
     _layout_key(fig.add_subplot(grid[1, 1]), scene, moments, moment_unit, length)
-    fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=12)
+    fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=13)
+    fig.draw_without_rendering()  # the constrained layout fixes the axes, then the labels are placed
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]  # the Agg canvas of _new_figure
+    for ax, labels, points in views:
+        _place_labels(ax, labels, points, renderer)
+    fig.set_layout_engine("none")  # keep the axes where the labels were placed
     return fig
 
 
@@ -454,10 +510,10 @@ def _modes_figure(ident: Identification, positions: Array, length: str, table: _
         title = _mode_title(
             table.labels[k], float(table.frequency_hz[k]), float(table.damping_ratio[k]), table.plain[k]
         )
-        ax.set_title(title, fontsize=10)
-        ax.set_xlabel(f"x [{length}]", fontsize=8, labelpad=-2)
-        ax.set_ylabel(f"y [{length}]", fontsize=8, labelpad=-2)
-        ax.set_zlabel(f"z [{length}]", fontsize=8, labelpad=-2)
+        ax.set_title(title, fontsize=12)
+        ax.set_xlabel(f"x [{length}]", fontsize=10, labelpad=-2)
+        ax.set_ylabel(f"y [{length}]", fontsize=10, labelpad=-2)
+        ax.set_zlabel(f"z [{length}]", fontsize=10, labelpad=-2)
         ax.tick_params(labelsize=7, pad=0)
         ax.view_init(elev=22, azim=-60)
     fig.suptitle(
@@ -659,6 +715,20 @@ figcaption { color: #4a5663; font-size: 13px; margin-top: 4px; }
 .warn { background: #fff4e0; border-left: 4px solid #d68910; padding: 6px 12px; margin: 6px 0; }
 .flex { display: flex; flex-wrap: wrap; gap: 28px; align-items: flex-start; }
 details summary { cursor: pointer; color: #1f5fa8; }
+table.test th { text-align: left; background: none; border: none; padding: 1px 14px 1px 0; color: #4a5663; }
+table.test td { text-align: left; border: none; padding: 1px 0; white-space: pre-wrap; }
+@media print {
+  @page { size: A4; margin: 14mm 12mm; }
+  body { max-width: none; margin: 0; padding: 0; font-size: 9.5pt; color: #000; }
+  h1 { font-size: 16pt; } h2 { font-size: 12.5pt; margin-top: 14pt; break-after: avoid; }
+  h3 { font-size: 10.5pt; break-after: avoid; }
+  table, figure, .warn { break-inside: avoid; }
+  th, td { padding: 2px 6px; }
+  caption, figcaption { font-size: 8.5pt; }
+  figure img { max-width: 100%; border: none; }
+  details > summary { display: none; }
+  .flex { gap: 12pt; }
+}
 """
 
 
@@ -691,78 +761,97 @@ def _figure_html(png: bytes, alt: str, caption: str) -> str:
     )
 
 
-def _uncertainty_html(uncertainty: Mapping[str, Any], length: str, mass: str) -> str:
-    unit_of = {
-        "center_of_gravity": length,
-        "inertia_tensor": f"{mass}·{length}²",
-        "inertia_per_mass": f"{length}²",
-        "principal_moments": f"{mass}·{length}²",
-        "principal_moments_per_mass": f"{length}²",
-    }
-    rows: list[list[str]] = []
-    for name, entry in uncertainty.items():
-        if not isinstance(entry, Mapping) or "estimate" not in entry:
-            continue
-        est = np.asarray(_float_array(entry.get("estimate")), dtype=float)
-        std = np.asarray(_float_array(entry.get("std")), dtype=float)
-        ci = np.asarray(_float_array(entry.get("ci95")), dtype=float)
-        if std.shape != est.shape or ci.shape != (*est.shape, 2):
-            raise InputError(
-                "estimate, std and ci95 (pairs) do not match in shape", source="uncertainty", location=str(name)
-            )
-        labels = _component_labels(str(name), est.shape)
-        unit = unit_of.get(str(name), "")
-        if str(name).startswith(("stiffness_diagonal", "damping_diagonal")):
-            per_mass = str(name).endswith("_per_mass")
-            blocks = _block_units(length, None if per_mass else mass, 2 if str(name).startswith("stiff") else 1)
-        first = True
-        for index, label in zip(np.ndindex(est.shape), labels, strict=True):
-            if est.shape == (3, 3) and index[0] > index[1]:
-                continue  # symmetric tensor: the upper triangle says it all
-            if str(name).startswith(("stiffness_diagonal", "damping_diagonal")):
-                unit = blocks[0] if index[0] < 3 else blocks[2]
-            rows.append(
-                [
-                    _esc(str(name).replace("_", " ")) if first else "",
-                    _esc(label),
-                    _esc(unit),
-                    _num(float(est[index])),
-                    _num(float(std[index]), 3),
-                    f"{_num(float(ci[index][0]))} … {_num(float(ci[index][1]))}",
-                ]
-            )
-            first = False
-    extra = []
-    for key in ("method", "segments", "used", "draws", "failed", "implausible", "seed"):
-        if key in uncertainty and not isinstance(uncertainty[key], Mapping):
-            extra.append(f"{key}: {uncertainty[key]}")
-    noise = uncertainty.get("noise")
-    if isinstance(noise, Mapping):
-        extra.append("noise: " + ", ".join(f"{k} {v}" for k, v in noise.items()))
-    caption = "; ".join(extra) if extra else None
-    return _table(
-        ["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption, label_cols=3
+def _percent(v: float) -> str:
+    return f"{_num(100.0 * v, 3)} %"
+
+
+def _interval_caption(source: Uncertainty | RecordSpread | RecordBound, length: str) -> tuple[str, str]:
+    """A heading and a caption (in words and formatted numbers) saying where the intervals come from."""
+    from rigidid.core.record_spread import RecordSpread
+    from rigidid.core.uncertainty import Uncertainty
+
+    if isinstance(source, Uncertainty):
+        n = source.noise
+        noise = (
+            f"frequency {_percent(n.frequency)}, damping {_percent(n.damping)}, shape {_percent(n.shape)} of each "
+            f"mode's RMS, position {_num(n.position, 3)} {length}, angle {_num(n.angle_deg, 3)}°"
+        )
+        seed = "" if source.seed is None else f", seed {source.seed}"
+        return "Monte Carlo", (
+            f"{source.draws} draws of the measurement errors ({source.failed} failed, {source.implausible} "
+            f"implausible{seed}); standard deviations assumed: {noise}. Interval: 2.5 and 97.5 percentiles."
+        )
+    if isinstance(source, RecordSpread):
+        return "record segments", (
+            f"{source.used} of {source.segments} interleaved segments of the records identified apart; the "
+            f"spread of their estimates over √{source.used}; interval with Student's t. Measurement noise only."
+        )
+    cost = _num(source.normalised_cost, 3)
+    return "Cramér-Rao bound on the records", (
+        f"the refit on the records (output error): standard errors from its {source.variance_from} covariance, "
+        f"noise from the {source.noise_from}, normalised cost {cost} (about 1 at a good fit); "
+        f"interval: estimate ± 1.96 standard errors."
     )
 
 
-def _float_array(value: Any) -> Any:
-    if isinstance(value, list | tuple):
-        return [_float_array(v) for v in value]
-    return math.nan if value is None else value
+def _uncertainty_rows(
+    source: Uncertainty | RecordSpread | RecordBound, length: str, mass: str, force_unit: str | None
+) -> list[list[str]]:
+    """One row per component, in the units of the tables above (force units for K and C)."""
+    from rigidid.units import force_units
+
+    per_mass = source.per_mass
+    inertia_unit = f"{length}²" if per_mass else f"{mass}·{length}²"
+    quantities: list[tuple[str, Any, list[str], list[str], float]] = [
+        ("centre of gravity", source.center_of_gravity, ["x", "y", "z"], [length] * 3, 1.0),
+        ("inertia tensor" + (" per mass" if per_mass else ""), source.inertia,
+         [f"{a}{b}" for a in "xyz" for b in "xyz"], [inertia_unit] * 9, 1.0),
+        ("principal moments" + (" per mass" if per_mass else ""), source.principal_moments, ["1", "2", "3"],
+         [inertia_unit] * 3, 1.0),
+    ]  # fmt: skip
+    diagonals = [("stiffness", source.stiffness_diagonal, 2)]
+    damping = getattr(source, "damping_diagonal", None)
+    if damping is not None:
+        diagonals.append(("damping", damping, 1))
+    for name, interval, power in diagonals:
+        if per_mass:
+            t, _, r = _block_units(length, None, power)
+            factor, label = 1.0, f"{name} diagonal per mass"
+        else:
+            fu = force_units(length, mass, force_unit)
+            spelt = fu.stiffness if power == 2 else fu.damping
+            t, r, factor, label = spelt["translation"], spelt["rotation"], fu.factor, f"{name} diagonal"
+        quantities.append((label, interval, list(DOF_LABELS), [t] * 3 + [r] * 3, factor))
+    rows: list[list[str]] = []
+    for name, interval, labels, units, factor in quantities:
+        est, std = factor * np.asarray(interval.estimate), factor * np.asarray(interval.std)
+        low, high = factor * np.asarray(interval.low), factor * np.asarray(interval.high)
+        for k, index in enumerate(np.ndindex(est.shape)):
+            if est.shape == (3, 3) and index[0] > index[1]:
+                continue  # symmetric tensor: the upper triangle says it all
+            rows.append([
+                _esc(name) if k == 0 else "", _esc(labels[k]), _esc(units[k]), _num(float(est[index])),
+                _num(float(std[index]), 3), f"{_num(float(low[index]))} … {_num(float(high[index]))}",
+            ])  # fmt: skip
+    return rows
 
 
-def _component_labels(name: str, shape: tuple[int, ...]) -> list[str]:
-    if shape == (3,) and name.startswith("center"):
-        return ["x", "y", "z"]
-    if shape == (3,):
-        return ["1", "2", "3"]
-    if shape == (6,):
-        return list(DOF_LABELS)
-    if shape == (3, 3):
-        return [f"{a}{b}" for a in "xyz" for b in "xyz"]
-    if shape == ():
-        return [""]
-    return [str(list(i)) for i in np.ndindex(shape)]
+def _uncertainty_html(
+    sources: Sequence[Uncertainty | RecordSpread | RecordBound], length: str, mass: str, force_unit: str | None
+) -> str:
+    """One table per source of intervals, in the units of the result tables, with a caption in words."""
+    parts = []
+    for source in sources:
+        heading, caption = _interval_caption(source, length)
+        if not np.asarray(source.center_of_gravity.estimate).shape == (3,):
+            raise InputError("the intervals of the CG are not three numbers", source="uncertainty")
+        rows = _uncertainty_rows(source, length, mass, force_unit)
+        parts.append(f"<h3>{_esc(heading)}</h3>")
+        parts.append(
+            _table(["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption,
+                   label_cols=3)
+        )  # fmt: skip
+    return "\n".join(parts)
 
 
 def render_report(
@@ -774,7 +863,7 @@ def render_report(
     *,
     mounts: Sequence[ArrayLike] | None = None,
     stabilisation: Stabilisation | None = None,
-    uncertainty: Mapping[str, Any] | None = None,
+    uncertainty: Intervals | Sequence[Intervals] | None = None,
     title: str = "rigidid report",
     mode_labels: Sequence[int] | None = None,
     inputs: Sequence[str] = (),
@@ -783,8 +872,9 @@ def render_report(
     spectrum: tuple[ArrayLike, ArrayLike] | None = None,
     created: str | None = None,
     progress: ProgressCallback | None = None,
-    identified_mounts: Mapping[str, Any] | None = None,
-    torque_roll_axis: Mapping[str, Any] | None = None,
+    identified_mounts: Mounts | None = None,
+    torque_roll_axis: TorqueRollAxis | None = None,
+    test: TestInfo | None = None,
 ) -> str:
     """One self-contained HTML document reporting an identification.
 
@@ -809,12 +899,11 @@ def render_report(
         stable ones. Objects with ``order``, ``poles`` (rad/s) and
         ``stable`` attributes (``OrderPoles`` of
         :mod:`rigidid.core.timedomain.stabilisation`) are accepted as well.
-    uncertainty : mapping, optional
-        ``{quantity: {"estimate": [...], "std": [...], "ci95": [[low,
-        high], ...]}}`` (the form of
-        :func:`rigidid.jsonout.uncertainty_to_dict`: arrays of any
-        shape, ``ci95`` with a last axis of 2, None for NaN); other keys
-        (``draws``, ``failed``, ``noise`` ...) are shown as a caption.
+    uncertainty : Uncertainty, RecordSpread or RecordBound, or a sequence of them, optional
+        Intervals of the identified quantities (Monte Carlo, record segments, the
+        refit's Cramér-Rao bound): one table each, in the units of the result
+        tables (stiffness and damping in force units with a mass), with a
+        caption saying where they come from.
     title : str
         Heading and ``<title>`` of the document.
     mode_labels : sequence of int, optional
@@ -834,14 +923,15 @@ def render_report(
         Date and time shown under the title (default: now, UTC).
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
-    identified_mounts : mapping, optional
-        Per-mount rates identified from the test, in the form of
-        :func:`rigidid.jsonout.mounts_to_dict` (``units``, ``mounts`` with ``id``,
-        ``position``, ``axes``, ``stiffness``, ``damping``...): drawn at the mounts
-        (positions from here, replacing `mounts` and `mount_stiffness`) and tabled.
-    torque_roll_axis : mapping, optional
-        ``{"direction", "torque_axis", "angle_to_torque_deg", "angle_to_principal_deg"}``
-        (the result JSON's ``torque_roll_axis``): drawn through the CG and tabled.
+    identified_mounts : Mounts, optional
+        Per-mount rates identified from the test (``IdentifyResult.mounts``): drawn at
+        the mounts (positions from here, replacing `mounts` and `mount_stiffness`)
+        and tabled in force units (per unit mass without a mass).
+    torque_roll_axis : TorqueRollAxis, optional
+        Drawn through the CG and tabled.
+    test : TestInfo, optional
+        The test's id, specimen, date, operator and notes (the layout's ``test``
+        block), shown under the title.
 
     Returns
     -------
@@ -861,14 +951,20 @@ def render_report(
     """
     length, mass_unit = _units(units)
     if identified_mounts is not None:
-        mounts = [m["position"] for m in identified_mounts["mounts"]]
+        mounts = list(identified_mounts.positions)
     pos, dirs, ids, mount_pos = _as_arrays(positions, directions, sensor_ids, mounts)
-    uncertainty_table = None if uncertainty is None else _uncertainty_html(uncertainty, length, mass_unit)
+    sources = [] if uncertainty is None else list(uncertainty) if isinstance(uncertainty, Sequence) else [uncertainty]
+    uncertainty_table = _uncertainty_html(sources, length, mass_unit, force_unit) if sources else None
     ident = identification
     table = _decoupling(ident, mode_labels)
-    mount_labels = _mount_labels(mount_stiffness, length, mass_unit, force_unit)
-    drawn_labels = mount_labels if identified_mounts is None else identified_mount_labels(identified_mounts)
-    roll = None if torque_roll_axis is None else torque_roll_axis["direction"]
+    mount_labels = stiffness_labels(mount_stiffness, length, mass_unit, force_unit)
+    has_mass = ident.mass is not None
+    drawn_labels = (
+        mount_labels
+        if identified_mounts is None
+        else identified_mount_labels(identified_mounts, units, has_mass=has_mass, force_unit=force_unit)
+    )
+    roll = None if torque_roll_axis is None else torque_roll_axis.direction
     figures = _figures(
         ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=drawn_labels,
         spectrum=spectrum, progress=progress, roll_axis=roll,
@@ -876,13 +972,14 @@ def render_report(
     pngs = {name: _png(fig) for name, fig in figures.items()}
     parts = [
         _head_html(title, ident, ids, length, mass_unit, inputs, created),
+        _test_html(test),
         *(f'<div class="warn">⚠ {_esc(message)}</div>' for message in ident.diagnostics.warnings),
         _mass_properties_html(ident, length, mass_unit),
         _modes_html(ident, table),
         _supports_html(ident, length, mass_unit, force_unit),
         _decoupling_html(table, pngs["decoupling"]),
         _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, [] if identified_mounts else mount_labels),
-        _identified_mounts_html(identified_mounts, torque_roll_axis, length),
+        _identified_mounts_html(identified_mounts, torque_roll_axis, units, has_mass, force_unit),
         "<h2>Mode shapes</h2>",
         _figure_html(
             pngs["modes"],
@@ -935,6 +1032,16 @@ def _head_html(
             files,
         ]
     )
+
+
+def _test_html(test: TestInfo | None) -> str:
+    """The test block under the title: id, specimen, date, operator, notes (what is given)."""
+    if test is None:
+        return ""
+    fields = [("test", test.id), ("specimen", test.specimen), ("date of measurement", test.date),
+              ("operator", test.operator), ("notes", test.notes)]  # fmt: skip
+    rows = "".join(f"<tr><th>{_esc(k)}</th><td>{_esc(v)}</td></tr>" for k, v in fields if v)
+    return f'<table class="test">{rows}</table>' if rows else ""
 
 
 def _mass_properties_html(ident: Identification, length: str, mass_unit: str) -> str:
@@ -1061,52 +1168,85 @@ def _decoupling_html(table: _Decoupling, png: bytes) -> str:
     return "\n".join(parts)
 
 
-def identified_mount_labels(identified: Mapping[str, Any]) -> list[str]:
-    """``front-left: k 180/160/420 N/mm`` per mount: its identified rates along its own axes."""
-    unit = identified["units"]["stiffness"]
+def _rate_units(units: Mapping[str, str], has_mass: bool, force_unit: str | None) -> tuple[float, str, str]:
+    """Factor from the rates' units (mass/s², mass/s) to the tables', and the stiffness and damping units."""
+    from rigidid.units import rate_units
+
+    length, mass = _units(units)
+    factor, k_unit, c_unit = rate_units(length, mass, force_unit, per_mass=not has_mass)
+    return factor, k_unit.replace("^2", "²"), c_unit
+
+
+def identified_mount_labels(
+    identified: Mounts, units: Mapping[str, str], *, has_mass: bool = True, force_unit: str | None = None
+) -> list[str]:
+    """``front-left: k 180/160/420 N/mm`` per mount: its identified rates along its own axes.
+
+    Parameters
+    ----------
+    identified : Mounts
+        ``IdentifyResult.mounts``.
+    units : mapping
+        ``{"length", "mass"}`` of the layout.
+    has_mass : bool
+        Whether the identification knows the mass (else the rates are per unit mass).
+    force_unit : str, optional
+        As for :func:`render_report`.
+    """
+    factor, unit, _ = _rate_units(units, has_mass, force_unit)
     return [
-        f"{m['id']}: k " + "/".join(_num(float(v), 3) for v in m["stiffness"]) + f" {unit}"
-        for m in identified["mounts"]
+        f"{name}: k " + "/".join(_num(float(v), 3) for v in factor * identified.rates.stiffness[k]) + f" {unit}"
+        for k, name in enumerate(identified.ids)
     ]
 
 
-def _triple(values: Sequence[Any] | None) -> str:
-    return "-" if values is None else " / ".join("-" if v is None else _num(float(v), 4) for v in values)
+def _triple(values: ArrayLike | None, factor: float = 1.0) -> str:
+    if values is None:
+        return "-"
+    return " / ".join(_num(factor * float(v), 4) for v in np.asarray(values, dtype=float))
 
 
-def _identified_mounts_html(identified: Mapping[str, Any] | None, roll: Mapping[str, Any] | None, length: str) -> str:
+def _identified_mounts_html(
+    identified: Mounts | None, roll: TorqueRollAxis | None, units: Mapping[str, str], has_mass: bool,
+    force_unit: str | None,
+) -> str:  # fmt: skip
     """The identified per-mount rates and the torque roll axis, as tables (empty without either)."""
     parts: list[str] = []
+    length = _units(units)[0]
     if identified is not None:
-        units = identified["units"]
+        factor, k_unit, c_unit = _rate_units(units, has_mass, force_unit)
+        rates = identified.rates
+        damping = rates.damping
+        rows = [
+            [_esc(name), _triple(identified.positions[k]),
+             "; ".join(_direction_text(rates.axes[k][:, a]) for a in range(3)),
+             _triple(rates.stiffness[k], factor), "-" if damping is None else _triple(damping[k], factor),
+             "-" if identified.nominal is None else _triple(identified.nominal[k], factor),
+             _esc((identified.groups[k] if identified.groups else None) or "-")]
+            for k, name in enumerate(identified.ids)
+        ]  # fmt: skip
         parts += ["<h2>Mounts (identified)</h2>", _table(
-            ["mount", f"position [{length}]", "axes (rows)", f"stiffness [{units['stiffness']}]",
-             f"damping [{units['damping']}]", "nominal stiffness", "group"],
-            [[_esc(m["id"]), _triple(m["position"]),
-              "; ".join(_direction_text(np.asarray(a, dtype=float)) for a in m["axes"]),
-              _triple(m["stiffness"]), _triple(m["damping"]), _triple(m.get("nominal_stiffness")),
-              _esc(m.get("group") or "-")]
-             for m in identified["mounts"]],
+            ["mount", f"position [{length}]", "axes", f"stiffness [{k_unit}]", f"damping [{c_unit}]",
+             "nominal stiffness", "group"], rows,
             caption=f"rates along each mount's axes, fitted to the identified stiffness and damping at the CG; "
-            f"residual |K - K_mounts| / |K| = {_num(float(identified['stiffness_residual']), 3)}; "
-            f"{identified['statement']}",
+            f"residual |K - K_mounts| / |K| = {_residual(float(rates.stiffness_residual))}; {rates.statement}",
         )]  # fmt: skip
     if roll is not None:
         parts += ["<h2>Torque roll axis</h2>", _table(
             ["torque axis", "roll axis (J⁻¹t)", "angle to torque axis [°]", "angles to principal axes 1/2/3 [°]"],
-            [[_esc(_direction_text(np.asarray(roll["torque_axis"], dtype=float))),
-              _esc(_direction_text(np.asarray(roll["direction"], dtype=float))),
-              _num(float(roll["angle_to_torque_deg"]), 3), _triple(roll["angle_to_principal_deg"])]],
+            [[_esc(_direction_text(np.asarray(roll.torque_axis, dtype=float))),
+              _esc(_direction_text(np.asarray(roll.direction, dtype=float))),
+              _num(float(roll.angle_to_torque_deg), 3), _triple(roll.angle_to_principal_deg)]],
             caption="the axis through the CG the free body starts to turn about under a pure torque about the "
             "torque axis (dashed orange in the layout figure)",
         )]  # fmt: skip
     return "\n".join(parts)
 
 
-def _mount_labels(
+def stiffness_labels(
     stiffness: Sequence[ArrayLike] | None, length: str, mass_unit: str, force_unit: str | None
 ) -> list[str]:
-    """``k 180/160/420 N/mm`` per mount: the diagonal of its stiffness in the force unit."""
+    """``k 180/160/420 N/mm`` per mount: the diagonal of its stiffness (mass/s², 3x3) in the force unit."""
     if not stiffness:
         return []
     from rigidid.units import force_units

@@ -16,6 +16,7 @@ from rigidid.models import LayoutFile
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import ScaledBody
+    from rigidid.core.linearised import StandardErrors
     from rigidid.core.massline import MassLine
     from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
     from rigidid.core.noise import NoiseLevels
@@ -60,6 +61,8 @@ class IdentifyResult:
         (:func:`with_record_spread`).
     layout_name : str or None
         The layout's ``name``.
+    test : TestInfo or None
+        The layout's ``test`` block (id, specimen, date, operator, notes), for the report.
     mounts : Mounts or None
         Per-mount rates fitted to the stiffness and damping (:func:`with_mounts`).
     torque_roll_axis : TorqueRollAxis or None
@@ -75,6 +78,11 @@ class IdentifyResult:
         column ``scaling`` ``modal_a``, written by ``rigidid modes --frf``):
         the mass, CG, inertia, stiffness and damping in absolute units from the
         scaled modes (:func:`rigidid.core.frfmodes.body_from_scaled_shapes`).
+    standard_errors : StandardErrors or None
+        Linearised standard errors of the structured route's answer, computed
+        by default (:func:`rigidid.core.linearised.standard_errors`).
+    torque_roll_axis_std_deg : float or None
+        Angular standard error of the torque roll axis (:func:`rigidid.api.with_mounts`).
     """
 
     identification: Identification
@@ -95,6 +103,36 @@ class IdentifyResult:
     torque_roll_axis: TorqueRollAxis | None = None
     mount_model: MountModelFit | None = None
     scaled: ScaledBody | None = None
+    standard_errors: StandardErrors | None = None
+    torque_roll_axis_std_deg: float | None = None
+    test: TestInfo | None = None
+
+
+@dataclass(frozen=True)
+class TestInfo:
+    """What was measured, when and by whom: the layout's optional ``test`` block (each field optional).
+
+    Attributes
+    ----------
+    id, specimen, date, operator, notes : str or None
+        The test's id, the part tested, the date of the measurement, who measured, anything else.
+    """
+
+    __test__ = False  # not a pytest test class
+
+    id: str | None = None
+    specimen: str | None = None
+    date: str | None = None
+    operator: str | None = None
+    notes: str | None = None
+
+    @classmethod
+    def from_layout(cls, layout: LayoutFile) -> TestInfo | None:
+        """The layout's ``test`` block, or None without one."""
+        block = layout.test
+        if block is None:
+            return None
+        return cls(block.id, block.specimen, block.date, block.operator, block.notes)
 
 
 
@@ -161,6 +199,9 @@ class Mounts:
         Rates along each mount's axes (force units come from the presentation).
     nominal : ndarray, shape (n, 3) or None
         The file's nominal rates along the same axes, when every mount gives them.
+    stiffness_std, damping_std : ndarray, shape (n, 3) or None
+        Linearised standard errors of the rates (units of `rates`, scaled by the
+        mass when known), when the identification has standard errors.
     """
 
     ids: tuple[str, ...]
@@ -168,6 +209,8 @@ class Mounts:
     rates: MountRates
     nominal: NDArray[np.float64] | None = None
     groups: tuple[str | None, ...] | None = None
+    stiffness_std: NDArray[np.float64] | None = None
+    damping_std: NDArray[np.float64] | None = None
 
 
 

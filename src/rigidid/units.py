@@ -38,6 +38,7 @@ __all__ = [
     "diagonal_units",
     "force_factor",
     "force_units",
+    "rate_units",
 ]
 
 G0 = 9.80665
@@ -214,3 +215,26 @@ def check_same_units(given: Any, layout: Any, *, source: str | None, location: s
         raise InputError(
             f"units ({gl}, {gm}) differ from the layout's units ({ll}, {lm})", source=source, location=location
         )
+
+
+def rate_units(length: str, mass: str, force: str | None = None, *, per_mass: bool = False) -> tuple[float, str, str]:
+    """Factor and units of mount rates: from ``mass/s^2`` and ``mass/s`` to ``N/mm`` and ``N s/mm``.
+
+    Parameters
+    ----------
+    length, mass : str
+        Units of the layout.
+    force : str, optional
+        ``N``, ``kN`` or ``lbf`` (default :func:`default_force_unit`).
+    per_mass : bool
+        Rates per unit mass (no mass known): factor 1, units ``1/s^2`` and ``1/s``.
+
+    Returns
+    -------
+    float, str, str
+        The factor and the stiffness and damping units.
+    """
+    if per_mass:
+        return 1.0, "1/s^2 (per mass)", "1/s (per mass)"
+    fu = force_units(length, mass, force)
+    return fu.factor, f"{fu.force}/{length}", f"{fu.force} s/{length}"

@@ -195,3 +195,20 @@ def test_f_test_passes_a_right_model_and_flags_a_hidden_hose() -> None:
         assert good.f_dof == (12 * 6 - 27, 2 * 6 * (12 - 6))
         assert good.p_value is not None and good.p_value >= ADEQUATE_P and good.adequate
         assert bad.p_value is not None and bad.p_value < 1e-6 and bad.adequate is False
+
+
+def test_mount_model_starts_from_an_indefinite_inertia() -> None:
+    """A noisy free route can hand the mount model an indefinite inertia: it must still fit (issue 22)."""
+    from rigidid.core.mounts import feasible_inertia, identify_mount_model
+
+    body, where, axes, _rates = _body(4)
+    pos = np.array([[x, y, z] for x in (0.4, -0.4) for y in (0.3, -0.3) for z in (0.2, -0.2)])
+    dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
+    modes = body_modes(body, pos, dirs)
+    bad = np.diag([-0.01, 0.04, 0.06])  # J / m with a negative principal moment
+    start = (body.center_of_gravity + 0.01, bad)
+    ident, _model = identify_mount_model(pos, dirs, modes.poles, modes.shapes, where, axes, mass=body.mass, start=start)
+    np.testing.assert_allclose(ident.center_of_gravity, body.center_of_gravity, atol=MOUNT_RATES_REL)
+    assert ident.inertia_tensor is not None
+    np.testing.assert_allclose(ident.inertia_tensor, body.inertia_tensor, atol=MOUNT_RATES_REL * 3.0)
+    assert np.all(np.linalg.eigvalsh(feasible_inertia(bad)) > 0.0)

@@ -10,7 +10,7 @@ that the command line imports only the workflow it runs:
   (:func:`identify_records` is what ``rigidid identify --records`` does)
 - :mod:`rigidid.api.frf`: the FRF routes (modes from FRFs, mass line, simulated FRFs)
 - :mod:`rigidid.api.planning`, :mod:`rigidid.api.simulation`, :mod:`rigidid.api.conversion`,
-  :mod:`rigidid.api.reports`
+  :mod:`rigidid.api.reports`, :mod:`rigidid.api.comparison` (a result against a reference)
 
 The result types live in :mod:`rigidid.results`, below the API and the presentation.
 
@@ -49,6 +49,7 @@ _HOME = {
     "estimate_modes": "rigidid.api.records",
     "estimate_rigid_modes": "rigidid.api.records",
     "estimate_records_modes": "rigidid.api.records",
+    "fitted_layout": "rigidid.api.records",
     "identify_test": "rigidid.api.records",
     "load_test": "rigidid.api.load",
     "TestRun": "rigidid.results",
@@ -65,6 +66,7 @@ _HOME = {
     "simulate": "rigidid.api.simulation",
     "simulate_records": "rigidid.api.simulation",
     "convert": "rigidid.api.conversion",
+    "compare": "rigidid.api.comparison",
     "report": "rigidid.api.reports",
     "report_pngs": "rigidid.api.reports",
 }
@@ -82,11 +84,13 @@ __all__ = [
     "TestRun",
     "body_from_file",
     "body_with_mounts",
+    "compare",
     "convert",
     "estimate_modes",
     "estimate_records_modes",
     "estimate_rigid_modes",
     "fit_modes_frf",
+    "fitted_layout",
     "identify",
     "identify_massline",
     "identify_records",
@@ -112,6 +116,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from rigidid.api.comparison import compare
     from rigidid.api.conversion import convert
     from rigidid.api.frf import fit_modes_frf, identify_massline, simulate_frf
     from rigidid.api.identification import identify, with_warnings
@@ -132,6 +137,7 @@ if TYPE_CHECKING:
         estimate_modes,
         estimate_records_modes,
         estimate_rigid_modes,
+        fitted_layout,
         identify_records,
         identify_test,
         records_spectrum,

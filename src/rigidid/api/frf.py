@@ -17,6 +17,7 @@ from rigidid.results import FrfData, MassLineResult, PathLike
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import FrfModes
+    from rigidid.core.massline import MassLine
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
 
@@ -161,6 +162,7 @@ def identify_massline(
             "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
             "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
         )
+    _frf_verdict(result, "mass line" if modes is None and method != "residues" else "residues")
     scaled = None
     if poles is not None:
         from rigidid.core.frfmodes import body_from_frfs, rigid_band
@@ -179,6 +181,15 @@ def identify_massline(
 
 
 Arr = NDArray[np.float64]
+
+
+def _frf_verdict(result: MassLine, route: str) -> None:
+    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says."""
+    from rigidid.core.frfstats import verdict
+    from rigidid.errors import emit
+
+    notice = verdict(result.inertia_tensor, result.residual, result.misfit_noise_units, result.misfit_where, route)
+    emit([notice] if notice is not None else [], stacklevel=3)
 
 
 def _load_frf(

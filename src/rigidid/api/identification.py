@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api import checks
 from rigidid.api.load import load_layout, load_modes
 from rigidid.api.mounts import mount_model
 from rigidid.core.identify import Identification, Method
@@ -21,7 +22,7 @@ from rigidid.io import files
 from rigidid.io.files import ModeTable
 from rigidid.models import LayoutFile, MountsFile
 from rigidid.progress import no_progress
-from rigidid.results import IdentifyResult, PathLike, Selection
+from rigidid.results import IdentifyResult, PathLike, Selection, TestInfo
 
 if TYPE_CHECKING:
     from rigidid.core.frfmodes import ScaledBody
@@ -36,6 +37,7 @@ def _choose_modes(
     wanted: Sequence[int] | None,
     source: str | None,
     fewest: int = 6,
+    suggest_mounts: bool = False,
 ) -> tuple[tuple[int, ...], Selection, dict[int, float] | None]:
     if wanted is not None:
         labels = tuple(int(m) for m in wanted)
@@ -50,7 +52,10 @@ def _choose_modes(
         return labels, "given", None
     n = len(modes.labels)
     if n < fewest:
-        raise InputError(f"{n} modes given; the six rigid-body modes are needed", source=source)
+        hint = ""
+        if n == 5 and fewest == 6 and suggest_mounts:
+            hint = "; the mount model fits five (--method mounts, with --mounts)"
+        raise InputError(f"{n} modes given; the six rigid-body modes are needed{hint}", source=source)
     if n <= 6:
         return modes.labels, "all", None
     if transformation.shape[0] <= 6:
@@ -138,33 +143,40 @@ def identify(
         raise InputError("the mount model needs the mounts (a mounts.json or body.json)", source="mounts")
     if method == "mounts" and uncertainty:
         raise InputError("Monte Carlo intervals are computed for the structured method only", source="uncertainty")
-    labels, selection, residuals = _choose_modes(table, t, modes_used, source, 5 if method == "mounts" else 6)
+    labels, selection, residuals = _choose_modes(
+        table, t, modes_used, source, 5 if method == "mounts" else 6, suggest_mounts=mounts is not None
+    )
     used = table.subset(labels)
     notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
     fit = None
+    errors = None
     if method == "mounts":
         assert mounts is not None
         result, fit = mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
     else:
-        result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method)
+        levels = checks.noise_levels(noise, positions, directions, used.shapes)
+        weighted = levels if method == "structured" else None
+        result = identify_core(positions, directions, poles, used.shapes, mass=body_mass, method=method, noise=weighted)
     result = _check_result(result, labels, lay.units.length, notes)
+    if method == "structured":
+        errors = checks.standard_errors_of(result, positions, directions, poles, used.shapes, levels)
+        units = {"length": lay.units.length, "mass": lay.units.mass}
+        assumed = positions.shape[0] <= 6 and not (isinstance(noise, Mapping) and "shape" in noise)
+        result = checks.checked(
+            result, errors, (positions, directions, poles, used.shapes), levels, units, assumed=assumed
+        )
     intervals = None
     if uncertainty:
-        from rigidid.core.noise import estimate_noise
         from rigidid.core.uncertainty import propagate
 
-        if isinstance(noise, Mapping) or noise is None:
-            levels = replace(estimate_noise(positions, directions, used.shapes), **dict(noise or {}))
-        else:
-            levels = noise
         step = progress or no_progress
         task = f"{uncertainty} Monte Carlo draws"
         step(task, 0, uncertainty)
         intervals = propagate(
             positions, directions, poles, used.shapes, mass=body_mass, noise=levels, draws=uncertainty, seed=seed,
-            progress=lambda _, done, total: step(task, done, total),
+            progress=lambda _, done, total: step(task, done, total), weighted=True,
         )  # fmt: skip
     return IdentifyResult(
         identification=result,
@@ -179,8 +191,10 @@ def identify(
         shapes=used.shapes,
         uncertainty=intervals,
         layout_name=lay.name,
+        test=TestInfo.from_layout(lay),
         mount_model=fit,
         scaled=_scaled_body(used, poles, positions, directions),
+        standard_errors=errors,
     )
 
 
@@ -267,10 +281,18 @@ def _check_result(result: Identification, labels: Sequence[int], length: str, no
     bad = inertia_not_positive(result.inertia_per_mass)
     if bad is not None:
         moments = ", ".join(f"{v:.4g}" for v in bad.principal_moments_per_mass)
+        observability = result.diagnostics.inertia_observability
+        cause = (
+            "check that these are the six rigid-body modes and that the layout matches the test"
+            if observability >= 0.1
+            else f"the supports couple rotations to translations only weakly (inertia observability "
+            f"{observability:.2g}, typically 0.1-0.3), so noise in the modes can make it so; the mount model "
+            "(--method mounts with --mounts) keeps the inertia positive definite, or measure with the supports "
+            "further from the CG's height"
+        )
         raise IdentificationError(
             f"modes {', '.join(str(m) for m in labels)} determine no rigid body: the inertia tensor they give is "
-            f"not positive definite (principal moments per mass {moments} {length}^2); check that these are the "
-            "six rigid-body modes and that the layout matches the test"
+            f"not positive definite (principal moments per mass {moments} {length}^2); {cause}"
         )
     if not notes:
         return result

@@ -90,6 +90,13 @@ def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -
             raise InputError("a mount without stiffness cannot be simulated", source=source, location=f"mounts.{k}")
         extra = {} if m.damping is None else {"damping": m.damping}
         replaced.append(MountSpec(position=m.position, stiffness=m.stiffness, **extra))
+    if all(m.damping is None for m in entries.mounts):
+        raise InputError(
+            "no mount has a damping: undamped modes cannot be simulated (they never decay); "
+            "give each mount a `damping` (3 values or a 3x3 matrix, mass/s, as in body.json)",
+            source=source,
+            location="mounts",
+        )
     return spec.model_copy(update={"mounts": replaced})
 
 
@@ -199,6 +206,22 @@ UFF_SUFFIXES = (".uff", ".unv")
 """Suffixes of files read as universal files (geometry, modes and records in one file)."""
 
 
+def check_uff_options(layout: PathLike, units: dict[str, str] | None, geometry: PathLike | None) -> None:
+    """Refuse `units` and `geometry` for a layout that is not UFF: they would be ignored.
+
+    Raises
+    ------
+    InputError
+        Naming the parameter (source ``units`` or ``geometry``).
+    """
+    if Path(layout).suffix.lower() in UFF_SUFFIXES:
+        return
+    if geometry is not None:
+        raise InputError("a geometry file completes a UFF input; the layout here is not UFF", source="geometry")
+    if units is not None:
+        raise InputError(f"applies to a UFF input only; {layout} states its own units", source="units")
+
+
 def load_test(
     layout: PathLike,
     inputs: Sequence[PathLike],
@@ -222,8 +245,7 @@ def load_test(
     """
     layout = Path(layout)
     is_uff = layout.suffix.lower() in UFF_SUFFIXES
-    if geometry is not None and not is_uff:
-        raise InputError("a geometry file completes a UFF input; the layout here is not UFF", source="geometry")
+    check_uff_options(layout, units, geometry)
     if is_uff:
         if inputs:
             raise InputError("with a UFF file, give no other input files", source=str(inputs[0]))

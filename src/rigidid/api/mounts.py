@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -10,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api import checks
 from rigidid.core.identify import Identification
 from rigidid.core.identify import identify as identify_core
 from rigidid.io import files
@@ -66,9 +68,27 @@ def with_mounts(
                 for k, m in enumerate(spec.mounts)
             ])  # fmt: skip
         ids = tuple(m.id or str(k + 1) for k, m in enumerate(spec.mounts))
-        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups))
+        k_std, c_std = None, None
+        if result.standard_errors is not None:
+            k_std, c_std = checks.rate_errors(
+                result.standard_errors, positions, rates.axes, groups, (rates.stiffness, rates.damping)
+            )
+            k_std = np.where(rates.stiffness > 0.0, k_std, np.nan) if rates.unique else np.full_like(k_std, np.nan)
+        found = checks.rates_verdict(result.standard_errors, ident, positions, rates)
+        for category, text in found:
+            warnings.warn(text, category, stacklevel=2)
+        if found:
+            diag = out.identification.diagnostics
+            texts = tuple(t for _, t in found if t not in diag.warnings)
+            out = replace(out, identification=replace(out.identification, diagnostics=replace(
+                diag, warnings=(*diag.warnings, *texts))))  # fmt: skip
+        out = replace(out, mounts=Mounts(ids, positions, rates, nominal, groups, k_std, c_std))
     if torque_axis is not None:
-        out = replace(out, torque_roll_axis=torque_roll_axis(ident.inertia_per_mass, torque_axis))
+        tra = torque_roll_axis(ident.inertia_per_mass, torque_axis)
+        tra_std = None
+        if result.standard_errors is not None:
+            tra_std = checks.roll_axis_error(result.standard_errors, torque_axis, tra.direction)
+        out = replace(out, torque_roll_axis=tra, torque_roll_axis_std_deg=tra_std)
     return out
 
 
@@ -119,9 +139,15 @@ def mount_model(
         except IdentificationError:
             free = None
     start = None if free is None else (free.center_of_gravity, free.inertia_per_mass)
-    ident, model = identify_mount_model(
-        positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
-    )
+    try:
+        ident, model = identify_mount_model(
+            positions, directions, poles, shapes, where, axes, mass=mass, start=start, groups=groups, noise=levels
+        )
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise IdentificationError(
+            f"the mount model cannot be fitted to these modes ({exc}): check that mounts.json lists every support "
+            "at its position, in the layout's axes and units"
+        ) from exc
     length = layout_frame(positions).scale
     residual = eigen_residual(
         poles, ident.mode_shapes_cg, ident.inertia_per_mass, ident.stiffness_per_mass, ident.damping_per_mass, length

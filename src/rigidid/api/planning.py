@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rigidid.api.load import body_from_file, load_references_for, load_uff, same_units
+from rigidid.api.load import body_from_file, check_uff_options, load_references_for, load_uff, same_units
 from rigidid.api.mounts import read_mount_spec
 from rigidid.core.simulate import Body
 from rigidid.errors import InputError
@@ -98,6 +98,7 @@ def plan(
     elif Path(layout).suffix.lower() in (".uff", ".unv"):
         lay = load_uff(layout, units=units, geometry=geometry).layout
     else:
+        check_uff_options(layout, units, geometry)
         lay = files.load_layout(layout, require_rank=False)
     ids, positions, directions = files.layout_arrays(lay)
     layout_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}

@@ -4,6 +4,7 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -12,8 +13,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.api import checks
 from rigidid.api.identification import identify, suspect_mode, with_warnings
-from rigidid.api.load import UFF_SUFFIXES, input_source, load_layout, load_records, load_test
+from rigidid.api.load import UFF_SUFFIXES, check_uff_options, input_source, load_layout, load_records, load_test
 from rigidid.core.selection import rigid_fit_residuals
 from rigidid.errors import InputError
 from rigidid.io import files
@@ -22,6 +24,7 @@ from rigidid.models import LayoutFile
 from rigidid.results import IdentifyResult, PathLike, TestData, TestRun
 
 if TYPE_CHECKING:
+    from rigidid.core.sensor_budget import SensorBounds
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
@@ -96,8 +99,13 @@ def estimate_modes(
         raise InputError(
             f"records have different sample intervals ({min(dts):.6g} to {max(dts):.6g} s)", source="records"
         )
+    from rigidid.core.timedomain.clipping import clipped_channels
+
+    ids = tuple(s.id for s in lay.sensors)
+    kept = _unclipped(ids, [clipped_channels([data]) for data, _ in arrays])
+    columns = list(range(len(ids)) if kept is None else kept)
     result = estimate(
-        [data for data, _ in arrays],
+        [data[:, columns] for data, _ in arrays],
         dts[0],
         method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
         n_modes=n_modes,
@@ -106,9 +114,79 @@ def estimate_modes(
         decimate=decimate,
         progress=progress,
     )
-    ids = tuple(s.id for s in lay.sensors)
-    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, ids, result.shapes)
+    if kept is not None:
+        result = replace(result, channels=kept)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
+
+
+def _unclipped(ids: Sequence[str], clipped: Sequence[NDArray[np.bool_]]) -> tuple[int, ...] | None:
+    """The channels to fit when some record has clipped ones (None: all), with a ClippedChannelWarning naming them.
+
+    Parameters
+    ----------
+    ids : sequence of str
+        The sensors, in record column order.
+    clipped : sequence of ndarray of bool
+        Per record, :func:`~rigidid.core.timedomain.clipping.clipped_channels`.
+
+    Returns
+    -------
+    tuple of int or None
+        The columns kept; None when none is clipped, or when leaving them out
+        would leave fewer than six sensors (then they are kept, and the warning says so).
+    """
+    import warnings
+
+    from rigidid.errors import ClippedChannelWarning
+
+    flags = np.zeros(len(ids), dtype=bool)
+    where: dict[int, list[int]] = {}
+    for k, mask in enumerate(clipped):
+        if mask is None:
+            continue
+        flags |= mask
+        for c in np.flatnonzero(mask):
+            where.setdefault(int(c), []).append(k + 1)
+    if not flags.any():
+        return None
+    named = ", ".join(f"{ids[c]!r} (record {', '.join(map(str, where[c]))})" for c in sorted(where))
+    kept = tuple(int(c) for c in np.flatnonzero(~flags))
+    if len(kept) < 6:
+        warnings.warn(
+            f"clipped channels (flat tops at their peak): {named}; kept in the fit, since leaving them out "
+            f"leaves {len(kept)} sensors of the 6 needed: the answer is biased by the overload",
+            ClippedChannelWarning,
+            stacklevel=3,
+        )
+        return None
+    warnings.warn(
+        f"clipped channels (flat tops at their peak) left out of the fit: {named}",
+        ClippedChannelWarning,
+        stacklevel=3,
+    )
+    return kept
+
+
+def fitted_layout(layout: LayoutFile, modes: ModeTable) -> LayoutFile:
+    """The layout's sensors that `modes` has shapes for (all of them unless channels were left out).
+
+    Parameters
+    ----------
+    layout : LayoutFile
+        The test's layout.
+    modes : ModeTable
+        Modes estimated from its records (:func:`estimate_modes`).
+
+    Returns
+    -------
+    LayoutFile
+        `layout` itself, or a copy with the sensors left out of the estimate removed.
+    """
+    if tuple(s.id for s in layout.sensors) == modes.sensor_ids:
+        return layout
+    keep = set(modes.sensor_ids)
+    return layout.model_copy(update={"sensors": [s for s in layout.sensors if s.id in keep]})
 
 
 def estimate_rigid_modes(
@@ -155,14 +233,14 @@ def estimate_rigid_modes(
 
     from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import elastic_suspect, separate_elastic
-    from rigidid.errors import ElasticModeWarning, IdentificationError
+    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, IdentificationError
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
         "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
     }  # fmt: skip
     table, estimate = estimate_modes(lay, records, n_modes=6, **options)
-    _, positions, directions = files.layout_arrays(lay)
+    _, positions, directions = files.layout_arrays(fitted_layout(lay, table))
     if positions.shape[0] <= 6:
         return table, estimate
     t = local_sensor_matrix(positions, directions)
@@ -175,7 +253,9 @@ def estimate_rigid_modes(
         f"against {float(np.median(np.delete(residual, k))):.2g} for the others: an elastic mode taken for a rigid one?"
     )
     try:
-        table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
+        with warnings.catch_warnings():  # the clipped channels were named by the first estimation
+            warnings.simplefilter("ignore", ClippedChannelWarning)
+            table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
     except IdentificationError:
         warnings.warn(
             f"{found} The records give no seventh stable mode to replace it; name the six rigid-body modes "
@@ -235,9 +315,11 @@ def _estimate_streamed(
     factor = streamed[0].factor
     dts = [r.dt for r in streamed]
     cascaded = streamed[0].stages[1] > 1
+    kept = _unclipped(ids, [r.clipped for r in streamed if r.clipped is not None])
+    columns = list(range(len(ids)) if kept is None else kept)
     try:
         result = estimate(
-            [r.data for r in streamed],
+            [r.data[:, columns] for r in streamed],
             dts[0],
             method=method or DEFAULT_METHOD,  # type: ignore[arg-type]
             n_modes=n_modes,
@@ -264,7 +346,9 @@ def _estimate_streamed(
             for r, i in zip(streamed, result.impacts, strict=False)
         )
         result = replace(result, decimation=result.decimation * factor, impacts=impacts)
-    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, tuple(ids), result.shapes)
+    if kept is not None:
+        result = replace(result, channels=kept)
+    table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
 
 
@@ -320,6 +404,7 @@ def with_refinement(
     estimate: ModalEstimate,
     *,
     progress: ProgressCallback | None = None,
+    tolerances: SensorBounds | None = None,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -333,6 +418,10 @@ def with_refinement(
         The modal estimate the modes came from (impacts found, decimation).
     progress : ProgressCallback, optional
         Called with ``("refit", done, total)``.
+    tolerances : SensorBounds, optional
+        The sensors' error bounds (type B), propagated into the intervals with the
+        noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
+        :func:`sensor_bounds` of a layout without ``tolerances``.
 
     Returns
     -------
@@ -355,7 +444,7 @@ def with_refinement(
     ident = result.identification
     if progress is not None:
         progress("refit", 0, 1)
-    arrays = [data for data, _ in records]
+    arrays = [data if estimate.channels is None else data[:, list(estimate.channels)] for data, _ in records]
     unused = [k + 1 not in result.modes_used for k in range(estimate.poles.size)]
     if any(unused):  # modes estimated but not used (elastic): out of the records the rigid-body model is fitted to
         from rigidid.core.timedomain.nuisance import subtract_modes
@@ -379,10 +468,13 @@ def with_refinement(
             damping_per_mass=ident.damping_per_mass,
         ),
         progress,
+        tolerances,
     )
 
 
-def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) -> IdentifyResult:
+def _refit(
+    result: IdentifyResult, fit: Any, progress: ProgressCallback | None, tolerances: SensorBounds | None = None
+) -> IdentifyResult:
     """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
     import warnings
 
@@ -401,10 +493,58 @@ def _refit(result: IdentifyResult, fit: Any, progress: ProgressCallback | None) 
     finally:
         if progress is not None:
             progress("refit", 1, 1)
-    return _accept_refinement(result, refinement)
+    return _accept_refinement(result, refinement, tolerances)
 
 
-def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResult:
+def sensor_bounds(layout: LayoutFile | None, length: str = "m") -> SensorBounds:
+    """The sensors' error bounds: the layout's ``tolerances``, each field left out from the defaults.
+
+    Parameters
+    ----------
+    layout : LayoutFile or None
+        The layout (its ``tolerances`` and length unit); None: the defaults.
+    length : str
+        The length unit when `layout` is None.
+
+    Returns
+    -------
+    SensorBounds
+        :data:`rigidid.core.sensor_budget.DEFAULT_BOUNDS` (position converted to
+        the layout's length unit) overridden field by field.
+    """
+    from rigidid.core.sensor_budget import DEFAULT_BOUNDS
+    from rigidid.core.sensor_budget import SensorBounds as Bounds
+    from rigidid.units import M_PER_LENGTH
+
+    unit = layout.units.length if layout is not None else length
+    values = {
+        "sensitivity": DEFAULT_BOUNDS.sensitivity,
+        "orientation_deg": DEFAULT_BOUNDS.orientation_deg,
+        "transverse": DEFAULT_BOUNDS.transverse,
+        "position": DEFAULT_BOUNDS.position / M_PER_LENGTH[unit],
+    }
+    given = layout.tolerances if layout is not None else None
+    if given is not None:
+        values.update({k: v for k, v in given.model_dump().items() if v is not None})
+    return Bounds(**values)
+
+
+def _sensor_std(result: IdentifyResult, bounds: SensorBounds) -> dict[str, dict[str, NDArray[np.float64]]] | None:
+    """Each type-B source's std of the body at the modes used (None when the kernel cannot linearise them)."""
+    from rigidid.core.sensor_budget import sensor_budget
+
+    if result.poles is None or result.shapes is None:
+        return None
+    try:
+        budget = sensor_budget(result.positions, result.directions, result.poles, result.shapes, bounds)
+    except ValueError:
+        return None
+    return budget.std
+
+
+def _accept_refinement(
+    result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None
+) -> IdentifyResult:
     """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
     import warnings
 
@@ -428,7 +568,10 @@ def _accept_refinement(result: IdentifyResult, refinement: Any) -> IdentifyResul
         stiffness_per_mass=refinement.stiffness_per_mass,
         damping_per_mass=refinement.damping_per_mass,
     )
-    return replace(result, identification=refined, record_bound=record_bound(refinement, ident.mass))
+    bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
+    sensor_std = _sensor_std(result, bounds)
+    bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
+    return replace(result, identification=refined, record_bound=bound, standard_errors=None)
 
 
 STREAM_REFIT_VALUES = 16 * 150_000
@@ -485,7 +628,7 @@ def refine_records(
     differ from a whole-record estimation's when that budget binds.
     """
 
-    from rigidid.core.timedomain.refine import refine_prepared
+    from rigidid.core.timedomain.refine import columns_of, refine_prepared
     from rigidid.io.records import layout_ids, open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
@@ -507,7 +650,9 @@ def refine_records(
 
         raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
-        return with_refinement(result, raw, replace(estimate, impacts=found), progress=progress)
+        return with_refinement(
+            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
+        )
     estimate = replace(estimate, impacts=tuple(impacts))
     from rigidid.io.records.refit import read_prepared_decays
 
@@ -520,13 +665,15 @@ def refine_records(
             paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
             factor=estimate.decimation, progress=progress,
         )  # fmt: skip
+        if estimate.channels is not None:  # clipped channels left out
+            data = columns_of(data, estimate.channels)
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
         )  # fmt: skip
 
-    return _refit(result, fit, progress)
+    return _refit(result, fit, progress, sensor_bounds(lay))
 
 
 def records_spectrum(
@@ -608,6 +755,19 @@ class ModalOptions:
     decimate: int | None = None
 
 
+def _refuse_record_options(modal: ModalOptions | None, refine: bool) -> None:
+    """Options of the records route given with modes: refused, naming the first, rather than ignored."""
+    given = modal or ModalOptions()
+    default = ModalOptions()
+    names = {"method": "modal_method", "n_modes": "n_modes", "band": "band", "max_order": "max_order",
+             "decimate": "decimate"}  # fmt: skip
+    for field, name in names.items():
+        if getattr(given, field) != getattr(default, field):
+            raise InputError("applies to impact records only (`records`); the input here is modes", source=name)
+    if not refine:
+        raise InputError("the refit runs on impact records only (`records`); the input here is modes", source="refine")
+
+
 def estimate_test_modes(
     data: TestData,
     modal: ModalOptions,
@@ -676,11 +836,14 @@ def identify_test(
     -------
     TestRun
     """
-    from rigidid.errors import ElasticModeWarning, RefinementWarning, named_source, noted
+    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, RefinementWarning, named_source, noted
 
     modal = modal or ModalOptions()
     method = identify_options.get("method", "structured")
     src = input_source(layout, inputs)
+    check_uff_options(layout, units, geometry)
+    if not records:
+        _refuse_record_options(modal, refine)
     files_in = records and bool(inputs) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     streamed = files_in and not resample
     data = TestData(load_layout(layout)) if streamed else load_test(
@@ -698,7 +861,7 @@ def identify_test(
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     estimate = None
     modes = data.modes
-    with named_source(src), noted(notes, ElasticModeWarning):
+    with named_source(src), noted(notes, ElasticModeWarning, ClippedChannelWarning):
         if records:
             rigid_six = identify_options.get("modes_used") is None
             modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six, progress=progress)
@@ -707,14 +870,32 @@ def identify_test(
     if spectrum and paths:  # after the estimation, which checked the files
         with named_source(src):
             summed = records_spectrum(paths, data.layout)
-    with named_source(src):
-        result = identify(data.layout, modes, progress=progress, **identify_options)
-    if refine and estimate is not None and method == "structured":
-        with named_source(src), noted(notes, RefinementWarning):
-            if paths is not None:
-                result = refine_records(result, paths, data.layout, estimate, progress=progress)
-            else:
-                result = with_refinement(result, data.records, estimate, progress=progress)
+    refining = refine and estimate is not None and method == "structured"
+    held: list[warnings.WarningMessage] = []
+    try:
+        with named_source(src), warnings.catch_warnings(record=True) as held:
+            warnings.simplefilter("always")
+            # without the channels left out of the estimate (clipped)
+            result = identify(fitted_layout(data.layout, modes), modes, progress=progress, **identify_options)
+    except BaseException:  # the warnings first, then the error they led to
+        checks.pass_on(held)
+        raise
+    if not refining:
+        checks.pass_on(held)
+    else:
+        assert estimate is not None
+        try:
+            with named_source(src), noted(notes, RefinementWarning):
+                if paths is not None:
+                    result = refine_records(result, paths, data.layout, estimate, progress=progress)
+                else:
+                    result = with_refinement(
+                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout)
+                    )
+        except BaseException:
+            checks.pass_on(held)
+            raise
+        result = checks.about_the_answer(result, held, replaced=result.record_bound is not None)
     result = with_warnings(result, notes)
     if resample:
         if not records:
@@ -759,6 +940,7 @@ def estimate_records_modes(
     """
     from rigidid.errors import named_source
 
+    check_uff_options(layout, units, geometry)
     streamed = bool(records) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     data = TestData(load_layout(layout)) if streamed else load_test(
         layout, records, records=True, units=units, geometry=geometry

@@ -70,7 +70,6 @@ def report(
         spectrum = None
     elif spectrum is None and records:
         spectrum = summed_record_spectrum(records)
-    identified, roll = _report_mounts(result, force_unit)
     return render_report(
         result.identification,
         result.positions,
@@ -80,6 +79,7 @@ def report(
         mounts=None if mounts is None else [np.asarray(m, dtype=float) for m in mounts],
         stabilisation=stabilisation,
         uncertainty=_intervals_for_report(result),
+        test=result.test,
         title=title or result.layout_name or "rigidid report",
         mode_labels=result.modes_used,
         inputs=inputs,
@@ -87,22 +87,9 @@ def report(
         mount_stiffness=stiffness,
         spectrum=spectrum,
         progress=progress,
-        identified_mounts=identified,
-        torque_roll_axis=roll,
+        identified_mounts=result.mounts,
+        torque_roll_axis=result.torque_roll_axis,
     )
-
-
-
-def _report_mounts(result: IdentifyResult, force_unit: str | None) -> tuple[dict[str, Any] | None, Any]:
-    """The identified mounts and the torque roll axis as the report takes them (the result JSON's forms)."""
-    from rigidid.jsonout import mounts_to_dict, result_to_dict
-
-    identified = None if result.mounts is None else mounts_to_dict(result, force_unit)
-    roll = None if result.torque_roll_axis is None else result_to_dict(result, force_unit)["torque_roll_axis"]
-    return identified, roll
-
-
-
 
 
 def report_pngs(
@@ -120,7 +107,7 @@ def report_pngs(
 
     Parameters are those of :func:`report`; returns the paths written.
     """
-    from rigidid.reporting import _mount_labels, identified_mount_labels, save_pngs
+    from rigidid.reporting import identified_mount_labels, save_pngs, stiffness_labels
 
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)
@@ -128,11 +115,12 @@ def report_pngs(
     if body is not None:
         mounts = [np.asarray(m.position, dtype=float) for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
-        labels = _mount_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
-    identified, roll = _report_mounts(result, force_unit)
-    if identified is not None:
-        mounts = [np.asarray(m["position"], dtype=float) for m in identified["mounts"]]
-        labels = identified_mount_labels(identified)
+        labels = stiffness_labels(stiffness, result.units["length"], result.units["mass"], force_unit)
+    if result.mounts is not None:
+        mounts = list(result.mounts.positions)
+        has_mass = result.identification.mass is not None
+        labels = identified_mount_labels(result.mounts, result.units, has_mass=has_mass, force_unit=force_unit)
+    roll = result.torque_roll_axis
     return save_pngs(
         folder,
         result.identification,
@@ -146,17 +134,10 @@ def report_pngs(
         mount_labels=labels,
         spectrum=None if stabilisation is None else spectrum or (summed_record_spectrum(records) if records else None),
         progress=progress,
-        roll_axis=None if roll is None else roll["direction"],
+        roll_axis=None if roll is None else roll.direction,
     )
 
 
-
-def _intervals_for_report(result: IdentifyResult) -> dict[str, Any] | None:
-    """The Monte Carlo intervals, else the data-driven ones, as the report takes them."""
-    from rigidid.jsonout import record_spread_to_dict, uncertainty_to_dict
-
-    if result.uncertainty is not None:
-        return uncertainty_to_dict(result.uncertainty)
-    if result.record_spread is not None:
-        return record_spread_to_dict(result.record_spread)
-    return None
+def _intervals_for_report(result: IdentifyResult) -> list[Any]:
+    """Every interval the result holds, as the report shows them: Monte Carlo, record segments, the refit's bound."""
+    return [x for x in (result.uncertainty, result.record_spread, result.record_bound) if x is not None]

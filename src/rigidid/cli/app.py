@@ -10,6 +10,7 @@ import typer
 
 from rigidid import __version__
 from rigidid.cli.common import EXIT_INPUT, StdoutGone
+from rigidid.cli.compare import compare
 from rigidid.cli.convert import convert
 from rigidid.cli.identify import identify
 from rigidid.cli.modes import modes
@@ -29,7 +30,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
-for _command in (identify, modes, simulate, plan, report, convert):
+for _command in (identify, modes, simulate, plan, report, convert, compare):
     app.command()(_command)
 
 
@@ -109,7 +110,7 @@ _OUTPUTS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "identify": (("--json", "--uff"), ("--csv",)),
     "report": (("--json", "--uff", "-o", "--output"), ("--png", "--csv")),
     "modes": (("-o", "--output", "--json"), ()),
-    "simulate": (("-o", "--output", "--frf"), ("--records",)),
+    "simulate": (("-o", "--output", "--write-frf", "--frf"), ("--write-records", "--records")),
     "plan": (("--json",), ()),
     "convert": ((), ("-o", "--output")),
 }

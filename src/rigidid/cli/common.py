@@ -215,6 +215,20 @@ def check_outputs(files: dict[str, Any], folders: dict[str, Any] | None = None) 
             check_folder(path, option=option)
 
 
+def old_name(command: str, old: str, new: str, old_value: Any, value: Any, default: Any) -> Any:
+    """The value of an option given by its old (hidden) name, with a warning; refused beside the new name.
+
+    One concept has one option name in every command; a renamed option keeps its old name
+    as a hidden alias that says the new one.
+    """
+    if old_value is None:
+        return value
+    if value != default and value != old_value:
+        raise InputError(f"give {new} only ({old} is its old name)", source=old)
+    sys.stderr.write(f"rigidid: warning: {command} {old} is deprecated; use {new}\n")
+    return old_value
+
+
 def check_options(**values: Any) -> None:
     """Refuse option values that would overflow or run without bound (name -> value, by flag)."""
     from rigidid.limits import MAX_MAGNITUDE, MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number

@@ -16,12 +16,17 @@ if TYPE_CHECKING:
 
 
 def convert(
-    uff_file: Annotated[Path, typer.Argument(help="A universal file (.uff, .unv).", show_default=False)],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Folder to write into.")] = Path("."),
+    uff_file: Annotated[Path, typer.Argument(metavar="UFF", help="A universal file (.uff, .unv).", show_default=False)],
+    output: Annotated[Path, typer.Option("-o", "--output", metavar="DIR", help="Folder to write into.")] = Path("."),
     units: Units = None,
     geometry: Geometry = None,
     records_format: Annotated[
-        str, typer.Option("--records-format", help="Format of the record files: csv, npz, mat, h5 (needs h5py) or wav.")
+        str,
+        typer.Option(
+            "--records-format",
+            metavar="FORMAT",
+            help="Format of the record files: csv, npz, mat, h5 (needs h5py) or wav.",
+        ),
     ] = "csv",
 ) -> None:
     """Turn a UFF file into layout.json, modes.csv (dataset 55) and record-<k>.csv (dataset 58)."""

@@ -57,7 +57,9 @@ if TYPE_CHECKING:
 
 
 def identify(
-    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json), or a UFF file.", show_default=False)],
+    layout: Annotated[
+        Path, typer.Argument(metavar="LAYOUT", help="Sensor layout (layout.json), or a UFF file.", show_default=False)
+    ],
     inputs: Inputs = None,
     records: RecordsFlag = False,
     mass: Mass = None,
@@ -65,7 +67,8 @@ def identify(
     method: IdMethod = "structured",
     json_path: JsonPath = None,
     uff: Annotated[
-        Path | None, typer.Option(help="Also write the identified modes and geometry as a UFF file (15, 55, 82).")
+        Path | None,
+        typer.Option(metavar="FILE", help="Also write the identified modes and geometry as a UFF file (15, 55, 82)."),
     ] = None,
     uncertainty: Draws = 0,
     frequency_noise: FrequencyNoise = None,

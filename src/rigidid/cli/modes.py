@@ -17,11 +17,15 @@ if TYPE_CHECKING:
 
 
 def modes(
-    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json), or a UFF file.", show_default=False)],
+    layout: Annotated[
+        Path, typer.Argument(metavar="LAYOUT", help="Sensor layout (layout.json), or a UFF file.", show_default=False)
+    ],
     records: Annotated[
-        list[Path] | None, typer.Argument(help="One records.csv per impact.", show_default=False)
+        list[Path] | None, typer.Argument(metavar="RECORDS", help="One records.csv per impact.", show_default=False)
     ] = None,
-    output: Annotated[str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).")] = "-",
+    output: Annotated[
+        str, typer.Option("-o", "--output", metavar="FILE", help="modes.csv to write ('-': standard output).")
+    ] = "-",
     modal_method: ModalMethod = None,
     method: Annotated[
         str | None, typer.Option("--method", hidden=True, help="Deprecated name of --modal-method.")
@@ -37,7 +41,10 @@ def modes(
     units: Units = None,
     geometry: Geometry = None,
     frf: Annotated[
-        Path | None, typer.Option("--frf", help="Fit the modes to FRFs (CSV or UFF 58) instead.", show_default=False)
+        Path | None,
+        typer.Option(
+            "--frf", metavar="FILE", help="Fit the modes to FRFs (CSV or UFF 58) instead.", show_default=False
+        ),
     ] = None,
     references: ReferencesPath = None,
 ) -> None:

@@ -21,31 +21,44 @@ UNCERTAINTY_PANEL = "Uncertainty"
 RECORDS_PANEL = "Time records"
 
 
-Mass = Annotated[float | None, typer.Option(help="Mass of the body in the layout's mass unit (overrides the layout).")]
+Mass = Annotated[
+    float | None, typer.Option(help="Mass of the body in the layout's mass unit (overrides the layout).", metavar="M")
+]
 
 
 ModesUsed = Annotated[
     str | None,
-    typer.Option("--modes", help="The six rigid-body mode labels, e.g. 1,2,3,5,6,7.", show_default=False),
+    typer.Option(
+        "--modes", help="The six rigid-body mode labels, e.g. 1,2,3,5,6,7.", metavar="LABELS", show_default=False
+    ),
 ]
 
 
 IdMethod = Annotated[
     str,
     typer.Option(
-        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40); from --frf: massline, "
-        "or residues (scaled modes, with MODES)."
+        help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40), mounts (CG, inertia and "
+        "per-mount rates fitted together; needs --mounts); from --frf: massline, or residues (scaled modes, with "
+        "MODES).",
+        metavar="METHOD",
     ),
 ]
 
 
 FrfPath = Annotated[
-    Path | None, typer.Option("--frf", help="FRF CSV (accelerance) for --method massline.", show_default=False)
+    Path | None,
+    typer.Option(
+        "--frf",
+        help="FRFs (accelerance, CSV or UFF) for --method massline or residues.",
+        metavar="FILE",
+        show_default=False,
+    ),
 ]
 
 
 ReferencesPath = Annotated[
-    Path | None, typer.Option(help="references.json: force points and directions of the FRFs.", show_default=False)
+    Path | None,
+    typer.Option(help="references.json: force points and directions of the FRFs.", metavar="FILE", show_default=False),
 ]
 
 
@@ -56,19 +69,26 @@ JsonPath = Annotated[
 
 
 Draws = Annotated[
-    int, typer.Option(help="Monte Carlo draws for uncertainty intervals (0: none).", rich_help_panel=UNCERTAINTY_PANEL)
+    int,
+    typer.Option(
+        help="Monte Carlo draws for uncertainty intervals (0: none).", metavar="N", rich_help_panel=UNCERTAINTY_PANEL
+    ),
 ]
 
 
 FrequencyNoise = Annotated[
     float | None,
-    typer.Option(help="Relative std of natural frequencies \\[default: 0.001].", rich_help_panel=UNCERTAINTY_PANEL),
+    typer.Option(
+        help="Relative std of natural frequencies \\[default: 0.001].", metavar="X", rich_help_panel=UNCERTAINTY_PANEL
+    ),
 ]
 
 
 DampingNoise = Annotated[
     float | None,
-    typer.Option(help="Relative std of damping ratios \\[default: 0.05].", rich_help_panel=UNCERTAINTY_PANEL),
+    typer.Option(
+        help="Relative std of damping ratios \\[default: 0.05].", metavar="X", rich_help_panel=UNCERTAINTY_PANEL
+    ),
 ]
 
 
@@ -77,6 +97,7 @@ ShapeNoise = Annotated[
     typer.Option(
         help="Std of shape values relative to each mode's RMS \\[default: from the rigid-body fit with more than "
         "six sensors, else 0.01].",
+        metavar="X",
         rich_help_panel=UNCERTAINTY_PANEL,
     ),
 ]
@@ -84,17 +105,21 @@ ShapeNoise = Annotated[
 
 PositionNoise = Annotated[
     float | None,
-    typer.Option(help="Std of sensor positions (length unit) \\[default: 0].", rich_help_panel=UNCERTAINTY_PANEL),
+    typer.Option(
+        help="Std of sensor positions (length unit) \\[default: 0].", metavar="X", rich_help_panel=UNCERTAINTY_PANEL
+    ),
 ]
 
 
 AngleNoise = Annotated[
     float | None,
-    typer.Option(help="Std of sensor directions (degrees) \\[default: 0].", rich_help_panel=UNCERTAINTY_PANEL),
+    typer.Option(
+        help="Std of sensor directions (degrees) \\[default: 0].", metavar="X", rich_help_panel=UNCERTAINTY_PANEL
+    ),
 ]
 
 
-Seed = Annotated[int, typer.Option(help="Seed of the random draws.")]
+Seed = Annotated[int, typer.Option(help="Seed of the random draws.", metavar="N")]
 
 
 Resample = Annotated[
@@ -111,6 +136,7 @@ Resample = Annotated[
 Inputs = Annotated[
     list[Path] | None,
     typer.Argument(
+        metavar="MODES|RECORDS",
         help="modes.csv; or, with --records, one records.csv per impact. Not needed when LAYOUT is a UFF file "
         "with modes (55) or records (58).",
         show_default=False,
@@ -121,14 +147,19 @@ Inputs = Annotated[
 RecordsFlag = Annotated[
     bool,
     typer.Option(
-        "--records", help="The inputs are impact records: estimate the modes first.", rich_help_panel=RECORDS_PANEL
+        "--records",
+        help="The inputs are impact records: estimate the modes first.",
+        metavar="",
+        rich_help_panel=RECORDS_PANEL,
     ),
 ]
 
 
 ModalMethod = Annotated[
     str | None,
-    typer.Option(help="Modal estimator for records: era or ar \\[default: era].", rich_help_panel=RECORDS_PANEL),
+    typer.Option(
+        help="Modal estimator for records: era or ar \\[default: era].", metavar="METHOD", rich_help_panel=RECORDS_PANEL
+    ),
 ]
 
 
@@ -138,16 +169,20 @@ Band = Annotated[
 ]
 
 
-MaxOrder = Annotated[int | None, typer.Option(help="Highest model order of the sweep.", rich_help_panel=RECORDS_PANEL)]
+MaxOrder = Annotated[
+    int | None, typer.Option(help="Highest model order of the sweep.", metavar="N", rich_help_panel=RECORDS_PANEL)
+]
 
 
 Decimate = Annotated[
-    int | None, typer.Option(help="Decimation factor \\[default: from the spectrum].", rich_help_panel=RECORDS_PANEL)
+    int | None,
+    typer.Option(help="Decimation factor \\[default: from the spectrum].", metavar="N", rich_help_panel=RECORDS_PANEL),
 ]
 
 
 NModes = Annotated[
-    int, typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).")
+    int,
+    typer.Option(help="Modes to estimate from records (more than 6 when elastic modes share the band).", metavar="N"),
 ]
 
 
@@ -155,7 +190,7 @@ ForceUnit = Annotated[
     str | None,
     typer.Option(
         help="Force unit of stiffness and damping: N, kN or lbf \\[default: N for kg, g, t; lbf for lb, slug].",
-        metavar="N|kN|lbf",
+        metavar="UNIT",
     ),
 ]
 
@@ -173,6 +208,7 @@ Refine = Annotated[
     typer.Option(
         "--refine/--no-refine",
         help="With --records: refine the body by an output-error fit to the records, with Cramér-Rao intervals.",
+        metavar="",
         rich_help_panel=RECORDS_PANEL,
     ),
 ]
@@ -210,7 +246,7 @@ Geometry = Annotated[
     typer.Option(
         help="A UFF file with the nodes (15/2411), coordinate systems (18/2420) and units (164) of a UFF input "
         "that lacks them.",
-        metavar="UFF",
+        metavar="FILE",
     ),
 ]
 
@@ -228,11 +264,15 @@ FLAGS = {
     "frf_format": "--frf-format",
     "modal_method": "--modal-method",
     "geometry": "--geometry",
+    "rtol": "--rtol",
+    "sigma": "--sigma",
+    "records": "--records",
+    "refine": "--no-refine",
     "n_modes": "--n-modes",
-    "records_format": "--records-format",
     "decimate": "--decimate",
-    "frequency_noise": "--frequency-noise",
-    "damping_noise": "--damping-noise",
+    "records_format": "--records-format",
+    "frequency_noise": "--add-frequency-noise",
+    "damping_noise": "--add-damping-noise",
     "mass": "--mass",
     "pretrigger": "--pretrigger",
 }
@@ -241,27 +281,42 @@ FLAGS = {
 # simulate's record and FRF outputs
 RecordsOut = Annotated[
     Path | None,
-    typer.Option(help="Also write impulse-response records (record-<k>.csv) into DIR.", rich_help_panel=RECORDS_PANEL),
+    typer.Option(
+        "--write-records",
+        help="Also write impulse-response records (record-<k>.csv) into DIR.",
+        metavar="DIR",
+        rich_help_panel=RECORDS_PANEL,
+    ),
 ]
 Impacts = Annotated[
     list[str] | None,
     typer.Option(
         help="Impact as X,Y,Z:DX,DY,DZ (position, force direction); repeat for several records "
         "\\[default: two impacts at the first sensors].",
+        metavar="X,Y,Z:DX,DY,DZ",
         rich_help_panel=RECORDS_PANEL,
     ),
 ]
-SampleRate = Annotated[float, typer.Option(help="Samples per second.", rich_help_panel=RECORDS_PANEL)]
-Duration = Annotated[float, typer.Option(help="Free decay per record (s).", rich_help_panel=RECORDS_PANEL)]
-Pretrigger = Annotated[float, typer.Option(help="Record before the impact (s).", rich_help_panel=RECORDS_PANEL)]
+SampleRate = Annotated[float, typer.Option(help="Samples per second.", metavar="HZ", rich_help_panel=RECORDS_PANEL)]
+Duration = Annotated[float, typer.Option(help="Free decay per record (s).", metavar="S", rich_help_panel=RECORDS_PANEL)]
+Pretrigger = Annotated[
+    float, typer.Option(help="Record before the impact (s).", metavar="S", rich_help_panel=RECORDS_PANEL)
+]
 RecordNoise = Annotated[
-    float, typer.Option(help="Noise relative to each channel's RMS.", rich_help_panel=RECORDS_PANEL)
+    float,
+    typer.Option(
+        "--add-record-noise",
+        help="Add noise relative to each channel's RMS.",
+        metavar="X",
+        rich_help_panel=RECORDS_PANEL,
+    ),
 ]
 FrfFormat = Annotated[
     str | None,
     typer.Option(
         "--frf-format",
-        help="Format of --frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
+        help="Format of --write-frf: csv, uff (binary 58b) or uff-ascii (58) \\[default: from the suffix].",
+        metavar="FORMAT",
         show_default=False,
     ),
 ]

@@ -13,6 +13,7 @@ from rigidid.cli.common import (
     check_options,
     check_outputs,
     noise_overrides,
+    old_name,
     parse_units,
     reported,
     stage_tables,
@@ -37,18 +38,30 @@ if TYPE_CHECKING:
 
 
 def plan(
-    layout: Annotated[Path, typer.Argument(help="Planned sensor layout (layout.json or UFF).", show_default=False)],
+    layout: Annotated[
+        Path, typer.Argument(metavar="LAYOUT", help="Planned sensor layout (layout.json or UFF).", show_default=False)
+    ],
     body: Annotated[
-        Path | None, typer.Option(help="Estimate of the body and mounts (body.json) to predict the uncertainty.")
+        Path | None,
+        typer.Option(metavar="FILE", help="Estimate of the body and mounts (body.json) to predict the uncertainty."),
     ] = None,
     candidates: Annotated[
         Path | None,
-        typer.Option(help="Candidate sensors, as a layout.json \\[default: a grid over the sensors' bounding box]."),
+        typer.Option(
+            metavar="FILE",
+            help="Candidate sensors, as a layout.json \\[default: a grid over the sensors' bounding box].",
+        ),
     ] = None,
-    add: Annotated[int, typer.Option(help="Suggest this many sensors to add, one at a time (needs --body).")] = 0,
+    add: Annotated[
+        int, typer.Option(metavar="K", help="Suggest this many sensors to add, one at a time (needs --body).")
+    ] = 0,
     draws: Annotated[
-        int, typer.Option(help="Monte Carlo draws per prediction.", rich_help_panel=UNCERTAINTY_PANEL)
+        int,
+        typer.Option(
+            "--uncertainty", help="Monte Carlo draws per prediction.", metavar="N", rich_help_panel=UNCERTAINTY_PANEL
+        ),
     ] = 1000,
+    draws_old: Annotated[int | None, typer.Option("--draws", hidden=True)] = None,
     frequency_noise: FrequencyNoise = None,
     damping_noise: DampingNoise = None,
     shape_noise: ShapeNoise = None,
@@ -61,13 +74,16 @@ def plan(
     references: Annotated[
         Path | None,
         typer.Option(
+            metavar="FILE",
             help="references.json of an FRF test: do its hammer points excite all six rigid-body motions?",
             show_default=False,
         ),
     ] = None,
     mounts: Annotated[
         Path | None,
-        typer.Option("--mounts", help="mounts.json: check that the mount layout determines every per-mount rate."),
+        typer.Option(
+            "--mounts", metavar="FILE", help="mounts.json: check that the mount layout determines every per-mount rate."
+        ),
     ] = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
@@ -75,10 +91,13 @@ def plan(
         from rigidid import api
         from rigidid.io.atomic import OutputSet
         from rigidid.jsonout import plan_to_dict
+        from rigidid.limits import check_count
 
+        draws = old_name("plan", "--draws", "--uncertainty", draws_old, draws, 1000)
         if draws < 2:
-            raise InputError(f"need at least 2 draws, got {draws}", source="--draws")
-        check_options(draws=draws, add=add, seed=seed)
+            raise InputError(f"need at least 2 draws, got {draws}", source="--uncertainty")
+        check_options(add=add, seed=seed)
+        check_count(draws, "--uncertainty", low=2, high=1_000_000)
         check_outputs({"--json": json_path})
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,

@@ -41,13 +41,22 @@ if TYPE_CHECKING:
 
 
 def report(
-    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json), or a UFF file.", show_default=False)],
+    layout: Annotated[
+        Path, typer.Argument(metavar="LAYOUT", help="Sensor layout (layout.json), or a UFF file.", show_default=False)
+    ],
     inputs: Inputs = None,
-    output: Annotated[Path, typer.Option("-o", "--output", help="The HTML report to write.")] = Path("report.html"),
-    png: Annotated[Path | None, typer.Option(help="Also write the figures as PNG files into DIR.")] = None,
-    body: Annotated[Path | None, typer.Option(help="body.json whose mounts (and their stiffness) to draw.")] = None,
+    output: Annotated[Path, typer.Option("-o", "--output", metavar="FILE", help="The HTML report to write.")] = Path(
+        "report.html"
+    ),
+    png: Annotated[
+        Path | None, typer.Option(metavar="DIR", help="Also write the figures as PNG files into DIR.")
+    ] = None,
+    body: Annotated[
+        Path | None, typer.Option(metavar="FILE", help="body.json whose mounts (and their stiffness) to draw.")
+    ] = None,
     title: Annotated[
-        str | None, typer.Option(help="Title of the report \\[default: the layout's name, else 'rigidid report'].")
+        str | None,
+        typer.Option(metavar="TEXT", help="Title of the report \\[default: the layout's name, else 'rigidid report']."),
     ] = None,
     records: RecordsFlag = False,
     mass: Mass = None,

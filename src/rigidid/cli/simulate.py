@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rigidid.cli.common import check_options, check_outputs, reported
+from rigidid.cli.common import check_options, check_outputs, old_name, reported
 from rigidid.cli.options import (
     Duration,
     FrfFormat,
@@ -27,13 +27,21 @@ if TYPE_CHECKING:
 
 
 def simulate(
-    body: Annotated[Path, typer.Argument(help="Body on mounts (body.json).", show_default=False)],
-    layout: Annotated[Path, typer.Argument(help="Sensor layout (layout.json).", show_default=False)],
-    output: Annotated[str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).")] = "-",
-    frequency_noise: Annotated[float, typer.Option(help="Relative std of frequency noise (0.001 = 0.1 %).")] = 0.0,
-    damping_noise: Annotated[float, typer.Option(help="Relative std of damping-ratio noise.")] = 0.0,
-    shape_noise: Annotated[float, typer.Option(help="Complex shape noise relative to each mode's RMS.")] = 0.0,
-    seed: Annotated[int | None, typer.Option(help="Seed of the noise.")] = None,
+    body: Annotated[Path, typer.Argument(metavar="BODY", help="Body on mounts (body.json).", show_default=False)],
+    layout: Annotated[Path, typer.Argument(metavar="LAYOUT", help="Sensor layout (layout.json).", show_default=False)],
+    output: Annotated[
+        str, typer.Option("-o", "--output", help="modes.csv to write ('-': standard output).", metavar="FILE")
+    ] = "-",
+    frequency_noise: Annotated[
+        float, typer.Option("--add-frequency-noise", help="Add noise: relative std of frequencies.", metavar="X")
+    ] = 0.0,
+    damping_noise: Annotated[
+        float, typer.Option("--add-damping-noise", help="Add noise: relative std of damping ratios.", metavar="X")
+    ] = 0.0,
+    shape_noise: Annotated[
+        float, typer.Option("--add-shape-noise", help="Add complex shape noise (of each mode RMS).", metavar="X")
+    ] = 0.0,
+    seed: Annotated[int | None, typer.Option(help="Seed of the noise.", metavar="N")] = None,
     records: RecordsOut = None,
     impact: Impacts = None,
     sample_rate: SampleRate = 512.0,
@@ -41,38 +49,59 @@ def simulate(
     pretrigger: Pretrigger = 0.1,
     record_noise: RecordNoise = 0.0,
     frf: Annotated[
-        Path | None, typer.Option("--frf", help="Also write accelerance FRFs to PATH (CSV, or UFF for .uff/.unv).")
+        Path | None,
+        typer.Option(
+            "--write-frf", help="Also write accelerance FRFs to FILE (CSV, or UFF for .uff/.unv).", metavar="FILE"
+        ),
     ] = None,
     references: ReferencesPath = None,
-    frf_noise: Annotated[float, typer.Option(help="Complex FRF noise relative to each value.")] = 0.0,
+    frf_noise: Annotated[
+        float, typer.Option("--add-frf-noise", help="Add complex FRF noise relative to each value.", metavar="X")
+    ] = 0.0,
     frf_format: FrfFormat = None,
     mounts: Annotated[
         Path | None,
-        typer.Option("--mounts", help="mounts.json whose mounts (with their stiffness) replace the body's."),
+        typer.Option(
+            "--mounts", help="mounts.json whose mounts (with their stiffness) replace the body's.", metavar="FILE"
+        ),
     ] = None,
+    old_frequency: Annotated[float | None, typer.Option("--frequency-noise", hidden=True)] = None,
+    old_damping: Annotated[float | None, typer.Option("--damping-noise", hidden=True)] = None,
+    old_shape: Annotated[float | None, typer.Option("--shape-noise", hidden=True)] = None,
+    old_records: Annotated[Path | None, typer.Option("--records", hidden=True)] = None,
+    old_record_noise: Annotated[float | None, typer.Option("--record-noise", hidden=True)] = None,
+    old_frf: Annotated[Path | None, typer.Option("--frf", hidden=True)] = None,
+    old_frf_noise: Annotated[float | None, typer.Option("--frf-noise", hidden=True)] = None,
 ) -> None:
     """Write the exact (or noisy) rigid-body modes of a body on its mounts as modes.csv, and records."""
     with reported():
+        renamed = _old_names(
+            (old_frequency, frequency_noise, "frequency"), (old_damping, damping_noise, "damping"),
+            (old_shape, shape_noise, "shape"), (old_record_noise, record_noise, "record"),
+            (old_frf_noise, frf_noise, "frf"),
+        )  # fmt: skip
+        frequency_noise, damping_noise, shape_noise, record_noise, frf_noise = renamed
+        records = old_name("simulate", "--records", "--write-records", old_records, records, None)
+        frf = old_name("simulate", "--frf", "--write-frf", old_frf, frf, None)
         from rigidid import api
         from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import modes_csv_text
         from rigidid.limits import check_number
 
         for name, value in (
-            ("--frequency-noise", frequency_noise),
-            ("--damping-noise", damping_noise),
-            ("--shape-noise", shape_noise),
-            ("--record-noise", record_noise),
-            ("--frf-noise", frf_noise),
+            ("--add-frequency-noise", frequency_noise),
+            ("--add-damping-noise", damping_noise),
+            ("--add-shape-noise", shape_noise),
+            ("--add-record-noise", record_noise),
+            ("--add-frf-noise", frf_noise),
         ):
             check_number(value, name, nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
-        check_outputs({"--output": output, "--frf": frf}, {"--records": records})
+        check_outputs({"--output": output, "--write-frf": frf}, {"--write-records": records})
         impacts = [parse_impact(text) for text in impact] if impact else None
-        source = str(body) if mounts is None else f"{body}, {mounts}"
         if mounts is not None:
             body = api.body_with_mounts(body, mounts)  # type: ignore[assignment]
-        with named_source(source):
+        with named_source(str(mounts if mounts is not None else body)):
             table = api.simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
                 seed=seed,
@@ -97,6 +126,14 @@ def simulate(
             sys.stderr.write(
                 f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
             )
+
+
+def _old_names(*given: tuple[float | None, float, str]) -> list[float]:
+    """The noise options by their old names (``--frequency-noise``...), with a warning: now ``--add-...-noise``."""
+    return [
+        old_name("simulate", f"--{kind}-noise", f"--add-{kind}-noise", old_value, value, 0.0)
+        for old_value, value, kind in given
+    ]
 
 
 def _simulate_records(body: Path, layout: Path, records: Path, **options: Any) -> list[Path]:
@@ -131,9 +168,9 @@ def _simulate_frf(
     from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
 
     if references is None:
-        raise InputError("--frf needs --references REFS.json", source="--references")
+        raise InputError("--write-frf needs --references REFS.json", source="--references")
     if not noise >= 0.0:
-        raise InputError(f"must be zero or positive, got {noise}", source="--frf-noise")
+        raise InputError(f"must be zero or positive, got {noise}", source="--add-frf-noise")
     fmt = frf_format_from(out, frf_format)
     if fmt == "csv":
         data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)

@@ -25,6 +25,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "CG_OUTSIDE",
+    "DENSITY_RANGE",
+    "GYRATION_RATIO",
     "NONRIGID_RESIDUAL",
     "OUTLIER_FLOOR",
     "OUTLIER_SHARE",
@@ -32,7 +35,9 @@ __all__ = [
     "InertiaFinding",
     "ModeFinding",
     "PercentDampingFinding",
+    "PlausibilityFinding",
     "SensorFinding",
+    "implausible_body",
     "inertia_not_positive",
     "nonrigid_modes",
     "percent_damping",
@@ -262,3 +267,115 @@ def inertia_not_positive(inertia_per_mass: ArrayLike) -> InertiaFinding | None:
     if moments[0] > 0.0:
         return None
     return InertiaFinding(moments)
+
+
+DENSITY_RANGE = (1.0, 1e5)
+"""Plausible bounds of a body's apparent density (kg/m^3) from its mass and the sensors'
+extent: above air, below five times tungsten. The sensors' box lies inside the body, so the
+implied density is an upper bound of the body's; a length unit off by 1000 moves it by 1e9."""
+
+GYRATION_RATIO = 3.0
+"""Largest radius of gyration, as a multiple of the farthest sensor's distance from the CG,
+that a body the sensors sit on can have."""
+
+CG_OUTSIDE = 2.0
+"""Distance of the CG from the sensors' centroid, in multiples of the farthest sensor's, that
+no body the sensors sit on reaches."""
+
+
+@dataclass(frozen=True)
+class PlausibilityFinding:
+    """An implausible body: what was found, in words, and what to check.
+
+    Attributes
+    ----------
+    kind : str
+        ``"density"``, ``"gyration"`` or ``"cg_outside"``.
+    value : float
+        The figure judged (kg/m^3, a ratio).
+    text : str
+        What it means and what to check.
+    """
+
+    kind: str
+    value: float
+    text: str
+
+
+def _box_volume(positions: Array) -> tuple[float, float]:
+    """Volume of the sensors' box along their principal directions, and its thinnest-to-widest ratio."""
+    centred = positions - positions.mean(axis=0)
+    axes = np.linalg.svd(centred, full_matrices=False)[2]
+    extent = np.ptp(centred @ axes.T, axis=0)
+    return float(np.prod(extent)), float(extent.min() / max(extent.max(), 1e-300))
+
+
+def implausible_body(
+    positions: ArrayLike,
+    center_of_gravity: ArrayLike,
+    inertia_per_mass: ArrayLike,
+    *,
+    mass_kg: float | None = None,
+    metre: float = 1.0,
+) -> list[PlausibilityFinding]:
+    """Findings that the identified body cannot be the one the sensors sit on (units, layout).
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        Sensor locations (length).
+    center_of_gravity : array_like, shape (3,)
+        The CG (length).
+    inertia_per_mass : array_like, shape (3, 3)
+        ``J / m`` (length^2).
+    mass_kg : float, optional
+        The mass in kg (for the density).
+    metre : float
+        Metres per length unit.
+
+    Returns
+    -------
+    list of PlausibilityFinding
+        Empty for a plausible body. The density is judged only when the
+        sensors span a box at least a tenth as thick as it is wide.
+
+    Examples
+    --------
+    A 40 kg body in a 0.6 m box, its layout in metres declared as millimetres:
+
+    >>> pos = np.array([[x, y, z] for x in (0.3, -0.3) for y in (0.2, -0.2) for z in (0.15, -0.15)])
+    >>> [f.kind for f in implausible_body(pos, np.zeros(3), 0.04 * np.eye(3), mass_kg=40.0, metre=0.001)]
+    ['density']
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    cg = np.asarray(center_of_gravity, dtype=float)
+    j = np.asarray(inertia_per_mass, dtype=float)
+    found = []
+    volume, flatness = _box_volume(pos)
+    if mass_kg is not None and flatness >= 0.1 and volume > 0.0:
+        density = mass_kg / (volume * metre**3)
+        low, high = DENSITY_RANGE
+        if not low <= density <= high:
+            found.append(PlausibilityFinding("density", density, (
+                f"a {mass_kg:.3g} kg body around sensors spanning {volume * metre**3:.3g} m^3 would have a density of "
+                f"{density:.2g} kg/m^3 (real bodies: 1e2-2e4): the layout's length unit or the mass unit is wrong"
+                " (a layout in metres declared as mm, or the reverse?)"
+            )))  # fmt: skip
+    reach = float(np.max(np.linalg.norm(pos - cg, axis=1)))
+    moments = np.linalg.eigvalsh(0.5 * (j + j.T))
+    if moments[-1] > 0.0 and reach > 0.0:
+        gyration = float(np.sqrt(moments[-1])) / reach
+        if gyration > GYRATION_RATIO:
+            found.append(PlausibilityFinding("gyration", gyration, (
+                f"the largest radius of gyration is {gyration:.2g} times the farthest sensor's distance from the CG: "
+                "no body the sensors sit on is that large; check the mass and the sensors' positions and units"
+            )))  # fmt: skip
+    centre = pos.mean(axis=0)
+    spread = float(np.max(np.linalg.norm(pos - centre, axis=1)))
+    outside = float(np.linalg.norm(cg - centre)) / max(spread, 1e-300)
+    if outside > CG_OUTSIDE:
+        found.append(PlausibilityFinding("cg_outside", outside, (
+            f"the CG lies {outside:.2g} times the sensors' radius from their centroid, far outside the body they "
+            "sit on: check the directions' signs and the positions in the layout"
+        )))  # fmt: skip
+    return found

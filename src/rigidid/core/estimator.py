@@ -50,6 +50,7 @@ __all__ = [
     "Estimates",
     "Prepared",
     "at_cg",
+    "eq18_residuals",
     "eq36_system",
     "estimate",
     "inertia_from_params",
@@ -258,8 +259,11 @@ class _VarPro:
     ``w [anti(X_g11), X_g12 - X21^T J, anti(J X_g22)]``.
     """
 
-    def __init__(self, mats: Array, weights: Array):
-        # mats: (B, n, 6, 6); weights: (n,)
+    def __init__(self, mats: Array, weights: Array, white: Array | None = None):
+        # mats: (B, n, 6, 6); weights: (n,); white: (15 n, 15 n) shared, (B, 15 n, 15 n) or None
+        self.white = white
+        if white is not None:
+            weights = np.ones_like(weights)
         self.w = weights[None, :, None]
         self.x11 = mats[..., :3, :3]
         self.x12 = mats[..., :3, 3:]
@@ -275,6 +279,7 @@ class _VarPro:
         """The same problem restricted to some tests."""
         out = object.__new__(_VarPro)
         out.w = self.w
+        out.white = self.white if self.white is None or self.white.ndim == 2 else self.white[index]
         for name in ("x11", "x12", "x21", "x22", "a12", "n12"):
             setattr(out, name, getattr(self, name)[index])
         return out
@@ -289,6 +294,8 @@ class _VarPro:
         ey = _SYM3 @ xg22[:, :, None]  # E_k X_g22, (m, n, 6, 3, 3)
         a22 = np.swapaxes(_anti_up(ey), 2, 3) * self.w[..., None]  # (m, n, 3, 6)
         r12_0 = xg12.reshape(m, -1, 9) * self.w  # (m, n, 9)
+        if self.white is not None:
+            return self._evaluate_white(xg11, r12_0, a22, (s, xg11))
         a22_flat = a22.reshape(m, -1, 6)
         a12_flat = self.a12.reshape(m, -1, 6)
         normal = self.n12 + np.swapaxes(a22_flat, 1, 2) @ a22_flat
@@ -302,6 +309,21 @@ class _VarPro:
         zeros = np.zeros((*a22.shape[:2], 3, 6))
         amat = np.concatenate([zeros, self.a12, a22], axis=2).reshape(m, -1, 6)
         return resid, j, amat, ninv, (s, xg11)
+
+    def _evaluate_white(
+        self, xg11: Array, r12_0: Array, a22: Array, cache: tuple[Array, ...]
+    ) -> tuple[Array, Array, Array, Array, tuple[Array, ...]]:
+        """:meth:`evaluate` with the residual whitened by :attr:`white` (``L r``, ``L A``)."""
+        assert self.white is not None
+        m = xg11.shape[0]
+        r0 = np.concatenate([_anti_up(xg11), r12_0, np.zeros((*r12_0.shape[:2], 3))], axis=2).reshape(m, -1)
+        zeros = np.zeros((*a22.shape[:2], 3, 6))
+        amat = self.white @ np.concatenate([zeros, self.a12, a22], axis=2).reshape(m, -1, 6)
+        r0w = (self.white @ r0[..., None])[..., 0]
+        ninv = _pinv_psd(np.swapaxes(amat, 1, 2) @ amat)
+        j = -(ninv @ (np.swapaxes(amat, 1, 2) @ r0w[..., None]))[..., 0]
+        resid = r0w + (amat @ j[..., None])[..., 0]
+        return resid, j, amat, ninv, cache
 
     def jacobian(self, j: Array, amat: Array, ninv: Array, cache: tuple[Array, ...]) -> Array:
         """Kaufman's variable-projection Jacobian (m, 15 n, 3) of the residual in the CG.
@@ -326,6 +348,8 @@ class _VarPro:
                 ).reshape(m, -1)
             )
         raw = np.stack(cols, axis=-1)  # (m, 15 n, 3): derivative at fixed J / m
+        if self.white is not None:
+            raw = self.white @ raw
         proj = ninv @ (np.swapaxes(amat, 1, 2) @ raw)
         result: Array = raw - amat @ proj
         return result
@@ -428,14 +452,56 @@ def _eq36_start(stiffness: Array) -> Array:
     return result
 
 
-def _problem(stiffness: Array, damping: Array | None, damping_weight: float) -> _VarPro:
+def _problem(stiffness: Array, damping: Array | None, damping_weight: float, weights: Array | None = None) -> _VarPro:
+    if weights is not None:
+        if damping is None:
+            raise ValueError("residual weights need the damping matrices")
+        white = np.asarray(weights, dtype=float)
+        return _VarPro(np.stack([stiffness, damping], axis=1), np.array([1.0, 1.0]), white)
     if damping is not None and damping_weight > 0.0:
         return _VarPro(np.stack([stiffness, damping], axis=1), np.array([1.0, damping_weight]))
     return _VarPro(stiffness[:, None], np.array([1.0]))
 
 
+def eq18_residuals(stiffness: Array, damping: Array, cg: Array, inertia_params: Array) -> Array:
+    """The 30 residuals of eq. (18) of [1] and its damping twin, unweighted, at a CG and ``J / m``.
+
+    Parameters
+    ----------
+    stiffness, damping : ndarray, shape (B, 6, 6)
+        ``Q`` and ``P`` at the origin, dimensionless (or their changes: the
+        residuals are linear in them at a fixed CG and ``J / m``).
+    cg : ndarray, shape (B, 3)
+        The CG in the same frame.
+    inertia_params : ndarray, shape (B, 6)
+        ``J / m`` as ``xx, yy, zz, xy, xz, yz``.
+
+    Returns
+    -------
+    ndarray, shape (B, 30)
+        For ``Q`` then ``P``: the upper entries of ``X_g11 - X_g11^T``, the
+        nine entries of ``X_g12 - X_21^T J / m`` and the upper entries of
+        ``J X_g22 - (J X_g22)^T`` (the order the weights of :func:`solve_cg`
+        use).
+    """
+    problem = _VarPro(np.stack([stiffness, damping], axis=1), np.array([1.0, 1.0]))
+    s = _skew(cg)[:, None]
+    xg11 = problem.x11 - s @ problem.x21
+    xg12 = xg11 @ s + problem.x12 - s @ problem.x22
+    xg22 = problem.x21 @ s + problem.x22
+    jm = inertia_from_params(inertia_params)[:, None]
+    r12 = xg12 - np.swapaxes(problem.x21, -1, -2) @ jm
+    parts = [_anti_up(xg11), r12.reshape(*r12.shape[:2], 9), _anti_up(jm @ xg22)]
+    result: Array = np.concatenate(parts, axis=2).reshape(cg.shape[0], -1)
+    return result
+
+
 def solve_cg(
-    stiffness: Array, damping: Array | None = None, damping_weight: float = DAMPING_WEIGHT
+    stiffness: Array,
+    damping: Array | None = None,
+    damping_weight: float = DAMPING_WEIGHT,
+    weights: Array | None = None,
+    start: Array | None = None,
 ) -> tuple[Array, Array, Array]:
     """CG and inertia per mass from the whole of eq. (18) of [1], for a stack of tests.
 
@@ -449,6 +515,15 @@ def solve_cg(
     damping_weight : float
         Weight of the damping twin of eq. (18) against the stiffness
         equations (0: stiffness only).
+    weights : ndarray, shape (30, 30) or (B, 30, 30), optional
+        A whitening matrix ``L`` of the 30 residuals (:func:`eq18_residuals`
+        order): the cost becomes ``|L r|^2``, a chi-square when ``L^T L`` is
+        the inverse covariance of the residuals under the measurement noise
+        (:func:`rigidid.core.linearised.residual_weights`). Replaces
+        `damping_weight`; needs `damping`.
+    start : ndarray, shape (B, 3), optional
+        One start per test (a nearby solution, e.g. for small changes of the
+        data) instead of the two default starts.
 
     Returns
     -------
@@ -488,12 +563,22 @@ def solve_cg(
     ([[0.1, 0.0, 0.0]], [1.0, 2.0, 3.0])
     """
     b = stiffness.shape[0]
-    problem = _problem(stiffness, damping, damping_weight)
+    problem = _problem(stiffness, damping, damping_weight, weights)
+    scale = np.sum(stiffness**2, axis=(1, 2))
+    if weights is not None and damping is not None:
+        # the data's scale in whitened units: |L|^2 (|Q|^2 + |P|^2)
+        gain = np.linalg.norm(np.asarray(weights, dtype=float), ord=2, axis=(-2, -1)) ** 2
+        scale = gain * (scale + np.sum(damping**2, axis=(1, 2)))
+    elif damping is not None and damping_weight > 0.0:
+        scale = scale + damping_weight**2 * np.sum(damping**2, axis=(1, 2))
+    if start is not None:
+        g0 = np.asarray(start, dtype=float).reshape(b, 3).copy()
+        g, cost = _levenberg_marquardt(problem, g0, np.broadcast_to(scale, (b,)).copy())
+        g, cost = _polish(problem, g, cost)
+        _, j, *_ = problem.evaluate(g)
+        return g, inertia_from_params(j), cost
     starts = np.concatenate([_eq36_start(stiffness), np.zeros((b, 3))])
     both = problem.take(np.concatenate([np.arange(b), np.arange(b)]))
-    scale = np.sum(stiffness**2, axis=(1, 2))
-    if damping is not None and damping_weight > 0.0:
-        scale = scale + damping_weight**2 * np.sum(damping**2, axis=(1, 2))
     g_all, cost_all = _levenberg_marquardt(both, starts, np.concatenate([scale, scale]))
     c1, c2 = cost_all[:b], cost_all[b:]
     second = (c2 < c1) | ~np.isfinite(c1)
@@ -606,8 +691,11 @@ class Estimates(_Statuses):
         return good
 
 
-def _estimate_chunk(prepared: Prepared, damping_weight: float) -> Estimates:
-    g, j, _ = solve_cg(prepared.stiffness, prepared.damping, damping_weight)
+def _estimate_chunk(
+    prepared: Prepared, damping_weight: float, weights: Array | None = None, start: Array | None = None
+) -> Estimates:
+    g0 = None if start is None else (start[None, :] - prepared.centre) / prepared.scale[:, None]
+    g, j, _ = solve_cg(prepared.stiffness, prepared.damping, damping_weight, weights, g0)
     k = _sym(at_cg(prepared.stiffness, g, j))
     c = _sym(at_cg(prepared.damping, g, j))
     scale, omega = prepared.scale, prepared.omega
@@ -638,7 +726,9 @@ def estimate(
     shapes: CArray,
     *,
     damping_weight: float = DAMPING_WEIGHT,
+    weights: Array | None = None,
     progress: Callable[[str, float, float | None], None] | None = None,
+    start: Array | None = None,
 ) -> Estimates:
     """Identify a stack of tests: :func:`prepare`, :func:`solve_cg`, :func:`at_cg`, in chunks.
 
@@ -654,8 +744,14 @@ def estimate(
         Mode shapes as the sensors read them.
     damping_weight : float
         Weight of the damping twin of eq. (18).
+    weights : ndarray, shape (30, 30), optional
+        Residual whitening shared by every test (see :func:`solve_cg`);
+        replaces `damping_weight`.
     progress : callable, optional
         ``progress("identifying", done, total)`` after each chunk of tests.
+    start : ndarray, shape (3,), optional
+        A CG (length, the layout's axes) near every test's, to start from
+        instead of the two default starts (for small changes of one test).
 
     Returns
     -------
@@ -672,7 +768,7 @@ def estimate(
             parts.append(Estimates(np.full((b, 3), np.nan), np.full((b, 3, 3), np.nan), nan6, nan6.copy(),
                                    prepared.status))  # fmt: skip
             continue
-        parts.append(_estimate_chunk(prepared, damping_weight))
+        parts.append(_estimate_chunk(prepared, damping_weight, weights, start))
         if progress is not None:
             progress("identifying", min(i + _CHUNK, positions.shape[0]), positions.shape[0])
     if len(parts) == 1:

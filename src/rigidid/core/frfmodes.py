@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.frfstats import local_noise, misfit_units, sandwich_variance
 from rigidid.core.geometry import sensor_matrix, transfer_matrix
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
@@ -47,6 +48,7 @@ from rigidid.progress import ProgressCallback
 
 __all__ = [
     "FrfModes",
+    "ResidueLimit",
     "ScaledBody",
     "body_from_frfs",
     "body_from_scaled_modes",
@@ -55,6 +57,7 @@ __all__ = [
     "plscf_poles",
     "refine_poles",
     "refine_rigid_modes",
+    "residue_limit",
     "residues_lsfd",
     "rigid_band",
     "rigid_shapes",
@@ -432,7 +435,13 @@ def _pair_weights(hb: CArray, weighting: str) -> Array:
 
 
 def _solve_pairs(g: CArray, hb: CArray, wts: Array) -> tuple[Array, Array, float]:
-    """Weighted least squares per response and reference pair: coefficients, stacked residuals, data norm.
+    """Weighted least squares per response and reference pair: coefficients, stacked residuals, data norm."""
+    coef, resid, den, _ = _solve_pairs_qr(g, hb, wts)
+    return coef, resid.reshape(-1), den
+
+
+def _solve_pairs_qr(g: CArray, hb: CArray, wts: Array) -> tuple[Array, Array, float, tuple[Array, Array, Array]]:
+    """:func:`_solve_pairs` with residuals (pq, 2f) and its factors ``(Q, R, column scales)``.
 
     All pairs at once: stacked QR of the column-scaled real designs ``[Re; Im]``.
     """
@@ -452,7 +461,223 @@ def _solve_pairs(g: CArray, hb: CArray, wts: Array) -> tuple[Array, Array, float
     sol = np.linalg.solve(rm, qty[:, :, None])[:, :, 0] / scale
     resid = np.einsum("bfk,bk->bf", qm, qty) - target
     coef = sol.T.reshape(k, p, q)
-    return coef, resid.reshape(-1), float(np.linalg.norm(target))
+    return coef, resid, float(np.linalg.norm(target)), (qm, rm, scale)
+
+
+def _noise_weights(g: CArray, hb: CArray, passes: int = 2) -> Array:
+    """Weights (p, q, f) ``1 / sigma`` from the noise the misfit shows (:func:`rigidid.core.frfstats.local_noise`).
+
+    The first fit is unweighted; each pass refits with the weights of the previous misfit.
+    """
+    p, q, nf = hb.shape
+    wts = np.ones(hb.shape)
+    for _ in range(passes):
+        resid = _solve_pairs_qr(g, hb, wts)[1].reshape(p * q, 2, nf)
+        e = (resid[:, 0] + 1j * resid[:, 1]) / wts.reshape(p * q, nf)
+        wts = 1.0 / local_noise(e).reshape(p, q, nf)
+    return wts
+
+
+def _limit_weights(coef: Array, qm: Array, rm: Array, scale: Array, lam: CArray, n_modal: int) -> tuple[Array, Array]:
+    """``sum 2 Re(l_k R_k)`` per pair (p, q) and its weights on the weighted data (pq, 2f)."""
+    k = coef.shape[0]
+    c = np.zeros(k)
+    c[0:n_modal:2] = 2.0 * lam.real
+    c[1:n_modal:2] = -2.0 * lam.imag
+    limit = np.tensordot(c, coef, axes=1)
+    v = np.linalg.solve(np.transpose(rm, (0, 2, 1)), (c[None, :] / scale)[:, :, None])[:, :, 0]  # R^-T c
+    return limit, np.einsum("bfk,bk->bf", qm, v)
+
+
+def _pole_parameters(lam: CArray) -> Array:
+    return np.stack([lam.real, lam.imag], axis=1).reshape(-1)
+
+
+def _poles_of(theta: Array) -> CArray:
+    pair = theta.reshape(-1, 2)
+    return (pair[:, 0] + 1j * pair[:, 1]).astype(complex)
+
+
+def _varpro_residual(w: Array, hb: CArray, wts: Array, theta: Array, upper: int) -> Array:
+    """Weighted misfit (flat) of the residues fitted with the poles ``theta`` (variable projection)."""
+    return _solve_pairs_qr(_design(w, _poles_of(theta), False, upper)[0], hb, wts)[1].reshape(-1)
+
+
+def _varpro_jacobian(w: Array, hb: CArray, wts: Array, theta: Array, upper: int) -> tuple[Array, Array]:
+    """Projected weighted residual (flat) and its derivative in the pole parameters (forward differences)."""
+    r0 = _varpro_residual(w, hb, wts, theta, upper)
+    jac = np.empty((r0.size, theta.size))
+    for i in range(theta.size):
+        d = np.zeros_like(theta)
+        d[i] = 1e-7 * float(np.max(np.abs(theta)))
+        jac[:, i] = (_varpro_residual(w, hb, wts, theta + d, upper) - r0) / d[i]
+    return r0, jac
+
+
+def _refine_poles_varpro(w: Array, hb: CArray, wts: Array, lam: CArray, upper: int, steps: int = 6) -> CArray:
+    """Gauss-Newton on the poles with the residues projected out (variable projection), fixed weights."""
+    theta = _pole_parameters(lam)
+    r0, jac = _varpro_jacobian(w, hb, wts, theta, upper)
+    cost = float(r0 @ r0)
+    for _ in range(steps):
+        step = np.linalg.lstsq(jac, -r0, rcond=None)[0]
+        for _half in range(5):
+            trial = theta + step
+            if np.all(trial.reshape(-1, 2)[:, 1] > 0.0) and np.all(trial.reshape(-1, 2)[:, 0] < 0.0):
+                r_t = _varpro_residual(w, hb, wts, trial, upper)
+                if float(r_t @ r_t) < cost:
+                    break
+            step = 0.5 * step
+        else:
+            break
+        gain = cost - float(r_t @ r_t)
+        theta, cost = trial, float(r_t @ r_t)
+        if gain < 1e-6 * cost:
+            break
+        r0, jac = _varpro_jacobian(w, hb, wts, theta, upper)
+    return _poles_of(theta)
+
+
+def _pole_covariance(
+    w: Array, hb: CArray, wts: Array, lam: CArray, upper: int, resid: Array, k: int
+) -> tuple[Array, Array]:
+    """Covariance of the pole parameters (Gauss-Newton, misfit variance per its degrees of freedom) and the
+    derivative of the limit in them (p, q, 2 n)."""
+    theta = _pole_parameters(lam)
+    _, jac = _varpro_jacobian(w, hb, wts, theta, upper)
+    n_val = resid.size
+    s2 = float(np.sum(resid**2)) / max(n_val - resid.shape[0] * k - theta.size, 1)
+    cov = s2 * np.linalg.pinv(jac.T @ jac)
+    p, q, _ = hb.shape
+    jl = np.empty((p, q, theta.size))
+    for i in range(theta.size):
+        d = np.zeros_like(theta)
+        d[i] = 1e-6 * float(np.max(np.abs(theta)))
+        lims = []
+        for sgn in (1.0, -1.0):
+            lam_i = _poles_of(theta + sgn * d)
+            g_i, n_modal = _design(w, lam_i, False, upper)
+            coef, _, _, (qm, rm, scale) = _solve_pairs_qr(g_i, hb, wts)
+            lims.append(_limit_weights(coef, qm, rm, scale, lam_i, n_modal)[0])
+        jl[:, :, i] = (lims[0] - lims[1]) / (2.0 * d[i])
+    return cov, jl
+
+
+@dataclass(frozen=True)
+class ResidueLimit:
+    """The high-frequency limit of rigid-body residues fitted with known poles, with its variance.
+
+    Attributes
+    ----------
+    limit : ndarray, shape (p, q)
+        ``sum_k 2 Re(l_k R_k)`` (``T M^-1 T_f^T`` for the six rigid-body modes).
+    variance : ndarray, shape (p, q)
+        Its variance per response and reference (sandwich, :func:`rigidid.core.frfstats.sandwich_variance`).
+    residual : float
+        Weighted RMS misfit over the weighted RMS of the data.
+    misfit_units : float
+        The misfit over the noise seen in its third differences (:func:`rigidid.core.frfstats.misfit_units`).
+    poles : ndarray of complex, shape (n,)
+        The poles used (refined when asked).
+    pole_covariance : ndarray, shape (2 n, 2 n)
+        Covariance of ``(Re l_1, Im l_1, ...)`` when refined, else empty.
+    limit_jacobian : ndarray, shape (p, q, 2 n)
+        Derivative of `limit` with respect to those pole parameters (empty when not refined):
+        the limit's variance from the poles is ``J C J^T`` (correlated across FRFs).
+    worst : tuple of int
+        Response and reference whose FRF the model misfits most, in noise units.
+    worst_units : float
+        That FRF's misfit in noise units.
+    """
+
+    limit: Array
+    variance: Array
+    poles: CArray
+    pole_covariance: Array
+    limit_jacobian: Array
+    residual: float
+    misfit_units: float
+    worst: tuple[int, int]
+    worst_units: float
+
+
+def residue_limit(
+    frequencies: ArrayLike,
+    frf: ArrayLike,
+    poles: ArrayLike,
+    *,
+    band: tuple[float, float] | None = None,
+    upper: int = 2,
+    weighting: str = "noise",
+    refine: bool = True,
+) -> ResidueLimit:
+    """Residues of accelerance FRFs with known poles and their high-frequency limit, with its variance.
+
+    Parameters
+    ----------
+    frequencies, frf, poles, band, upper
+        As :func:`residues_lsfd` (no lower residual).
+    weighting : {"noise", "relative", "none"}
+        ``"noise"`` (default): each value weighted by the inverse of its noise level, found
+        from the misfit of the neighbouring lines of the same FRF
+        (:func:`rigidid.core.frfstats.local_noise`, two passes from an unweighted fit);
+        ``"relative"``: ``1 / |H|`` (right for noise proportional to the FRF only: with a
+        noise floor it weights the anti-resonances by their noise); ``"none"``: unweighted.
+    refine : bool
+        Refine the poles on the weighted FRFs (variable projection, Gauss-Newton) and count
+        their uncertainty in the limit's (``pole_covariance``, ``limit_jacobian``).
+
+    Returns
+    -------
+    ResidueLimit
+
+    Notes
+    -----
+    The limit is linear in the data, ``a^T h`` per FRF, so its variance is
+    ``sum a_l^2 e_l^2`` over the weighted misfits ``e_l`` (with the fit's degrees of
+    freedom); the poles' uncertainty adds ``J C J^T`` when they are refined (the
+    residues' covariance given the poles plus the poles' propagated: the two are
+    uncorrelated to first order in variable projection).
+    """
+    freq, h = _check(frequencies, frf)
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    if lam.size == 0 or np.any(lam.imag <= 0.0) or not np.all(np.isfinite(lam)):
+        raise InputError("poles must be finite with positive imaginary parts")
+    (lo, hi), sel = _band_lines(freq, band)
+    hb = h[:, :, sel]
+    g, n_modal = _design(2.0 * np.pi * freq[sel], lam, False, upper)
+    p, q, nf = hb.shape
+    k = g.shape[1]
+    if k > 2 * nf:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds too few lines for {lam.size} modes")
+    w = 2.0 * np.pi * freq[sel]
+    wts = _noise_weights(g, hb) if weighting == "noise" else _pair_weights(hb, weighting)
+    pole_cov = np.zeros((0, 0))
+    if refine:
+        lam = _refine_poles_varpro(w, hb, wts, lam, upper)
+        g = _design(w, lam, False, upper)[0]
+        if weighting == "noise":
+            wts = _noise_weights(g, hb)
+    coef, resid, den, (qm, rm, scale) = _solve_pairs_qr(g, hb, wts)
+    limit, a = _limit_weights(coef, qm, rm, scale, lam, n_modal)
+    var = sandwich_variance(a, resid, k).reshape(p, q)
+    jac_limit = np.zeros((p, q, 0))
+    if refine:
+        pole_cov, jac_limit = _pole_covariance(w, hb, wts, lam, upper, resid, k)
+    units, per_row = misfit_units(resid.reshape(p * q, 2, nf).reshape(2 * p * q, nf), k // 2)
+    per_pair = np.sqrt(np.mean(per_row.reshape(p * q, 2) ** 2, axis=1))
+    worst = int(np.argmax(per_pair))
+    return ResidueLimit(
+        limit=limit,
+        variance=var,
+        poles=lam,
+        pole_covariance=pole_cov,
+        limit_jacobian=jac_limit,
+        residual=float(np.linalg.norm(resid) / max(den, np.finfo(float).tiny)),
+        misfit_units=units,
+        worst=(worst // q, worst % q),
+        worst_units=float(per_pair[worst]),
+    )
 
 
 def refine_poles(

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core import estimator
 from rigidid.core.estimator import DAMPING_WEIGHT
 from rigidid.core.geometry import layout_condition, normalise_directions, sensor_matrix, transfer_matrix
+from rigidid.core.noise import NoiseLevels
 from rigidid.core.statespace import mac_matrix, modal_from_poles, state_matrices_paper, state_matrix
 from rigidid.errors import (
     IdentificationError,
@@ -58,6 +59,8 @@ UNOBSERVABLE = 1e-6
 """Inertia observability below which the inertia is not determined at all (an error)."""
 WEAKLY_OBSERVABLE = 0.03
 """Inertia observability below which the inertia is poorly determined (a warning)."""
+MISFIT_DOF = 21
+"""Degrees of freedom of the weighted misfit: 30 equations of eq. (18) and its twin, 9 unknowns."""
 ILL_CONDITIONED = 1e6
 """Layout condition number above which a warning is issued."""
 
@@ -242,6 +245,18 @@ class FitDiagnostics:
         MAC between each measured shape and the identified model's shape.
     warnings : tuple of str
         The physical-plausibility and conditioning warnings raised.
+    misfit : float or None
+        With noise levels given: the weighted cost ``|L r|^2`` of eq. (18) and
+        its damping twin in noise units at the noise-weighted fit, chi-square with `misfit_dof` degrees
+        of freedom when the rigid-body model and the levels are right (None
+        without levels).
+    misfit_dof : int
+        Its degrees of freedom (21: 30 equations, 9 unknowns), 0 without levels.
+    residual_weights : ndarray, shape (30, 30), or None
+        The whitening ``L`` of the reported estimate
+        (:func:`rigidid.core.linearised.residual_weights`); None when the
+        estimate has fixed weights (no levels, or a misfit per degree of
+        freedom above :data:`~rigidid.core.linearised.ACCEPTABLE_MISFIT`).
     """
 
     layout_condition: float
@@ -253,6 +268,9 @@ class FitDiagnostics:
     model_damping_ratio: Array
     model_mac: Array
     warnings: tuple[str, ...] = field(default=())
+    misfit: float | None = None
+    misfit_dof: int = 0
+    residual_weights: Array | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -412,6 +430,7 @@ def identify(
     method: Method = "structured",
     damping_weight: float = DAMPING_WEIGHT,
     warn: bool = True,
+    noise: NoiseLevels | None = None,
 ) -> Identification:
     """Identify CG, inertia, stiffness and damping from six rigid-body modes.
 
@@ -484,7 +503,7 @@ def identify(
     """
     notices: list[Notice] = []
     try:
-        return _identify(positions, directions, poles, shapes, mass, method, damping_weight, notices)
+        return _identify(positions, directions, poles, shapes, mass, method, damping_weight, notices, noise)
     finally:
         if warn:
             emit(notices)
@@ -524,6 +543,7 @@ def _identify(
     method: str,
     damping_weight: float,
     notices: list[Notice],
+    noise: NoiseLevels | None = None,
 ) -> Identification:
     pos, dirs, lam, psi = _checked(positions, directions, poles, shapes, mass, method)
     cond, rank = layout_condition(pos, dirs)
@@ -534,12 +554,16 @@ def _identify(
     prep = estimator.prepare(pos[None], dirs[None], lam[None], psi[None])
     if not prep.ok[0]:
         raise IdentificationError(estimator.STATUS_MESSAGES[int(prep.status[0])])
+    weighted = None
     if method == "paper":
         q, p = state_matrices_paper(lam / prep.omega[0], prep.coordinates[0])
         g, j = _solve_paper(q, notices)
     else:
         q, p = prep.stiffness[0], prep.damping[0]
         g_b, j_b, _ = estimator.solve_cg(prep.stiffness, prep.damping, damping_weight)
+        weighted = None if noise is None else _weighted(pos, dirs, lam, psi, noise, prep, g_b, j_b)
+        if weighted is not None and weighted[3] is not None:
+            g_b, j_b = weighted[0], weighted[1]
         g, j = g_b[0], j_b[0]
     omega, phi = float(prep.omega[0]), prep.coordinates[0]
     observability = inertia_observability(q, g)
@@ -592,5 +616,32 @@ def _identify(
             model_damping_ratio=model_z,
             model_mac=mac,
             warnings=tuple(n.message for n in notices),
+            misfit=None if weighted is None else float(weighted[2][0]),
+            misfit_dof=0 if weighted is None else MISFIT_DOF,
+            residual_weights=None if weighted is None else weighted[3],
         ),
     )
+
+
+def _weighted(
+    pos: Array, dirs: Array, lam: CArray, psi: CArray, noise: NoiseLevels, prep: estimator.Prepared, g: Array, j: Array
+) -> tuple[Array, Array, Array, Array | None] | None:
+    """The noise-weighted solution from the unweighted one: CG, ``J / m``, misfit (batches of one) and ``L``.
+
+    When the weighted misfit per degree of freedom exceeds
+    :data:`~rigidid.core.linearised.ACCEPTABLE_MISFIT`, the unweighted CG and
+    ``J / m`` come back with the misfit and no ``L``.
+    """
+    from rigidid.core.linearised import ACCEPTABLE_MISFIT, residual_weights
+
+    params = np.array([j[0, 0, 0], j[0, 1, 1], j[0, 2, 2], j[0, 0, 1], j[0, 0, 2], j[0, 1, 2]])
+    white = residual_weights(pos, dirs, lam, psi, noise, g[0], params)
+    if white is None:
+        return None
+    g_w, j_w, cost = estimator.solve_cg(prep.stiffness, prep.damping, weights=white)
+    if not (np.all(np.isfinite(g_w)) and np.all(np.isfinite(j_w))):
+        return None
+    if cost[0] > ACCEPTABLE_MISFIT * MISFIT_DOF:
+        # the noise levels do not explain the misfit: their weights are not trusted
+        return g, j, cost, None
+    return g_w, j_w, cost, white

@@ -29,7 +29,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.frfmodes import residues_lsfd, scaled_frame
+from rigidid.core.frfmodes import residue_limit, scaled_frame
+from rigidid.core.frfstats import BodyIntervals, body_intervals, misfit_units
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.errors import IdentificationError, InputError
 
@@ -77,6 +78,13 @@ class MassLine:
         ``"exact"`` (:func:`rigidid.core.rigidfrf.rigid_frf_fit`) or ``"none"``.
     supports_reason : str
         Why (one sentence; empty from :func:`mass_from_residues`).
+    intervals : rigidid.core.frfstats.BodyIntervals or None
+        Linearised 95 % intervals of mass, CG and inertia (None where not available).
+    misfit_noise_units : float or None
+        The fit's RMS misfit over the noise seen in its third differences along frequency
+        (:func:`rigidid.core.frfstats.misfit_units`): about 1 when the model explains the FRFs.
+    misfit_where : str
+        Where the misfit is largest (e.g. ``"response 3, reference 1"``), for messages.
     """
 
     mass: float
@@ -89,6 +97,9 @@ class MassLine:
     corrections: tuple[str, ...]
     supports: str = "first_order"
     supports_reason: str = ""
+    intervals: BodyIntervals | None = None
+    misfit_noise_units: float | None = None
+    misfit_where: str = ""
 
 
 def _peaks(s: Array) -> NDArray[np.intp]:
@@ -347,11 +358,16 @@ def mass_line(
         if support_model == "auto":
             noise = _noise_residual(fitted - target, target, design.shape[1])
             support_model, why = _auto_supports(fit, residual, noise)
+    units, where = _first_order_misfit(fitted - target, design.shape[1], q)
+    intervals = None
     if support_model == "exact" and fit is not None:
         m, cg, inertia = _body_from_parameters(fit.parameters, origin, span)
+        noise = _noise_residual(fitted - target, target, design.shape[1])
+        units = fit.residual / max(noise, np.finfo(float).tiny)
         residual = fit.residual
     else:
         m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+        intervals = _first_order_intervals(design, fitted - target, y0, tf, origin, span)
     return MassLine(
         mass=m,
         center_of_gravity=cg,
@@ -363,6 +379,36 @@ def mass_line(
         corrections=extra,
         supports=support_model,
         supports_reason=why,
+        intervals=intervals,
+        misfit_noise_units=units,
+        misfit_where=where,
+    )
+
+
+def _first_order_misfit(misfit: Array, n_params: int, q: int) -> tuple[float, str]:
+    """The first-order fit's misfit in noise units (:func:`~rigidid.core.frfstats.misfit_units`), where worst."""
+    n_f = misfit.shape[0] // 2
+    rows = np.concatenate([misfit[:n_f].T, misfit[n_f:].T])  # (12 q, f): real parts, then imaginary parts
+    units, per_row = misfit_units(rows, max(n_params // 2, 1))
+    per_col = np.sqrt(0.5 * (per_row[: 6 * q] ** 2 + per_row[6 * q :] ** 2)).reshape(6, q)
+    i, j = np.unravel_index(int(np.argmax(per_col)), per_col.shape)
+    names = ("x", "y", "z", "rx", "ry", "rz")
+    return units, f"rigid coordinate {names[i]}, reference {j + 1} ({per_col[i, j]:.3g} noise units)"
+
+
+def _first_order_intervals(
+    design: Array, misfit: Array, y0: Array, tf: Array, origin: Array, span: float
+) -> BodyIntervals:
+    """Linearised intervals of the first-order mass line: sandwich covariance of its constants ``y0``."""
+    a = np.linalg.pinv(design)[0]  # the constant of every column is a^T (its column of the target)
+    n, k = design.shape
+    weighted = a[:, None] * misfit  # (2 f, 6 q)
+    cov = weighted.T @ weighted * n / max(n - k, 1)
+    return body_intervals(
+        lambda y: _body_from_inverse_mass(y, tf, origin, span),
+        y0,
+        cov,
+        "linearised: sandwich covariance of the mass line's constants from the fit's misfit",
     )
 
 
@@ -457,7 +503,7 @@ def mass_from_residues(
     poles: ArrayLike,
     *,
     band: tuple[float, float] | None = None,
-    weighting: str = "relative",
+    weighting: str = "noise",
 ) -> MassLine:
     """Mass, CG and inertia from scaled rigid-body modes: residues fitted with known poles.
 
@@ -471,11 +517,12 @@ def mass_from_residues(
         Band (Hz) of the fit: it must hold the rigid-body modes and lie below the
         first elastic mode. Default: from the lowest line to half the first
         elastic peak (:func:`auto_band`), or the last line.
-    weighting : {"relative", "none"}
-        ``"relative"`` (default) weights every value by the inverse of its
-        magnitude (:func:`rigidid.core.frfmodes.residues_lsfd`), the
-        maximum-likelihood fit for noise proportional to the FRF; ``"none"``
-        is the unweighted fit of rigidid before this option.
+    weighting : {"noise", "relative", "none"}
+        ``"noise"`` (default): every value weighted by the inverse of its noise level,
+        found from the misfit of its neighbouring lines
+        (:func:`rigidid.core.frfmodes.residue_limit`); ``"relative"`` by ``1 / |H|`` (right
+        only for noise proportional to the FRF: with a noise floor it weights the
+        anti-resonances by their noise, benchmarks/frf_regimes.py); ``"none"``: unweighted.
 
     Returns
     -------
@@ -488,10 +535,13 @@ def mass_from_residues(
     The receptance is ``sum_k R_k / (i w - l_k) + conj``; the residues ``R_k``
     (``p x q``, complex, the scaled shapes times their participations) are fitted
     by linear least squares to the accelerance ``-w^2 x receptance`` with an
-    upper residual (``w^2``, ``w^4``), each response and reference pair weighted
-    by ``1 / |H|`` (benchmarks/frf_accuracy.py: on mounts with 1 % noise and
-    exact poles the worst mass error of 20 trials went from 1.2 % unweighted to
-    0.4 %). The high-frequency limit of the model,
+    upper residual (``w^2``, ``w^4``), every value weighted by its noise level
+    found from the misfit (``1 / |H|`` was the default before issue 21: right for
+    noise proportional to the FRF, but with a noise floor it weighted the
+    anti-resonances by their noise, mass off by up to 13 % at exit 0), the poles
+    refined on the weighted FRFs (:func:`rigidid.core.frfmodes.residue_limit`).
+    The intervals (``intervals``) are linearised: the limit's variance from the
+    misfit, plus the poles' propagated. The high-frequency limit of the model,
     ``sum_k 2 Re(l_k R_k) = T M^-1 T_f^T``, then gives the body as the mass
     line does, but from every line of the band including the resonances.
     """
@@ -524,10 +574,24 @@ def mass_from_residues(
         raise IdentificationError(f"the band must reach beyond the rigid-body modes (up to {top:.4g} Hz)")
     origin, span, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
-    r, _, _, residual = residues_lsfd(f, h, lam, band=(lo, hi), upper=2, weighting=weighting)  # (6, p, q)
-    h_inf = np.sum(2.0 * (lam[:, None, None] * r).real, axis=0)  # T M^-1 T_f^T
-    y0 = np.linalg.lstsq(t, h_inf, rcond=None)[0]
+    fit = residue_limit(f, h, lam, band=(lo, hi), upper=2, weighting=weighting)
+    t_pinv = np.linalg.pinv(t)  # (6, p)
+    y0 = t_pinv @ fit.limit  # M^-1 T_f^T in the scaled frame
     m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
+    # y0[:, j] = T^+ limit[:, j]: independent columns, cov T^+ diag(var_j) T^+^T
+    cov = np.zeros((6, q, 6, q))
+    for j in range(q):
+        cov[:, j, :, j] = (t_pinv * fit.variance[:, j]) @ t_pinv.T
+    if fit.limit_jacobian.shape[2]:  # the poles' uncertainty, correlated across the FRFs
+        gy = np.einsum("is,sjn->ijn", t_pinv, fit.limit_jacobian).reshape(6 * q, -1)
+        cov = cov + (gy @ fit.pole_covariance @ gy.T).reshape(6, q, 6, q)
+    intervals = body_intervals(
+        lambda y: _body_from_inverse_mass(y, tf, origin, span),
+        y0,
+        cov.reshape(6 * q, 6 * q),
+        "linearised: variance of the residues' high-frequency limit from the weighted misfit, poles refined and their "
+        "variance propagated",
+    )
     return MassLine(
         mass=m,
         center_of_gravity=cg,
@@ -535,6 +599,9 @@ def mass_from_residues(
         band=(lo, hi),
         band_source=band_source,
         frequencies_used=n_f,
-        residual=residual,
+        residual=fit.residual,
         corrections=("residues", "upper_residual"),
+        intervals=intervals,
+        misfit_noise_units=fit.misfit_units,
+        misfit_where=f"response {fit.worst[0] + 1}, reference {fit.worst[1] + 1} ({fit.worst_units:.3g} noise units)",
     )

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,16 +34,19 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ADEQUATE_P",
+    "FEASIBLE_FLOOR",
     "MountModel",
     "MountModelPrediction",
     "MountRates",
     "TorqueRollAxis",
     "eigen_residual",
+    "feasible_inertia",
     "fit_mount_model",
     "group_matrix",
     "identify_mount_model",
     "mount_rates",
     "predict_mount_model",
+    "split_misfit",
     "split_uniqueness",
     "torque_roll_axis",
 ]
@@ -472,6 +475,41 @@ def _mount_columns(phi: NDArray[np.complex128], offsets: Array, axes: Array) -> 
     return np.stack(cols, axis=1)
 
 
+FEASIBLE_FLOOR = 0.05
+"""Smallest principal moment of a start inertia, as a fraction of the mean of their moduli."""
+
+
+def feasible_inertia(inertia: ArrayLike) -> Array:
+    """The nearest positive definite inertia with every principal moment at least a floor.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (3, 3)
+        A start inertia (per mass), perhaps indefinite (a noisy free route's answer).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Symmetric part, principal moments raised to at least :data:`FEASIBLE_FLOOR` times
+        the mean of their moduli, axes kept; ``0.3 I`` when not finite or zero. A start
+        the mount model's Cholesky parameterisation can always take.
+
+    Examples
+    --------
+    >>> np.linalg.eigvalsh(feasible_inertia(np.diag([-1.0, 2.0, 5.0]))).round(6).tolist()
+    [0.133333, 2.0, 5.0]
+    """
+    j = np.asarray(inertia, dtype=float)
+    if j.shape != (3, 3) or not np.all(np.isfinite(j)):
+        return 0.3 * np.eye(3)
+    w, v = np.linalg.eigh(0.5 * (j + j.T))
+    floor = FEASIBLE_FLOOR * float(np.mean(np.abs(w)))
+    if not floor > 0.0:
+        return 0.3 * np.eye(3)
+    result: Array = (v * np.maximum(w, floor)) @ v.T
+    return 0.5 * (result + result.T)
+
+
 def _inertia(params: Array) -> Array:
     lower = np.zeros((3, 3))
     lower[np.tril_indices(3)] = params
@@ -689,39 +727,17 @@ def fit_mount_model(
     else:
         g0 = frame.to_local(np.asarray(start[0], dtype=float))
         j0 = np.asarray(start[1], dtype=float) / length**2
-    chol = np.linalg.cholesky(0.5 * (j0 + j0.T) + 1e-9 * np.eye(3))
+    chol = np.linalg.cholesky(feasible_inertia(j0))
     x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
-    f_result = None
-    cost = None
+    f_result = cost = None
     if noise is not None:
-        output = _OutputError((local_pos, dirs), mu, psi, noise)
-
-        def build(z: Array) -> tuple[Array, Array, Array, Array]:
-            g = z[:3]
-            kr = (ties @ z[9 : 9 + shared]).reshape(q, 3)
-            cr = (ties @ z[9 + shared :]).reshape(q, 3)
-            return (
-                g,
-                _inertia(z[3:9]),
-                _support_matrix(kr, local_mounts - g, u),
-                _support_matrix(cr, local_mounts - g, u),
-            )
-
-        z0 = np.concatenate([x, rates])
-        lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
-        refined = least_squares(
-            lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
+        x, rates, cost, f_result = _refit_output_error(
+            x, rates, (local_pos, dirs), mu, psi, noise, (local_mounts, u, ties)
         )
-        x, rates = refined.x[:9], refined.x[9:]
         a, b = system(x)
         resid = a @ rates - b
-        cost = float(np.sum(output(*build(refined.x)) ** 2))
-        f_result = _f_test(
-            cost, output.free_cost(sensor_matrix(local_pos, dirs)), mu.size, pos.shape[0], 9 + 2 * shared,
-            output.floored,
-        )  # fmt: skip
     g, j = x[:3], _inertia(x[3:])
     k = (ties @ rates[:shared]).reshape(q, 3) * omega**2
     c = (ties @ rates[shared:]).reshape(q, 3) * omega
@@ -739,6 +755,107 @@ def fit_mount_model(
         p_value=None if f_result is None else f_result[2],
         cost=cost,
     )
+
+
+def _refit_output_error(
+    x: Array,
+    rates: Array,
+    sensors: tuple[Array, Array],
+    mu: NDArray[np.complex128],
+    psi: NDArray[np.complex128],
+    noise: Any,
+    mounts: tuple[Array, Array, Array],
+) -> tuple[Array, Array, float, tuple[float, tuple[int, int], float] | None]:
+    """The mount model refined by noise-weighted output error, its cost and the F test against the free model.
+
+    `x` holds the CG and the inertia's Cholesky factor (local frame), `rates` the grouped mount rates
+    (stiffness then damping); `mounts` is (local positions, axes, group ties).
+    """
+    from scipy.optimize import least_squares
+
+    from rigidid.core.geometry import sensor_matrix
+
+    local_mounts, u, ties = mounts
+    q, shared = local_mounts.shape[0], ties.shape[1]
+    output = _OutputError(sensors, mu, psi, noise)
+
+    def build(z: Array) -> tuple[Array, Array, Array, Array]:
+        g = z[:3]
+        kr = (ties @ z[9 : 9 + shared]).reshape(q, 3)
+        cr = (ties @ z[9 + shared :]).reshape(q, 3)
+        return (
+            g,
+            _inertia(z[3:9]),
+            _support_matrix(kr, local_mounts - g, u),
+            _support_matrix(cr, local_mounts - g, u),
+        )
+
+    z0 = np.concatenate([x, rates])
+    lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
+    refined = least_squares(
+        lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
+    )
+    cost = float(np.sum(output(*build(refined.x)) ** 2))
+    f_result = _f_test(
+        cost, output.free_cost(sensor_matrix(*sensors)), mu.size, sensors[0].shape[0], 9 + 2 * shared,
+        output.floored,
+    )  # fmt: skip
+    return refined.x[:9], refined.x[9:], cost, f_result
+
+
+def split_misfit(
+    stiffness: ArrayLike, covariance: ArrayLike, center_of_gravity: ArrayLike, positions: ArrayLike, axes: ArrayLike
+) -> tuple[float, int]:
+    """How well point mounts explain a 6x6 stiffness, in noise units: a chi-square and its degrees of freedom.
+
+    Parameters
+    ----------
+    stiffness : array_like, shape (6, 6)
+        ``K`` at the CG (any units, per mass allowed).
+    covariance : array_like, shape (21, 21)
+        Covariance of its 21 upper entries (``numpy.triu_indices(6)`` order).
+    center_of_gravity : array_like, shape (3,)
+        The reference point of `stiffness`.
+    positions : array_like, shape (n, 3)
+        Where the mounts act.
+    axes : array_like, shape (n, 3, 3)
+        Their principal axes (columns).
+
+    Returns
+    -------
+    chi2 : float
+        ``min_r (k - A r)^T C^+ (k - A r)`` over unconstrained rates ``r`` (three
+        per mount, eq. (31)'s support matrices summed), ``k`` the upper entries.
+    dof : int
+        ``21 - rank(A)``.
+
+    Notes
+    -----
+    A support missing from the list (a hose, a torque rod) or a mount placed
+    wrong leaves a misfit far above its degrees of freedom; the noise alone gives
+    a chi-square with `dof` degrees of freedom (linearised).
+    """
+    k = np.asarray(stiffness, dtype=float)
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    u = np.asarray(axes, dtype=float).reshape(-1, 3, 3)
+    offsets = pos - np.asarray(center_of_gravity, dtype=float).reshape(3)
+    iu = np.triu_indices(6)
+    cols = []
+    for m in range(pos.shape[0]):
+        for a in range(3):
+            unit = np.zeros((pos.shape[0], 3))
+            unit[m, a] = 1.0
+            cols.append(_support_matrix(unit, offsets, u)[iu])
+    design = np.stack(cols, axis=1)
+    cov = np.asarray(covariance, dtype=float)
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    keep = w > 1e-12 * max(float(w[-1]), 1e-300)
+    white = (v[:, keep] / np.sqrt(w[keep])).T
+    a_w, k_w = white @ design, white @ k[iu]
+    rates, *_ = np.linalg.lstsq(a_w, k_w, rcond=None)
+    rank = int(np.linalg.matrix_rank(a_w))
+    resid = k_w - a_w @ rates
+    return float(resid @ resid), int(np.sum(keep)) - rank
 
 
 def _support_matrix(rates: Array, offsets: Array, axes: Array) -> Array:

@@ -53,6 +53,7 @@ def identify_batch(
     shapes: ArrayLike,
     *,
     damping_weight: float = DAMPING_WEIGHT,
+    weights: Array | None = None,
     progress: Callable[[str, float, float | None], None] | None = None,
 ) -> Estimates:
     """Identify many tests at once with the kernel of :func:`rigidid.core.identify.identify`.
@@ -69,6 +70,8 @@ def identify_batch(
         Mode shapes as the sensors read them.
     damping_weight : float
         As in :func:`~rigidid.core.identify.identify`.
+    weights : ndarray, shape (30, 30), optional
+        Residual whitening shared by every test (:func:`rigidid.core.estimator.solve_cg`).
     progress : callable, optional
         ``progress(task, done, total)`` as the draws are identified.
 
@@ -105,7 +108,7 @@ def identify_batch(
     norms = np.linalg.norm(dirs_in, axis=2, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         dirs = np.where(norms > 0.0, dirs_in / norms, np.nan)
-    return estimator.estimate(pos, dirs, lam, psi, damping_weight=damping_weight, progress=progress)
+    return estimator.estimate(pos, dirs, lam, psi, damping_weight=damping_weight, weights=weights, progress=progress)
 
 
 # --------------------------------------------------------------------------- propagation
@@ -207,6 +210,7 @@ def propagate(
     seed: int | None = None,
     damping_weight: float = DAMPING_WEIGHT,
     progress: Callable[[str, float, float | None], None] | None = None,
+    weighted: bool = False,
 ) -> Uncertainty:
     """Monte Carlo uncertainty of the CG, inertia and mount stiffness/damping.
 
@@ -233,6 +237,9 @@ def propagate(
         As in :func:`~rigidid.core.identify.identify`.
     progress : callable, optional
         ``progress(task, done, total)`` as the draws are identified.
+    weighted : bool
+        Identify the estimate and every draw with the noise-weighted kernel
+        (``identify(..., noise=noise)``), the draws with the estimate's weights.
 
     Returns
     -------
@@ -291,11 +298,15 @@ def propagate(
     pos, dirs, lam, psi = checked_test(positions, directions, poles, shapes)
     if not (isinstance(draws, int | np.integer) and draws >= 1):
         raise InputError(f"the number of draws must be a positive integer, got {draws!r}", source="draws")
-    base = identify(pos, dirs, lam, psi, mass=mass, method="structured", damping_weight=damping_weight, warn=False)
+    base = identify(
+        pos, dirs, lam, psi, mass=mass, method="structured", damping_weight=damping_weight, warn=False,
+        noise=noise if weighted else None,
+    )  # fmt: skip
     data = perturb(pos, dirs, lam, psi, noise, int(draws), mass=mass, seed=seed)
     batch = identify_batch(
-        data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight, progress=progress
-    )
+        data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight,
+        weights=base.diagnostics.residual_weights, progress=progress,
+    )  # fmt: skip
     return summarise(base_estimate(base), batch, data.mass, noise=noise, seed=seed)
 
 

@@ -158,6 +158,22 @@ class _BadConstant(Exception):
     pass
 
 
+def _table_hint(text: str) -> str:
+    """What a file that is not JSON looks like, when it is one of rigidid's tables (files swapped?)."""
+    first = text.lstrip().split("\n", 1)[0].strip().lower()
+    if not first or first[0] in "{[":
+        return ""
+    if "frequency" in first and "mode" in first:
+        kind = "a modes table (modes.csv)"
+    elif first.startswith("time"):
+        kind = "a time record"
+    elif any(sep in first for sep in (",", ";", "\t")):
+        kind = "a CSV table"
+    else:
+        return ""
+    return f"; this is {kind}, not JSON: the layout (JSON) comes first, then the modes or records (swapped?)"
+
+
 def _first_odd(data: Any, where: str = "") -> tuple[str, str] | None:
     """Location and fault of the first true/false (rigidid's inputs have none) or too large number."""
     from rigidid.limits import MAX_MAGNITUDE
@@ -189,7 +205,9 @@ def load_json(path: Path) -> Any:
     try:
         data = json.loads(text, object_pairs_hook=_unique_keys, parse_constant=_no_constant)
     except json.JSONDecodeError as exc:
-        raise InputError(f"invalid JSON: {exc.msg}", source=src, location=f"line {exc.lineno}") from None
+        raise InputError(
+            f"invalid JSON: {exc.msg}" + _table_hint(text), source=src, location=f"line {exc.lineno}"
+        ) from None
     except _DuplicateKey as exc:
         raise InputError(f"key {exc.args[0]!r} appears twice in one object", source=src) from None
     except _BadConstant as exc:
@@ -349,9 +367,22 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
     text = _read_text(p)
     dialect = sniff_dialect(text)
     reader = _csv_rows(csv.reader(io.StringIO(text), delimiter=dialect.delimiter), src)
+    if text.lstrip().startswith(("{", "[")):
+        raise InputError(
+            "this is a JSON file, not a modes table (mode, frequency_hz, ...): the layout comes first, "
+            "then the modes (swapped?)",
+            source=src,
+        )
     header = next(reader, None)
     if header is None:
         raise InputError("file is empty", source=src)
+    if header and column_key(header[0]).startswith("time"):
+        raise InputError(
+            "this is a time record (its first column is time), not a modes table: give records as "
+            "`records` (modes are estimated from them first)",
+            source=src,
+            location="row 1",
+        )
     columns = _modes_columns(header)
     for name in _REQUIRED:
         if name not in columns:

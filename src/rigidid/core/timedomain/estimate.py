@@ -99,6 +99,9 @@ class ModalEstimate:
     impacts : tuple of Impact
         Per record, where the impact and the free decay were found (sample
         indices of the record as given).
+    channels : tuple of int or None
+        The record columns the estimate was made from (the rows of `shapes`),
+        when some were left out (clipped channels); None: all of them.
     """
 
     poles: CArray
@@ -115,6 +118,7 @@ class ModalEstimate:
     channels_fitted: int
     adequate_order: int | None
     impacts: tuple[Impact, ...]
+    channels: tuple[int, ...] | None = None
 
 
 def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[tuple[Array, Array, int]]]:

@@ -36,6 +36,7 @@ __all__ = [
     "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "columns_of",
     "cut_decays",
     "fit_factor",
     "good_fit",
@@ -284,6 +285,23 @@ class PreparedDecays:
 
 
 _Data = PreparedDecays
+
+
+def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
+    """`data` with only the given channels (e.g. the clipped ones left out).
+
+    Parameters
+    ----------
+    data : PreparedDecays
+    channels : sequence of int
+        Columns kept, in order.
+
+    Returns
+    -------
+    PreparedDecays
+    """
+    cols = list(channels)
+    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from)
 
 
 def pretrigger_sigma(
@@ -832,9 +850,16 @@ class RecordBound:
     variance_from: str = "sandwich"
     evaluations: int | None = None
     converged: bool | None = None
+    sensor_budget: dict[str, dict[str, Array]] | None = None
+    tolerances: dict[str, float] | None = None
 
 
-def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
+def record_bound(
+    refinement: Refinement,
+    mass: float | None,
+    sensor_std: dict[str, dict[str, Array]] | None = None,
+    tolerances: dict[str, float] | None = None,
+) -> RecordBound:
     """95 % intervals from the calibrated standard errors of a refinement.
 
     Parameters
@@ -842,13 +867,21 @@ def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
     refinement : Refinement
     mass : float or None
         Scales inertia and stiffness to absolute values when given.
+    sensor_std : dict, optional
+        Per type-B source (:data:`rigidid.core.sensor_budget.SOURCES`), the
+        standard deviations ``"center_of_gravity"``, ``"inertia_per_mass"``,
+        ``"stiffness_per_mass"`` (:attr:`rigidid.core.sensor_budget.SensorBudget.std`):
+        combined with the noise's in quadrature (GUM 5.1.2).
+    tolerances : dict, optional
+        The bounds the budget used, recorded in the result.
 
     Returns
     -------
     RecordBound
         Normal intervals ``estimate +- 1.96 std``; the principal moments'
         standard errors come from the inertia tensor's by first-order
-        perturbation of its eigenvalues.
+        perturbation of its eigenvalues. With `sensor_std`, ``sensor_budget``
+        holds each source's std (``"noise"`` first) of the CG and the inertia.
 
     Notes
     -----
@@ -869,15 +902,25 @@ def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
         return IntervalEstimate(estimate, std, estimate - _Z95 * std, estimate + _Z95 * std)
 
     moments, axes = np.linalg.eigh(refinement.inertia_per_mass)
-    sj = refinement.std["inertia_per_mass"]
+    std = dict(refinement.std)
+    budget = None
+    if sensor_std is not None:
+        budget = {"noise": {"center_of_gravity": std["center_of_gravity"],
+                            "inertia_per_mass": scale * std["inertia_per_mass"]}}  # fmt: skip
+        for source, parts in sensor_std.items():
+            budget[source] = {"center_of_gravity": parts["center_of_gravity"],
+                              "inertia_per_mass": scale * parts["inertia_per_mass"]}  # fmt: skip
+        for key in ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass"):
+            std[key] = np.sqrt(std[key] ** 2 + sum(parts[key] ** 2 for parts in sensor_std.values()))
+    sj = std["inertia_per_mass"]
     # var(lambda_i) ~ sum_ab (u_ai u_bi)^2 var(J_ab), entries treated independent
     pm_std = np.sqrt(np.einsum("ai,bi,ab->i", axes**2, axes**2, sj**2))
     return RecordBound(
-        center_of_gravity=interval(refinement.center_of_gravity, refinement.std["center_of_gravity"]),
+        center_of_gravity=interval(refinement.center_of_gravity, std["center_of_gravity"]),
         inertia=interval(scale * refinement.inertia_per_mass, scale * sj),
         principal_moments=interval(scale * moments, scale * pm_std),
         stiffness_diagonal=interval(
-            scale * np.diag(refinement.stiffness_per_mass), scale * np.diag(refinement.std["stiffness_per_mass"])
+            scale * np.diag(refinement.stiffness_per_mass), scale * np.diag(std["stiffness_per_mass"])
         ),
         per_mass=mass is None,
         normalised_cost=refinement.normalised_cost,
@@ -886,4 +929,6 @@ def record_bound(refinement: Refinement, mass: float | None) -> RecordBound:
         variance_from=VARIANCE_FROM,
         evaluations=refinement.evaluations,
         converged=refinement.converged,
+        sensor_budget=budget,
+        tolerances=tolerances,
     )

@@ -19,6 +19,22 @@ NON_SENSOR_PREFIXES = ("force", "hammer", "trigger", "excitation", "tacho", "imp
 """Column names (matched without case and unit suffix) that are not sensors and are left out."""
 
 
+def _not_sensor_hint(name: str, skip_non_sensors: bool) -> str:
+    """How to have a force or trigger channel left out, or a mistyped sensor id found."""
+    key = column_key(name)
+    if skip_non_sensors and any(p in key for p in NON_SENSOR_PREFIXES):
+        return (
+            "; a force or trigger channel is left out when its name starts with "
+            f"{', '.join(NON_SENSOR_PREFIXES)}: rename it (e.g. 'hammer') or delete the column"
+        )
+    if skip_non_sensors:
+        return (
+            "; a sensor id of the layout, mistyped? (columns named like force, hammer, trigger... "
+            "are left out; any other must be a sensor)"
+        )
+    return ""
+
+
 def row(line: int) -> str:
     """Where a row is, for a message: ``"row 5"``."""
     return f"row {line}"
@@ -64,7 +80,9 @@ def match_columns(
             skipped.append(name)
         else:
             raise InputError(
-                f"column {name!r} is not a sensor of the layout", source=src, location=f"{where}, {column(name)}"
+                f"column {name!r} is not a sensor of the layout" + _not_sensor_hint(name, skip_non_sensors),
+                source=src,
+                location=f"{where}, {column(name)}",
             )
     missing = [s for s in wanted if s not in seen]
     if missing:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +73,13 @@ class StreamedRecord:
         The pre-factor and the second stage's factor (1: none; see the
         `cascade` option of :func:`read_record_streamed`); `factor` is their
         product.
+    dt_uncertainty : float
+        Bound on the error of `dt` from the rounding of the time column as
+        written (s, at `dt`'s rate;
+        :func:`~rigidid.core.timedomain.stamps.interval_uncertainty`).
+    clipped : ndarray of bool or None
+        Per channel, whether its peak is a flat top at the raw rate
+        (:class:`~rigidid.core.timedomain.clipping.PeakCount`).
     """
 
     data: Array
@@ -83,6 +90,8 @@ class StreamedRecord:
     energy: Array
     spectrum: tuple[Array, Array] | None = None
     stages: tuple[int, int] = (1, 1)
+    dt_uncertainty: float = 0.0
+    clipped: NDArray[np.bool_] | None = None
 
 
 
@@ -142,25 +151,37 @@ def read_record_streamed(
     src = str(path)
     wanted = layout_ids(sensor_ids, src)
     source = open_source(Path(path), wanted, progress)
+    from rigidid.core.timedomain.clipping import PeakCount
+
     times = TimeCheck(source.line_of, source.time_tokens, src)
-    peaks = np.zeros(len(wanted))
+    tops = PeakCount(len(wanted))  # each channel's peak, and the samples at it (a flat top: clipped)
 
     def check(t: Array, values: Array) -> None:
         times.add(t)
-        np.maximum(peaks, np.max(np.abs(values), axis=0), out=peaks)
+        tops.add(values)
 
     stream = StreamingDecimation(source.rows, len(wanted), factor=factor, f_limit=f_limit,
                                  cascade=cascade, second=second, keep_rows=keep_rows)  # fmt: skip
     stream.run(source.blocks, check)
-    dt = _checked_dt(source, times, peaks, wanted, src)
+    dt = _checked_dt(source, times, tops.peak, wanted, src)
     try:
         done = stream.finish()
     except InputError as exc:
         raise InputError(exc.message, source=src) from None
     _check_streamed_decay(done, source.line_of(times.rows), src)
+    dt_error = _stamp_uncertainty(source, times) if source.dt is None else 0.0
     return StreamedRecord(
-        done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages
-    )
+        done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages,
+        dt_error * done.factor, tops.clipped(),
+    )  # fmt: skip
+
+
+def _stamp_uncertainty(source: BlockSource, times: TimeCheck) -> float:
+    """Bound on the error of the interval from the digits the time column is written with."""
+    from rigidid.core.timedomain.stamps import interval_uncertainty, token_resolution
+
+    resolution = min((token_resolution(token) for token in source.time_tokens()), default=0.0)
+    return interval_uncertainty(resolution, times.rows, max(abs(times.first), abs(times.last)))
 
 
 def _checked_dt(source: BlockSource, times: TimeCheck, peaks: Array, wanted: list[str], src: str) -> float:
@@ -233,13 +254,16 @@ def read_records_streamed(
     q0, q2 = first.stages
     streamed = [first]
     streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
+    from rigidid.core.timedomain.stamps import common_interval, different_intervals
+
     total = streamed[0].factor
     dts = [r.dt for r in streamed]
-    if max(dts) - min(dts) > 1e-9 * max(dts):
-        raise InputError(
-            f"records have different sample intervals ({min(dts) / total:.6g} to {max(dts) / total:.6g} s)",
-            source="records",
-        )
+    common, same = common_interval(dts, [r.dt_uncertainty for r in streamed])
+    if not same:
+        raise InputError(different_intervals([d / total for d in dts], [r.dt_uncertainty / total for r in streamed]),
+                         source="records")  # fmt: skip
+    streamed = [r if r.dt == common else replace(r, dt=common) for r in streamed]
+    dts = [common] * len(streamed)
     content = spectra_content([r.spectrum for r in streamed], dts[0] / total)
     if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
         del streamed, first

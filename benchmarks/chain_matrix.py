@@ -1,0 +1,364 @@
+"""Impact records through a real acquisition chain: one effect at a time, then all together (issue 23).
+
+Run from the worktree root (a few minutes; each cell runs ``rigidid identify --records`` with defaults)::
+
+    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...]
+
+The test, simulated here with a forward model that shares no code with rigidid (6-DOF body on
+mounts written afresh, zero-order-hold state transition from scipy.linalg.expm, half-sine hammer):
+a 150 kg body on four inclined mounts (six modes 8.8-22.6 Hz, damping 3.9-5.1 %), ten
+single-axis accelerometers, three impacts, 2048 Hz, 6 s, 0.25 s pre-trigger, white noise of
+1 % of each channel's RMS (rigidid simulate's convention). Effects (each alone, then ``all``):
+
+- ``sens``: sensitivity errors, uniform +-3 %;      ``orient``: direction errors, 2-3 degrees;
+- ``transverse``: transverse sensitivity 3 %;        ``position``: positions +-3 mm per axis;
+- ``clip80`` / ``clip30``: two channels clipped at 80 % / 30 % of their peak;
+- ``double``: a second hit 60 ms after the first, 40 % of its amplitude;
+- ``offset``: DC offset 5 % and a linear drift of 2 % of each channel's peak over the record;
+- ``skew``: one channel one sample late;             ``ac``: 2 Hz first-order high-pass (AC coupling);
+- ``stamps``: time columns starting elsewhere, written with 7 decimals.
+
+Printed per cell: runs finished (exit 0) of all; the median and worst CG error (% of the sensor
+span, largest coordinate) and inertia error (largest relative error of the diagonal, %); runs
+whose refit was accepted; coverage of the reported 95 % intervals (CG and inertia diagonal: the
+fraction of the 6 quantities x runs whose interval holds the truth); runs "silently wrong" (exit 0,
+no warning, some error beyond 4 reported standard errors); the layout states the sensor tolerances
+the errors were drawn within (zero in the cells without sensor errors). ``floor``: the same errors from the
+exact modes read through the same erroneous sensors (``rigidid.api.identify`` on perfect modal
+data), the floor the chain's sensor errors leave.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+MASS = 150.0
+CG = np.array([0.04, -0.03, 0.11])
+INERTIA = np.array([[9.0, 0.4, -0.3], [0.4, 12.0, 0.5], [-0.3, 0.5, 14.0]])
+RATE, DURATION, PRE = 2048.0, 6.0, 0.25
+NOISE = 0.01
+
+# four mounts below the body, not symmetric, axes inclined 35 degrees towards the centre (m, N/m)
+_MOUNT_XY = np.array([[0.5, 0.3], [-0.35, 0.4], [-0.45, -0.25], [0.3, -0.4]])
+_MOUNT_SCALE = (1.6, 0.5, 1.3, 0.6)
+_MOUNT_Z = -0.25
+_K_AXIAL, _K_SHEAR, _INCLINE = 6e5, 8e4, 35.0
+
+SENSORS = np.array([
+    [0.5, 0.4, 0.25], [-0.5, 0.4, 0.25], [-0.5, -0.4, 0.25], [0.5, -0.4, 0.25], [0.5, 0.4, -0.15],
+    [-0.5, 0.4, -0.15], [-0.5, -0.4, -0.15], [0.5, -0.4, -0.15], [0.0, 0.4, 0.05], [0.0, -0.4, 0.25],
+])  # fmt: skip
+AXES = np.array([
+    [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 1, 0], [1, 0, 0], [1, 0, 0],
+], dtype=float)  # fmt: skip
+IMPACTS = [
+    ((0.5, 0.4, 0.25), (-0.4, -0.3, -1.0)),
+    ((-0.5, -0.1, 0.1), (1.0, 0.5, 0.2)),
+    ((0.2, -0.4, 0.0), (0.3, 1.0, -0.4)),
+]
+CELLS = ["clean", "sens", "orient", "transverse", "position", "clip80", "clip30", "double", "offset", "skew", "ac",
+         "stamps", "all"]  # fmt: skip
+SENSOR_EFFECTS = {"sens", "orient", "transverse", "position"}
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def _point(r: np.ndarray) -> np.ndarray:
+    """Motion of a point at `r` (from the CG) from the body's 6 coordinates: u + theta x r."""
+    return np.hstack([np.eye(3), -_skew(r)])
+
+
+def _mount_matrices() -> tuple[np.ndarray, np.ndarray]:
+    k6, c6 = np.zeros((6, 6)), np.zeros((6, 6))
+    for (x, y), factor in zip(_MOUNT_XY, _MOUNT_SCALE, strict=True):
+        axis = np.array([-x, -y, 0.0]) * np.tan(np.radians(_INCLINE)) / np.hypot(x, y) + [0, 0, 1]
+        axis /= np.linalg.norm(axis)
+        k3 = factor * (_K_SHEAR * np.eye(3) + (_K_AXIAL - _K_SHEAR) * np.outer(axis, axis))
+        t = _point(np.array([x, y, _MOUNT_Z]) - CG)
+        k6 += t.T @ k3 @ t
+    m6 = np.diag([MASS] * 3 + [0.0] * 3)
+    m6[3:, 3:] = INERTIA
+    # damping 4-6 % by a mix of mass- and stiffness-proportional parts
+    c6 = 2.5 * m6 + 6e-4 * k6
+    return k6, c6
+
+
+K6, C6 = _mount_matrices()
+M6 = np.diag([MASS] * 3 + [0.0] * 3)
+M6[3:, 3:] = INERTIA
+
+
+def modes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frequencies (Hz), damping ratios and poles of the truth."""
+    a = np.block([[np.zeros((6, 6)), np.eye(6)], [-np.linalg.solve(M6, K6), -np.linalg.solve(M6, C6)]])
+    lam, vec = np.linalg.eig(a)
+    up = lam.imag > 0
+    lam, vec = lam[up], vec[:, up]
+    order = np.argsort(np.abs(lam))
+    lam, vec = lam[order], vec[:, order]
+    return np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam), np.asarray(vec[:6])  # displacement shapes
+
+
+def sensor_errors(effects: set[str], rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """The true sensors given the stated ones: gains, directions (with transverse part) and positions."""
+    n = SENSORS.shape[0]
+    gain = 1.0 + (rng.uniform(-0.03, 0.03, n) if "sens" in effects else np.zeros(n))
+    axes = AXES.copy()
+    if "orient" in effects:
+        tilt = np.radians(rng.uniform(2.0, 3.0, n))
+        for i in range(n):
+            perp = np.cross(AXES[i], rng.standard_normal(3))
+            perp /= np.linalg.norm(perp)
+            axes[i] = np.cos(tilt[i]) * AXES[i] + np.sin(tilt[i]) * perp
+    reading = axes.copy()
+    if "transverse" in effects:
+        for i in range(n):
+            perp = np.cross(AXES[i], rng.standard_normal(3))
+            reading[i] = axes[i] + 0.03 * perp / np.linalg.norm(perp)
+    pos = SENSORS + (rng.uniform(-0.003, 0.003, SENSORS.shape) if "position" in effects else 0.0)
+    return {"gain": gain, "reading": reading * gain[:, None], "position": pos}
+
+
+def simulate(effects: set[str], rng: np.random.Generator, sensors: dict[str, np.ndarray]) -> list[np.ndarray]:
+    """Records (samples x sensors, accelerations as the chain delivers them), one per impact."""
+    from scipy.linalg import expm
+
+    dt = 1.0 / RATE
+    a = np.block([[np.zeros((6, 6)), np.eye(6)], [-np.linalg.solve(M6, K6), -np.linalg.solve(M6, C6)]])
+    big = expm(np.block([[a, np.eye(12)], [np.zeros((12, 24))]]) * dt)
+    phi, gamma = big[:12, :12], big[:12, 12:]
+    out_map = np.array([r @ _point(p - CG) for r, p in zip(sensors["reading"], sensors["position"], strict=True)])
+    n = int(DURATION * RATE)
+    t = np.arange(n) * dt
+    records = []
+    for k, (where, direction) in enumerate(IMPACTS):
+        d = np.asarray(direction, float) / np.linalg.norm(direction)
+        gen = _point(np.asarray(where) - CG).T @ d  # generalised force per newton
+        force = 500.0 * _pulse(t - PRE, 0.003)
+        if "double" in effects:
+            force += 200.0 * _pulse(t - PRE - 0.06 - 0.01 * k, 0.003)
+        b = np.concatenate([np.zeros(6), np.linalg.solve(M6, gen)])
+        x = np.zeros(12)
+        acc = np.empty((n, out_map.shape[0]))
+        minv_k, minv_c = np.linalg.solve(M6, K6), np.linalg.solve(M6, C6)
+        for i in range(n):
+            qdd = -minv_k @ x[:6] - minv_c @ x[6:] + b[6:] * force[i]
+            acc[i] = out_map @ qdd
+            x = phi @ x + gamma @ (b * force[i])
+        records.append(_chain(acc, effects, rng, t))
+    return records
+
+
+def _pulse(t: np.ndarray, width: float) -> np.ndarray:
+    return np.where((t >= 0) & (t < width), np.sin(np.pi * np.clip(t, 0, width) / width), 0.0)
+
+
+def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
+    peak = np.abs(acc).max(axis=0)
+    rms = np.sqrt(np.mean(acc**2, axis=0))
+    y = acc + NOISE * rms * rng.standard_normal(acc.shape)
+    if "ac" in effects:
+        from scipy.signal import bilinear, lfilter
+
+        b, a = bilinear([1.0, 0.0], [1.0, 2 * np.pi * 2.0], RATE)
+        y = lfilter(b, a, y, axis=0)
+    if "skew" in effects:
+        y[1:, 4] = y[:-1, 4].copy()
+    if "offset" in effects:
+        y = y + peak * (0.05 + 0.02 * t[:, None] / t[-1])
+    for level, cols in (("clip80", (2, 7)), ("clip30", (2, 7))):
+        if level in effects:
+            frac = 0.8 if level == "clip80" else 0.3
+            for c in cols:
+                lim = frac * peak[c]
+                y[:, c] = np.clip(y[:, c], -lim, lim)
+    return y
+
+
+def stated_tolerances(effects: set[str]) -> dict[str, float]:
+    """The layout's tolerances: the bounds the simulated sensor errors were drawn within (zero without them)."""
+    return {
+        "sensitivity": 0.03 if "sens" in effects else 0.0,
+        "orientation_deg": 3.0 if "orient" in effects else 0.0,
+        "transverse": 0.03 if "transverse" in effects else 0.0,
+        "position": 0.003 if "position" in effects else 0.0,
+    }
+
+
+def write_case(
+    folder: Path, records: list[np.ndarray], stamps: bool, tolerances: dict[str, float] | None = None
+) -> list[Path]:
+    layout: dict[str, object] = {
+        "name": "150 kg body, ten single-axis accelerometers (chain_matrix benchmark)",
+        "units": {"length": "m", "mass": "kg"},
+        "mass": MASS,
+        "sensors": [
+            {"id": f"s{i + 1}", "position": SENSORS[i].tolist(), "direction": AXES[i].tolist()}
+            for i in range(SENSORS.shape[0])
+        ],
+    }
+    if tolerances is not None:
+        layout["tolerances"] = tolerances
+    (folder / "layout.json").write_text(json.dumps(layout))
+    paths = []
+    header = "time," + ",".join(f"s{i + 1}" for i in range(SENSORS.shape[0]))
+    for k, rec in enumerate(records):
+        n = rec.shape[0]
+        if stamps:
+            start = [0.0, 101.00000004321, 12.34567891234][k % 3]
+            time_col = np.array([float(f"{v:.7f}") for v in start + np.arange(n) / RATE])
+        else:
+            time_col = np.arange(n) / RATE
+        path = folder / f"record-{k + 1}.csv"
+        fmt = ["%.7f" if stamps else "%.10g"] + ["%.8g"] * rec.shape[1]
+        np.savetxt(path, np.column_stack([time_col, rec]), delimiter=",", header=header, comments="", fmt=fmt)
+        paths.append(path)
+    return paths
+
+
+def errors(cg: np.ndarray, inertia: np.ndarray) -> tuple[float, float]:
+    span = float(np.max(np.ptp(SENSORS, axis=0)))
+    cg_err = 100 * float(np.max(np.abs(cg - CG))) / span
+    j_err = 100 * float(np.max(np.abs(np.diag(inertia) - np.diag(INERTIA)) / np.diag(INERTIA)))
+    return cg_err, j_err
+
+
+def floor(sensors: dict[str, np.ndarray]) -> tuple[float, float]:
+    """Errors of the identification kernel on the exact modes read through the erroneous sensors."""
+    from rigidid.core.estimator import estimate
+
+    freq, zeta, q = modes()
+    lam = -zeta * 2 * np.pi * freq + 1j * 2 * np.pi * freq * np.sqrt(1 - zeta**2)
+    read = np.array([r @ _point(p - CG) for r, p in zip(sensors["reading"], sensors["position"], strict=True)])
+    est = estimate(SENSORS[None], AXES[None], lam[None], (read @ q)[None])
+    return errors(est.center_of_gravity[0], MASS * est.inertia_per_mass[0])
+
+
+def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float, float]:
+    """Coverage of the type-B intervals on perfect modal data when the stated bounds are the true ones.
+
+    Sensor errors drawn from rectangular distributions of the bounds (sensitivity 3 %, orientation
+    3 degrees per normal axis, transverse 3 % in a uniform direction, position 3 mm per axis), the exact
+    modes read through them, the body identified by the kernel with the stated layout; the budget of
+    :func:`rigidid.core.sensor_budget.sensor_budget` at the measured modes gives +-1.96 std intervals.
+    Returns the coverage (CG and inertia diagonal), the median |error| / std, the median inertia error (%).
+    """
+    from rigidid.core.estimator import estimate
+    from rigidid.core.sensor_budget import SensorBounds, sensor_budget
+
+    bounds = SensorBounds(
+        sensitivity=0.03 if effect in ("sens", "all") else 0.0,
+        orientation_deg=3.0 if effect in ("orient", "all") else 0.0,
+        transverse=0.03 if effect in ("transverse", "all") else 0.0,
+        position=0.003 if effect in ("position", "all") else 0.0,
+    )
+    rng = np.random.default_rng(seed)
+    freq, zeta, q = modes()
+    lam = -zeta * 2 * np.pi * freq + 1j * 2 * np.pi * freq * np.sqrt(1 - zeta**2)
+    hits, ratios, j_errs = [], [], []
+    n = SENSORS.shape[0]
+    helper = np.where(np.abs(AXES[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    e1 = np.cross(AXES, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e2 = np.cross(AXES, e1)
+    for _ in range(draws):
+        a = np.radians(bounds.orientation_deg)
+        axes = AXES + rng.uniform(-a, a, (n, 1)) * e1 + rng.uniform(-a, a, (n, 1)) * e2
+        phase = rng.uniform(0, 2 * np.pi, (n, 1))
+        tau = rng.uniform(0, bounds.transverse, (n, 1))
+        reading = axes + tau * (np.cos(phase) * e1 + np.sin(phase) * e2)
+        reading *= (1 + rng.uniform(-bounds.sensitivity, bounds.sensitivity, n))[:, None]
+        pos = SENSORS + rng.uniform(-bounds.position, bounds.position, (n, 3))
+        shapes = np.array([r @ _point(p - CG) for r, p in zip(reading, pos, strict=True)]) @ q
+        est = estimate(SENSORS[None], AXES[None], lam[None], shapes[None])
+        budget = sensor_budget(SENSORS, AXES, lam, shapes, bounds)
+        err = np.concatenate([est.center_of_gravity[0] - CG, np.diag(est.inertia_per_mass[0] - INERTIA / MASS)])
+        std = np.concatenate([budget.total["center_of_gravity"], np.diag(budget.total["inertia_per_mass"])])
+        z = np.abs(err) / std
+        hits.append(z <= 1.959964)
+        ratios.append(np.median(z))
+        j_errs.append(100 * np.max(np.abs(err[3:]) / np.diag(INERTIA / MASS)))
+    return float(np.mean(hits)), float(np.median(ratios)), float(np.median(j_errs))
+
+
+def run_cell(cell: str, seed: int) -> dict[str, object]:
+    effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
+    rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
+    sensors = sensor_errors(effects, rng)
+    records = simulate(effects, rng, sensors)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects))
+        env = dict(os.environ)
+        out = subprocess.run(
+            [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
+             "--mass", str(MASS), "--json", "-"],
+            capture_output=True, text=True, env=env, check=False,
+        )  # fmt: skip
+    row: dict[str, object] = {"cell": cell, "seed": seed, "exit": out.returncode, "floor": floor(sensors)}
+    warned = [line for line in out.stderr.splitlines() if "warning" in line]
+    row["warnings"] = warned
+    if out.returncode != 0:
+        row["error"] = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else ""
+        return row
+    data = json.loads(out.stdout)
+    cg, inertia = np.array(data["center_of_gravity"]), np.array(data["inertia_tensor"])
+    row["errors"] = errors(cg, inertia)
+    crb = data.get("uncertainty_records_crb")
+    row["refit"] = crb is not None
+    if crb is not None:
+        cg_sd = np.array(crb["center_of_gravity"]["std"])
+        j_sd = np.diag(np.array(crb["inertia_tensor"]["std"]))
+        z = np.concatenate([(cg - CG) / cg_sd, (np.diag(inertia) - np.diag(INERTIA)) / j_sd])
+        row["covered"] = int(np.sum(np.abs(z) <= 1.959964))
+        row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--cells", default=",".join(CELLS))
+    parser.add_argument("--floor-draws", type=int, default=200, help="draws of the type-B coverage table (0: none)")
+    args = parser.parse_args()
+    if args.floor_draws:
+        print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
+        print(f"{'effect':<11} {'coverage':>8} {'median |err|/std':>16} {'median J err %':>14}")
+        for effect in ("sens", "orient", "transverse", "position", "all"):
+            cover, ratio, j_err = floor_coverage(effect, args.floor_draws)
+            print(f"{effect:<11} {cover:>8.3f} {ratio:>16.2f} {j_err:>14.2f}", flush=True)
+    freq, zeta, _ = modes()
+    print("truth: modes " + " ".join(f"{f:.2f}" for f in freq) + " Hz, damping "
+          + " ".join(f"{100 * z:.1f}" for z in zeta) + " %")  # fmt: skip
+    print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
+          f"{'refit':>5} {'cover':>6} {'silent':>6}  first warning or error")  # fmt: skip
+    for cell in args.cells.split(","):
+        rows = [run_cell(cell, s) for s in range(args.seeds)]
+        done = [r for r in rows if r["exit"] == 0]
+        errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
+        fl = np.array([r["floor"] for r in rows])
+        fitted = [r for r in done if r.get("refit")]
+        cover = sum(int(r["covered"]) for r in fitted) / (6 * len(fitted)) if fitted else float("nan")  # type: ignore[call-overload]
+        silent = sum(bool(r.get("silent")) for r in done)
+        note = next((str(r.get("error") or (r["warnings"][0] if r["warnings"] else "")) for r in rows  # type: ignore[index]
+                     if r.get("error") or r["warnings"]), "")  # fmt: skip
+        note = note.replace("rigidid: ", "")[:110]
+        med, worst = np.median(errs, axis=0), np.max(errs, axis=0)
+        print(f"{cell:<11} {len(done):>4}/{len(rows):<3} {med[0]:>8.3f}/{worst[0]:<8.3f} "
+              f"{med[1]:>6.2f}/{worst[1]:<6.2f} "
+              f"{np.max(fl[:, 0]):>5.2f}/{np.max(fl[:, 1]):<5.2f} {len(fitted):>5} {cover:>6.2f} {silent:>6}  {note}",
+              flush=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

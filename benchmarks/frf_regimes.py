@@ -1,0 +1,188 @@
+"""The FRF routes with their defaults across the regimes labs meet (issue 21).
+
+Run: ``OPENBLAS_NUM_THREADS=1 PYTHONPATH=src .venv/bin/python benchmarks/frf_regimes.py
+[--seeds 3] [--cells NAME,NAME] [--routes residues,massline] [--coverage N]``
+
+FRFs from ``benchmarks/frf_sim.py`` (written afresh: M, K, C of a box-like body on four
+mounts, elastic modes as modal sums; no rigidid code). Noise: half relative to each value,
+half a floor relative to each FRF's RMS (the floor is what a lab's anti-resonances show).
+Default cell: mount damping 2 %, band 0.3x lowest to 4x highest rigid mode, 0.1 Hz lines,
+1 % noise, 3 references, 8 sensors, an elastic mode at 8x the highest rigid mode.
+
+Per cell and seed and route (as ``identify --frf --method residues`` and ``--method
+massline`` call the core): finished, warned (FrfMisfitWarning), refused (one line), and
+*silently wrong* (finished, no warning, an error beyond 4 of its own standard errors in mass,
+CG or an inertia diagonal). Errors: mass (relative), CG (over the body's half-size),
+inertia (largest element over trace/3). The oracle: the residues fitted with the true poles.
+``--coverage N``: coverage of the 95 % intervals over N draws on the default cell.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from frf_sim import Rig, add_elastic, make_rig, truth_errors
+from rigidid.core.frfmodes import fit_frf_modes, rigid_band
+from rigidid.core.frfstats import verdict
+from rigidid.core.massline import MassLine, mass_from_residues, mass_line
+from rigidid.errors import FrfMisfitWarning, RigididError, emit
+
+BASE: dict[str, Any] = {
+    "zeta": 0.02,
+    "top": 4.0,
+    "start": 0.3,
+    "df": 0.1,
+    "noise": 0.01,
+    "refs": 3,
+    "elastic": 8.0,
+    "free": False,
+    "h1": 0.0,
+}
+CELLS: dict[str, dict[str, Any]] = {
+    "default": {},
+    "zeta0.5%": {"zeta": 0.005},
+    "zeta5%": {"zeta": 0.05},
+    "zeta10%": {"zeta": 0.10},
+    "top1.5x": {"top": 1.5},
+    "top2x": {"top": 2.0},
+    "start0.7x": {"start": 0.7},
+    "df0.05": {"df": 0.05},
+    "df0.25": {"df": 0.25},
+    "df1": {"df": 1.0},
+    "noise0.3%": {"noise": 0.003},
+    "noise3%": {"noise": 0.03},
+    "refs4": {"refs": 4},
+    "refs6": {"refs": 6},
+    "elastic_in": {"elastic": 3.0},
+    "elastic_above": {"elastic": 4.5},
+    "free_below": {"free": True, "start": 0.3},
+    "free_above": {"free": True, "start": 30.0, "top": 400.0, "df": 1.0},
+    "h1_bias2%": {"h1": 0.02},
+}
+
+
+def poles_of(rig: Rig) -> np.ndarray:
+    m, k, c = rig.matrices()
+    w_ref = 2 * np.pi * max(float(np.median(rig.rigid_hz())), 1e-3)
+    a = np.block(
+        [
+            [np.zeros((6, 6)), np.eye(6)],
+            [-np.linalg.solve(m, k), -np.linalg.solve(m, 2 * rig.damping_ratio / w_ref * c)],
+        ]
+    )
+    lam = np.linalg.eigvals(a)
+    return lam[lam.imag > 0]
+
+
+def draw(cell: dict[str, Any], seed: int) -> tuple[Rig, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    c = {**BASE, **cell}
+    rig = make_rig(rng, zeta=c["zeta"], n_refs=c["refs"], free=c["free"])
+    fr = rig.rigid_hz() if not c["free"] else np.array([0.1, 0.1])
+    if c["free"]:
+        fr_mount = make_rig(np.random.default_rng(seed), zeta=c["zeta"], n_refs=c["refs"]).rigid_hz()
+        base_hz = float(fr_mount[-1])
+    else:
+        base_hz = float(fr[-1])
+    add_elastic(rig, rng, c["elastic"] * base_hz * (10.0 if c["free"] else 1.0))
+    lo = c["start"] * (float(rig.rigid_hz()[0]) if not c["free"] else 1.0)
+    f = np.arange(max(lo, c["df"]), c["top"] * base_hz, c["df"])
+    h = rig.frf(f, c["noise"] / 2, rng, h1_bias=c["h1"], additive=c["noise"] / 2)
+    return rig, f, h
+
+
+def judged(rig: Rig, run: Any) -> dict[str, Any]:
+    """Run one route; status, errors and the worst error in its own standard errors."""
+    out: dict[str, Any] = {"status": "finished", "z": np.nan, "err": (np.nan,) * 3, "line": ""}
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            ml: MassLine = run()
+            notice = verdict(ml.inertia_tensor, ml.residual, ml.misfit_noise_units, ml.misfit_where, "fit")
+            emit([notice] if notice is not None else [])
+    except (RigididError, np.linalg.LinAlgError) as exc:
+        return {**out, "status": "refused", "line": str(exc).splitlines()[0][:150]}
+    out["err"] = truth_errors(rig, ml.mass, ml.center_of_gravity, ml.inertia_tensor)
+    if any(issubclass(w.category, FrfMisfitWarning) for w in caught):
+        out["status"] = "warned"
+    if ml.intervals is not None:
+        iv = ml.intervals
+        z = [abs(ml.mass - rig.mass) / iv.mass.std]
+        z += list(np.abs(ml.center_of_gravity - rig.cg) / iv.center_of_gravity.std)
+        z += list(np.abs(np.diag(ml.inertia_tensor - rig.inertia)) / np.diag(iv.inertia_tensor.std))
+        out["z"] = float(np.max(z))
+        out["zs"] = np.array([ml.mass - rig.mass, *list(ml.center_of_gravity - rig.cg)]) / np.concatenate(
+            [[iv.mass.std], iv.center_of_gravity.std]
+        )
+    return out
+
+
+def routes(rig: Rig, f: np.ndarray, h: np.ndarray, which: list[str]) -> dict[str, dict[str, Any]]:
+    args = (rig.sensors, rig.sensor_dirs, rig.refs, rig.ref_dirs)
+    res: dict[str, dict[str, Any]] = {}
+    if "residues" in which:
+
+        def residues() -> MassLine:
+            band = rigid_band(f, h)[0]
+            poles = fit_frf_modes(f, h, *args, band=band, n_modes=6).poles
+            return mass_from_residues(f, h, *args, poles)
+
+        res["residues"] = judged(rig, residues)
+        res["oracle"] = judged(rig, lambda: mass_from_residues(f, h, *args, poles_of(rig)))
+    if "massline" in which:
+        res["massline"] = judged(rig, lambda: mass_line(f, h, *args))
+    return res
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--cells", default=",".join(CELLS))
+    ap.add_argument("--routes", default="residues,massline")
+    ap.add_argument("--coverage", type=int, default=0)
+    a = ap.parse_args()
+    which = a.routes.split(",")
+    total = {"finished": 0, "warned": 0, "refused": 0, "silent": 0}
+    for name in a.cells.split(","):
+        for seed in range(a.seeds):
+            t0 = time.perf_counter()
+            rig, f, h = draw(CELLS[name], seed)
+            for route, r in routes(rig, f, h, which).items():
+                silent = r["status"] == "finished" and r["z"] > 4.0
+                if route != "oracle":
+                    total[r["status"]] += 1
+                    total["silent"] += int(silent)
+                e = r["err"]
+                print(
+                    f"{name:14s} s{seed} {route:9s} {r['status']:9s} mass {e[0]:.4f} cg {e[1]:.4f} inertia {e[2]:.4f} "
+                    f"max|z| {r['z']:.2f}{' SILENT' if silent else ''} {r['line']}",
+                    flush=True,
+                )
+            print(f"   ({time.perf_counter() - t0:.0f} s)", flush=True)
+    print("totals (routes other than the oracle):", total)
+    if a.coverage:
+        zs = []
+        for seed in range(1000, 1000 + a.coverage):
+            rig, f, h = draw({}, seed)
+            r = routes(rig, f, h, which)
+            for route in which:
+                if "zs" in r[route]:
+                    zs.append((route, r[route]["zs"]))
+        for route in which:
+            z = np.array([v for k, v in zs if k == route])
+            if z.size:
+                cov = np.mean(np.abs(z) < 1.959964, axis=0)
+                print(f"coverage {route} over {len(z)} draws (mass, cg x, y, z):", np.round(cov, 3))
+
+
+if __name__ == "__main__":
+    main()
