@@ -32,6 +32,7 @@ from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "samples"
@@ -91,7 +92,126 @@ def base_files(workdir: Path) -> dict[str, bytes]:
     files["rec1.csv"] = (workdir / "rec/record-1.csv").read_bytes()
     files["rec2.csv"] = (workdir / "rec/record-2.csv").read_bytes()
     files["p.uff"] = (workdir / "p.uff").read_bytes()
+    files.update(_more_base_files(workdir))
     return files
+
+
+READER_FILES = ("rec", "r1.", "r2.", "frf", "refs", "f_mounts", "e_mounts", "local", "p.uff")
+"""Names of the base files whose faults are a reader's to catch (counted apart in the summary)."""
+RECORD_FORMATS = ("csv", "semicolon.csv", "npy", "npz", "mat", "mat73.mat", "h5", "wav", "tdms", "uff")
+
+
+def _records(workdir: Path) -> dict[str, bytes]:
+    """The four-mounts records (64 Hz, 2 s) in every records format rigidid reads, as r<k>.<format>."""
+    import numpy as np
+
+    from rigidid.cli import run
+    from rigidid.io.records.binary import write_binary
+    from rigidid.io.uff import write_uff_test
+
+    with _in(workdir), _captured():
+        status = run(["simulate", "f_body.json", "f_layout.json", "--records", "short", "--sample-rate", "64",
+                      "--duration", "2", "-o", "short.csv"])  # fmt: skip
+    if status:
+        raise RuntimeError("could not make the short records")
+    layout = json.loads((workdir / "f_layout.json").read_text())
+    ids = [str(s["id"]) for s in layout["sensors"]]
+    out: dict[str, bytes] = {}
+    uff_records = []
+    for k in (1, 2):
+        text = (workdir / f"short/record-{k}.csv").read_text()
+        out[f"r{k}.csv"] = text.encode()
+        out[f"r{k}.semicolon.csv"] = text.replace(",", ";").replace(".", ",").encode()
+        a = np.loadtxt(workdir / f"short/record-{k}.csv", delimiter=",", skiprows=1)
+        a = a[a[:, 0] >= -1e-12]
+        a[:, 0] -= a[0, 0]
+        uff_records.append((a[:, 0], a[:, 1:], ids))
+        buf = io.BytesIO()
+        np.save(buf, a)
+        out[f"r{k}.npy"] = buf.getvalue()
+        for suffix in ("npz", "mat", "h5", "wav"):
+            path = workdir / f"r{k}.{suffix}"
+            write_binary(path, a[:, 0], a[:, 1:], ids)
+            out[path.name] = path.read_bytes()
+        out[f"r{k}.mat73.mat"] = _mat73(workdir / f"r{k}.mat73.mat", a, ids)
+        out[f"r{k}.tdms"] = _tdms(workdir / f"r{k}.tdms", a, ids)
+    ax = json.loads((workdir / "ax_layout.json").read_text())
+    write_uff_test(workdir / "r.uff", ax, uff_records)
+    out["r1.uff"] = (workdir / "r.uff").read_bytes()
+    return out
+
+
+def _mat73(path: Path, a: Any, ids: list[str]) -> bytes:
+    """A MATLAB v7.3 file (HDF5 after a 512-byte user block): time and one vector per sensor."""
+    import h5py
+
+    with h5py.File(path, "w", userblock_size=512) as fh:
+        for name, column in [("time", a[:, 0])] + [(s, a[:, i + 1]) for i, s in enumerate(ids)]:
+            fh[name] = column.reshape(1, -1)
+            fh[name].attrs["MATLAB_class"] = b"double"
+    data = bytearray(path.read_bytes())
+    data[:19] = b"MATLAB 7.3 MAT-file"
+    return bytes(data)
+
+
+def _tdms(path: Path, a: Any, ids: list[str]) -> bytes:
+    from nptdms import ChannelObject, TdmsWriter
+
+    dt = float(a[1, 0] - a[0, 0])
+    with TdmsWriter(path) as writer:
+        writer.write_segment([ChannelObject("impact", s, a[:, i + 1], properties={"wf_increment": dt})
+                              for i, s in enumerate(ids)])  # fmt: skip
+    return path.read_bytes()
+
+
+def _more_base_files(workdir: Path) -> dict[str, bytes]:
+    """Records in every format, FRFs (CSV, UFF 58, 58b), references, mounts, a UFF with local systems."""
+    from rigidid.cli import run
+
+    out: dict[str, bytes] = {
+        "f_mounts.json": (SAMPLES / "four-mounts/mounts.json").read_bytes(),
+        "e_mounts.json": (SAMPLES / "engine-on-mounts/mounts.json").read_bytes(),
+        "e_modes.csv": (SAMPLES / "engine-on-mounts/modes.csv").read_bytes(),
+        "local.unv": (SAMPLES / "uff-local-systems/test.unv").read_bytes(),
+        "refs.json": json.dumps(
+            {
+                "units": {"length": "m", "mass": "kg"},
+                "references": [
+                    {"id": "101", "position": [0.3, 0.2, 0.15], "direction": "+x"},
+                    {"id": "102", "position": [-0.3, 0.2, -0.15], "direction": "+y"},
+                    {"id": "103", "position": [0.3, -0.2, -0.15], "direction": "+z"},
+                ],
+            }
+        ).encode(),
+    }
+    layout = json.loads((SAMPLES / "four-mounts/layout.json").read_text())
+    for sensor in layout["sensors"]:  # UFF 58 records only +-x, +-y, +-z
+        if not isinstance(sensor["direction"], str):
+            sensor["direction"] = "+y"
+    out["ax_layout.json"] = json.dumps(layout, indent=1).encode()
+    for name, data in out.items():
+        (workdir / name).write_bytes(data)
+    with _in(workdir), _captured():
+        status = 0
+        for target, fmt in (("frf.csv", "csv"), ("frf.uff", "uff-ascii"), ("frfb.uff", "uff")):
+            status |= run(["simulate", "f_body.json", "ax_layout.json", "-o", "frf_modes.csv", "--frf", target,
+                           "--frf-format", fmt, "--references", "refs.json"])  # fmt: skip
+    if status:
+        raise RuntimeError("could not make the FRF files")
+    lines = (workdir / "frf.csv").read_text().splitlines()
+    out["frf.csv"] = ("\n".join(lines[:1] + [ln for ln in lines[1:] if _keep_line(ln)]) + "\n").encode()
+    out["frf.uff"] = (workdir / "frf.uff").read_bytes()
+    out["frfb.uff"] = (workdir / "frfb.uff").read_bytes()
+    out.update(_records(workdir))
+    return out
+
+
+def _keep_line(line: str) -> bool:
+    """Every fourth frequency line of the FRF CSV (a file a quarter the size, same pairs)."""
+    try:
+        return round(float(line.split(",")[0]) / 0.26077) % 4 == 1
+    except ValueError:
+        return True
 
 
 # ----------------------------------------------------------------------------- mutations
@@ -101,8 +221,34 @@ ODD_NUMBERS = ["NaN", "Infinity", "-Infinity", "1e308", "-1e308", "1e-320", "0",
 ODD_CELLS = ["", "nan", "inf", "-inf", "1e308", "1_0", "true", "0x10", " ", "\u00e9", "1e-320", "--1", "1,2"]
 
 
-def mutate(data: bytes, rnd: random.Random) -> tuple[bytes, str]:
+BINARY = (".npy", ".npz", ".mat", ".h5", ".wav", ".tdms")
+
+
+def mutate_binary(data: bytes, rnd: random.Random) -> tuple[bytes, str]:
+    """One random fault in a binary file: truncation, flipped bytes (often in the header), a zeroed run."""
+    kind = rnd.choice(["truncate", "flip", "flip header", "zero run", "empty", "append"])
+    b = bytearray(data)
+    if kind == "truncate":
+        return bytes(b[: rnd.randrange(len(b) + 1)]), kind
+    if kind in ("flip", "flip header") and b:
+        span = min(len(b), 600) if kind == "flip header" else len(b)
+        for _ in range(rnd.randint(1, 3)):
+            b[rnd.randrange(span)] = rnd.randrange(256)
+        return bytes(b), kind
+    if kind == "zero run" and b:
+        at = rnd.randrange(len(b))
+        n = min(len(b) - at, rnd.choice([4, 64, 4096]))
+        b[at : at + n] = bytes(n)
+        return bytes(b), kind
+    if kind == "append":
+        return bytes(b) + bytes(rnd.randrange(256) for _ in range(rnd.choice([1, 100]))), kind
+    return b"", "empty"
+
+
+def mutate(data: bytes, rnd: random.Random, name: str = "") -> tuple[bytes, str]:
     """One random fault in a file's bytes; returns the new bytes and what was done."""
+    if name.endswith(BINARY) or (name.endswith(".uff") and b"\x00" in data[:100000]):
+        return mutate_binary(data, rnd)
     text = data.decode("utf-8", "replace")
     kind = rnd.choice(["truncate", "flip", "delete line", "duplicate line", "number", "cell", "swap columns",
                        "dup key", "nest", "unicode", "empty", "blank lines", "drop column", "huge line"])  # fmt: skip
@@ -236,9 +382,92 @@ ODD_OPTIONS: dict[str, list[list[str]]] = {
 }  # fmt: skip
 
 
+ODD_MORE: dict[str, list[list[str]]] = {
+    "records": [["--band", "-5", "200"], ["--band", "nan", "10"], ["--band", "20", "5"], ["--band", "0", "inf"],
+                ["--max-order", "1"], ["--max-order", "1001"], ["--max-order", "0"], ["--decimate", "100"],
+                ["--decimate", "0"], ["--n-modes", "0"], ["--n-modes", "100"], ["--modal-method", "xyz"],
+                ["--frf", "frf.csv"], ["--units", "m,kg"], ["--mass", "1e-320"], ["--refine"],
+                ["--uncertainty", "5"], ["--resample", "4"], ["--csv", ""], ["--csv", "cdir/"]],
+    "frf": [["--band", "-5", "200"], ["--band", "600", "300"], ["--band", "nan", "1"], ["--band", "1", "1e308"],
+            ["--records"], ["--mass", "1e-320"], ["--mass", "-1"], ["--units", "in,lb"], ["--max-order", "1"],
+            ["--max-order", "1001"], ["--method", "residues"], ["--modes", "1,2,3,4,5,6"]],
+    "mounts": [["--torque-axis", "x"], ["--torque-axis", "0,0,0"], ["--torque-axis", "1e-200,0,0"],
+               ["--torque-axis", "q"], ["--mass", "1e-320"], ["--force-unit", "kN"],
+               ["--force-unit", "dyn"]],
+    "plan_refs": [["--add", "2"], ["--add", "-1"], ["--draws", "1"], ["--body", "f_body.json"]],
+    "simulate_frf": [["--frf-noise", "inf"], ["--frf-noise", "1e308"], ["--frf-noise", "-1"], ["--frf-noise", "nan"],
+                     ["--frf-format", "xyz"], ["--frf-format", "uff-ascii"], ["--mounts", "f_mounts.json"],
+                     ["--mounts", "e_mounts.json"]],
+    "convert_records": [["--records-format", "xyz"], ["--records-format", "wav"], ["--units", "m,kg"],
+                        ["--geometry", "local.unv"]],
+}  # fmt: skip
+
+
+def _records_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    fmt = rnd.choice(RECORD_FORMATS)
+    if fmt == "uff":
+        case.argv = ["identify", use("r1.uff"), "--no-refine"]
+    else:
+        first, second = use(f"r1.{fmt}"), use(f"r2.{rnd.choice(RECORD_FORMATS[:-1])}")
+        command = rnd.choice(["identify", "identify", "modes"])
+        case.argv = [command, use("f_layout.json"), first, second]
+        case.argv += ["--records", "--no-refine"] if command == "identify" else ["-o", _target(rnd, case, "m")]
+    if case.argv[0] == "identify" and rnd.random() < 0.5:
+        case.argv += ["--json", _target(rnd, case, "json")]
+    if case.argv[0] == "identify" and rnd.random() < 0.2:
+        case.argv += ["--csv", _folder(rnd, case, "csv")]
+
+
+def _frf_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    frf = use(rnd.choice(["frf.csv", "frf.uff", "frfb.uff"]))
+    if rnd.random() < 0.75:
+        case.argv = ["identify", use("ax_layout.json"), "--frf", frf, "--references", use("refs.json"),
+                     "--method", "massline"]  # fmt: skip
+        if rnd.random() < 0.5:
+            case.argv += ["--json", _target(rnd, case, "json")]
+        if rnd.random() < 0.2:
+            case.argv += ["--csv", _folder(rnd, case, "csv")]
+    else:
+        case.argv = ["modes", use("ax_layout.json"), "--frf", frf, "--references", use("refs.json"),
+                     "--max-order", "24", "-o", _target(rnd, case, "m")]  # fmt: skip
+
+
+def _mounts_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    pick = rnd.choice(["f", "e"])
+    case.argv = ["identify", use(f"{pick}_layout.json"), use(f"{pick}_modes.csv")]
+    case.argv += ["--mounts", use(f"{pick}_mounts.json")]
+    if pick == "e" and rnd.random() < 0.15:  # the mount model (four-mounts takes minutes: issue 24, left open)
+        case.argv += ["--method", "mounts"]
+    if rnd.random() < 0.5:
+        case.argv += ["--json", _target(rnd, case, "json")]
+
+
+def _plan_refs_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    case.argv = ["plan", use("ax_layout.json"), "--references", use("refs.json"), "--draws", "20"]
+    if rnd.random() < 0.6:
+        case.argv += ["--json", _target(rnd, case, "json")]
+
+
+def _simulate_frf_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    case.argv = ["simulate", use("f_body.json"), use("ax_layout.json"), "-o", _target(rnd, case, "csv"),
+                 "--frf", _target(rnd, case, "frf", allow_dash=False), "--references", use("refs.json")]  # fmt: skip
+
+
+def _convert_records_case(rnd: random.Random, case: Case, use: Callable[[str], str]) -> None:
+    source = use(rnd.choice(["r1.uff", "r1.uff", "local.unv"]))
+    case.argv = ["convert", source, "-o", _folder(rnd, case, "conv")]
+    case.argv += ["--records-format", rnd.choice(["csv", "npz", "mat", "h5", "wav"])]
+
+
+_MORE = {"records": _records_case, "frf": _frf_case, "mounts": _mounts_case, "plan_refs": _plan_refs_case,
+         "simulate_frf": _simulate_frf_case, "convert_records": _convert_records_case}  # fmt: skip
+
+
 def make_case(rnd: random.Random, base: dict[str, bytes], *, slow: bool = True) -> Case:
     """A random command line over (possibly mutated) sample files and odd output paths."""
     commands = ["identify"] * 6 + ["simulate"] * 3 + ["plan"] * 2 + ["convert"] * 2 + ["uff"] * 2
+    commands += ["records"] * 8 + ["frf"] * 5 + ["mounts"] * 3 + ["plan_refs"] * 2 + ["simulate_frf"] * 2
+    commands += ["convert_records"] * 2
     if slow:
         commands += ["modes", "report"]
     command = rnd.choice(commands)
@@ -248,7 +477,9 @@ def make_case(rnd: random.Random, base: dict[str, bytes], *, slow: bool = True) 
         case.files.setdefault(name, base[name])
         return name
 
-    if command == "identify":
+    if command in _MORE:
+        _MORE[command](rnd, case, use)
+    elif command == "identify":
         pick = rnd.choice(["p", "f"])
         case.argv = ["identify", use(f"{pick}_layout.json"), use(f"{pick}_modes.csv")]
         if rnd.random() < 0.6:
@@ -288,12 +519,15 @@ def make_case(rnd: random.Random, base: dict[str, bytes], *, slow: bool = True) 
     inputs = [name for name in case.files if name in base]
     if inputs and rnd.random() < 0.6:
         name = rnd.choice(inputs)
-        case.files[name], what = mutate(base[name], rnd)
+        case.files[name], what = mutate(base[name], rnd, name)
         case.note = f"{name}: {what}"
-    odd = ODD_OPTIONS.get(case.argv[0], [])
+    odd = ODD_MORE.get(command) or ODD_OPTIONS.get(case.argv[0], [])
     if odd and rnd.random() < 0.25:
         extra = rnd.choice(odd)
         case.argv += extra
+        for token in extra:
+            if token in base:
+                use(token)
         case.note += f" option {' '.join(extra)}"
     return case
 
@@ -441,7 +675,7 @@ def run_case(case: Case, folder: Path, timeout: float = 60.0) -> Result:
             reader.close()
     stderr = err.getvalue()
     after = _snapshot(folder)
-    reader_case = case.note.startswith("rec")  # a mutated records file: read_record's domain
+    reader_case = case.note.startswith(READER_FILES)  # a mutated file of one of the readers
 
     def result(outcome: str, detail: str = "") -> Result:
         return Result(outcome, status, stderr, case, detail, reader_case)
@@ -462,7 +696,8 @@ def run_case(case: Case, folder: Path, timeout: float = 60.0) -> Result:
         now = after.get(name, ("absent", ""))
         if now[0] != kind or (kind == "symlink" and now != before[name]):
             return result("damaged target", f"{name} was {kind}, now {now[0]}")
-    if status != 0:
+    verdict = status == 1 and case.argv[0] == "plan"  # an exit-1 verdict writes its report (FORMATS)
+    if status != 0 and not verdict:
         changed = [name for name in after if before.get(name) != after[name]]
         if changed:
             return result("partial output", ", ".join(changed))

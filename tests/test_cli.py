@@ -68,7 +68,8 @@ def test_failure_writes_nothing_and_prints_one_line(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (("--mass", "-3"), "mass must be positive"),
+        (("--mass", "-3"), "--mass: must be positive"),
+        (("--mass", "1e-320"), "--mass: must be at least 1e-100"),
         (("--method", "guess"), "--method: unknown method 'guess'"),
         (("--modes", "1,2,x"), "--modes: expected mode labels"),
         (("--modes", "1,2,3,4,5,7"), "--modes: mode 7 is not in the modes file"),

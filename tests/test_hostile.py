@@ -282,13 +282,17 @@ def test_broken_pipe_ends_quietly() -> None:
     assert err == ""
 
 
-def test_closed_stdout_ends_quietly_without_a_traceback() -> None:
+@pytest.mark.parametrize("json_target", ["-", "out.json"])
+def test_closed_stdout_is_one_line_and_writes_nothing(tmp_path: Path, json_target: str) -> None:
+    # a closed standard output is not a broken pipe (no reader has gone): one line, exit 2, no output file
     proc = subprocess.run(
-        f"'{sys.executable}' -m rigidid simulate '{FOUR / 'body.json'}' '{FOUR / 'layout.json'}' >&-",
-        shell=True, capture_output=True, text=True, timeout=60, check=False,
+        f"'{sys.executable}' -m rigidid identify '{PAPER / 'layout.json'}' '{PAPER / 'modes.csv'}' "
+        f"--json {json_target} >&-",
+        shell=True, capture_output=True, text=True, timeout=60, check=False, cwd=tmp_path,
     )  # fmt: skip
-    assert proc.returncode in (-signal.SIGPIPE, 128 + signal.SIGPIPE)
-    assert proc.stderr == ""
+    assert proc.returncode == 2
+    assert one_error(proc.stderr) == "rigidid: error: standard output: it is closed (>&-): nothing written"
+    assert list(tmp_path.iterdir()) == []
 
 
 @ROOT_ONLY
@@ -303,3 +307,32 @@ def test_full_disk_is_one_line(tmp_path: Path) -> None:
     assert status == 2
     assert one_error(err) == "rigidid: error: full: cannot write: No space left on device"
     assert stat.S_ISCHR(os.stat(full).st_mode)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["identify", "{L}", "{M}", "--csv", ""], "--csv: empty output path"),
+        (["identify", "{L}", "{M}", "--uff", "x/"], "x/: is a folder path"),
+        (["simulate", "{B}", "{FL}", "--records", ""], "--records: empty output path"),
+        (["convert", "{U}", "-o", ""], "-o: empty output path"),
+        (["identify", "{L}", "{M}", "--units", "in,lb"], "--units: is for a UFF file without dataset 164"),
+        (["identify", "{L}", "{M}", "--mass", "1e-320"], "--mass: must be at least 1e-100"),
+        (["simulate", "{B}", "{FL}", "--add-frequency-noise", "10"], "--add-frequency-noise: too large"),
+        (["simulate", "{B}", "{FL}", "--write-frf", "f.csv", "--references", "r.json", "--add-frf-noise", "inf"],
+         "--add-frf-noise: must be a finite number"),
+        (["simulate", "{B}", "{FL}", "--write-records", ""], "--write-records: empty output path"),
+        (["modes", "{FL}", "--frf", "f.csv", "--references", "r.json", "--max-order", "1001"],
+         "--max-order: must be from 1 to 1000"),
+        (["identify", "{FL}", "--records", "--frf", "f.csv", "--references", "r.json"], "give --records or --frf"),
+        (["identify", "{FL}", "--frf", "f.csv", "--references", "r.json", "--method", "massline", "--band", "nan", "9"],
+         "--band: must be a finite number"),
+    ],
+)  # fmt: skip
+def test_round_two_options_and_targets_are_refused_in_one_line(tmp_path: Path, args: list[str], message: str) -> None:
+    names = {"L": PAPER / "layout.json", "M": PAPER / "modes.csv", "B": FOUR / "body.json",
+             "FL": FOUR / "layout.json", "U": PAPER / "layout.json"}  # fmt: skip
+    status, _, err = cli(tmp_path, *[a.format(**names) for a in args])
+    assert status == 2
+    assert message in one_error(err)
+    assert list(tmp_path.iterdir()) == []

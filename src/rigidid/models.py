@@ -225,12 +225,37 @@ class BodyFile(_Strict):
         return _finite(value)
 
 
+_AXES_COSINE = 1e-3
+"""Largest |cosine| between two of a mount's axes read as orthogonal (axes typed to 4 digits pass)."""
+
+
+def _unit_axes(value: Matrix3) -> Matrix3:
+    """A mount's axes as unit rows (each scaled before its norm, so 1e-200 rows are fine), orthogonal."""
+    rows: list[tuple[float, float, float]] = []
+    for i, row in enumerate(value):
+        big = max(abs(v) for v in row)
+        if not big > 0.0:
+            raise ValueError(f"axis {i + 1} is the zero vector")
+        scaled = [v / big for v in row]
+        norm = math.sqrt(sum(v * v for v in scaled))
+        rows.append((scaled[0] / norm, scaled[1] / norm, scaled[2] / norm))
+    for i in range(3):
+        for j in range(i + 1, 3):
+            cosine = sum(a * b for a, b in zip(rows[i], rows[j], strict=True))
+            if abs(cosine) > _AXES_COSINE:
+                raise ValueError(
+                    f"axes {i + 1} and {j + 1} are not orthogonal (cosine {cosine:.3g}): "
+                    "a mount's principal axes are three perpendicular directions"
+                )
+    return (rows[0], rows[1], rows[2])
+
+
 class MountEntry(_Strict):
     """One mount of ``mounts.json``: where it acts and, optionally, its principal axes."""
 
     id: Annotated[str, BeforeValidator(_text_id)] | None = Field(default=None, description="the mount's name")
     position: Vector3 = Field(description="where the mount acts (length unit)")
-    axes: Matrix3 | None = Field(
+    axes: Annotated[Matrix3, AfterValidator(_unit_axes)] | None = Field(
         default=None,
         description="its principal axes, one unit vector per row (compression first, then the two shears); "
         "default the layout's x, y, z",
@@ -250,6 +275,16 @@ class MountsFile(_Strict):
     name: str | None = None
     units: Units
     mounts: Annotated[list[MountEntry], Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _unique_ids(self) -> MountsFile:
+        seen: set[str] = set()
+        for i, mount in enumerate(self.mounts):
+            if mount.id is not None and mount.id in seen:
+                raise ValueError(f"mounts.{i}.id: duplicate mount id {mount.id!r}")
+            if mount.id is not None:
+                seen.add(mount.id)
+        return self
 
 
 class ResultUnits(_Strict):

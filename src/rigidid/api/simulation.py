@@ -66,7 +66,13 @@ def simulate(
     ids, positions, directions = files.layout_arrays(lay)
     modes = body_modes(body_from_file(spec), positions, directions)
     if frequency_noise or damping_noise or shape_noise:
-        modes = add_noise(modes, frequency=frequency_noise, damping=damping_noise, shape=shape_noise, seed=seed)
+        try:
+            modes = add_noise(modes, frequency=frequency_noise, damping=damping_noise, shape=shape_noise, seed=seed)
+            f, z = modal_from_poles(modes.poles)
+        except InputError as exc:  # a noisy frequency or damping ratio out of range: the option's fault
+            option = "frequency_noise" if frequency_noise else "damping_noise"
+            raise InputError(f"too large: a noisy mode is invalid ({exc.message})", source=option) from None
+        return ModeTable.numbered(f, z, ids, modes.shapes)
     f, z = modal_from_poles(modes.poles)
     return ModeTable.numbered(f, z, ids, modes.shapes)
 

@@ -50,12 +50,15 @@ def _root(
 
 
 class _ClosedStdout:
-    """Stands for a standard output that was closed (``>&-``): writing to it is a broken pipe."""
+    """Stands for a standard output that was closed (``>&-``): writing to it is an error (EBADF), not a broken
+    pipe (no reader has gone; the caller gave no output): one line on stderr, exit 2."""
 
     encoding = "utf-8"
 
     def write(self, text: str) -> int:
-        raise BrokenPipeError(32, "standard output is closed")
+        import errno
+
+        raise OSError(errno.EBADF, "it is closed (>&-): nothing written")
 
     def flush(self) -> None:
         pass
@@ -101,6 +104,38 @@ def _end_quietly_by_sigpipe() -> NoReturn:
     raise SystemExit(141)  # pragma: no cover - where there is no SIGPIPE
 
 
+# output options per command: file targets, then folder targets (their raw text is checked before typer
+# turns it into a Path, which reads "" as "." and drops a trailing "/")
+_OUTPUTS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "identify": (("--json", "--uff"), ("--csv",)),
+    "report": (("--json", "--uff", "-o", "--output"), ("--png", "--csv")),
+    "modes": (("-o", "--output", "--json"), ()),
+    "simulate": (("-o", "--output", "--write-frf", "--frf"), ("--write-records", "--records")),
+    "plan": (("--json",), ()),
+    "convert": ((), ("-o", "--output")),
+}
+
+
+def _raw_output_fault(argv: list[str]) -> str | None:
+    """An empty output path, or a file target ending in '/', in `argv` (the message), else None."""
+    if not argv or argv[0] not in _OUTPUTS:
+        return None
+    files, folders = _OUTPUTS[argv[0]]
+    for k, token in enumerate(argv[1:], start=1):
+        name, eq, value = token.partition("=")
+        if not eq:
+            if token not in files + folders or k + 1 >= len(argv):
+                continue
+            name, value = token, argv[k + 1]
+        if name not in files + folders:
+            continue
+        if not value.strip():
+            return f"{name}: empty output path"
+        if name in files and value != "-" and value.endswith(("/", os.sep)):
+            return f"{value}: is a folder path; give a file name ({name})"
+    return None
+
+
 def run(argv: list[str] | None = None) -> int:
     """Run the command line on `argv` (default ``sys.argv[1:]``); return the exit status.
 
@@ -111,6 +146,10 @@ def run(argv: list[str] | None = None) -> int:
     from typer import exceptions as typer_exceptions
     from typer._click import exceptions as click_exceptions
 
+    fault = _raw_output_fault(list(sys.argv[1:] if argv is None else argv))
+    if fault is not None:
+        sys.stderr.write(f"rigidid: error: {fault}\n")
+        return EXIT_INPUT
     try:
         try:
             status = app(args=argv, prog_name="rigidid", standalone_mode=False)

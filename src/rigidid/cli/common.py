@@ -90,6 +90,19 @@ def make_console() -> Any:
     return Console(width=None if sys.stdout.isatty() else 150)
 
 
+def stage_tables(*renderables: Any) -> None:
+    """Stage rich tables for standard output in the active output set: written first when it publishes,
+    so that a standard output that fails (a full disk, a closed stream) leaves no output file behind."""
+    from rigidid.io.atomic import transaction
+
+    console = make_console()
+    with console.capture() as captured:
+        for item in renderables:
+            console.print(item)
+    with transaction() as outs:
+        outs.stdout(captured.get())
+
+
 def check_force_unit(text: str | None) -> str | None:
     from rigidid.units import FORCE_UNITS
 
@@ -142,9 +155,14 @@ def add_mounts(result: IdentifyResult, mounts: Path | None, torque_axis: str | N
         raise
 
 
-def parse_units(text: str | None) -> dict[str, str] | None:
+def parse_units(text: str | None, layout: Path | None = None) -> dict[str, str] | None:
+    """``--units LENGTH,MASS``; refused beside a layout that is not a UFF file (a layout.json states its units)."""
     if text is None:
         return None
+    from rigidid.cli.options import UFF_SUFFIXES
+
+    if layout is not None and Path(layout).suffix.lower() not in UFF_SUFFIXES:
+        raise InputError(f"is for a UFF file without dataset 164; {layout} states its own units", source="--units")
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 2:
         raise InputError(f"expected LENGTH,MASS like in,lb, got {text!r}", source="--units")
@@ -213,7 +231,7 @@ def old_name(command: str, old: str, new: str, old_value: Any, value: Any, defau
 
 def check_options(**values: Any) -> None:
     """Refuse option values that would overflow or run without bound (name -> value, by flag)."""
-    from rigidid.limits import MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number
+    from rigidid.limits import MAX_MAGNITUDE, MAX_MODEL_ORDER, MAX_MODES, MAX_SEGMENTS, check_count, check_number
 
     counts = {"--n-modes": (1, MAX_MODES), "--max-order": (1, MAX_MODEL_ORDER), "--resample": (0, MAX_SEGMENTS),
               "--decimate": (1, 10_000), "--uncertainty": (0, 1_000_000), "--draws": (2, 1_000_000),
@@ -228,7 +246,9 @@ def check_options(**values: Any) -> None:
         elif flag in counts and value is not None:
             check_count(value, flag, low=counts[flag][0], high=counts[flag][1])
         elif isinstance(value, float):
-            check_number(value, flag, positive=name in ("sample_rate", "duration"), nonnegative=name != "mass")
+            check_number(value, flag, positive=name in ("sample_rate", "duration", "mass"), nonnegative=True)
+            if name == "mass" and value < 1.0 / MAX_MAGNITUDE:  # 1e-320 would divide by zero
+                raise InputError(f"must be at least {1.0 / MAX_MAGNITUDE:g}, got {value:g}", source=flag)
 
 
 def identify_files(
@@ -266,7 +286,7 @@ def identify_files(
     chosen = parse_modes(options.pop("modes_used"))
     with terminal_progress() as progress:
         return api.identify_test(
-            layout, inputs, records=records, modal=ModalOptions(**modal), units=parse_units(units),
+            layout, inputs, records=records, modal=ModalOptions(**modal), units=parse_units(units, layout),
             geometry=geometry, resample=resample, spectrum=spectrum, progress=progress, mass=mass,
             modes_used=chosen, method=method, uncertainty=draws, seed=seed, mounts=mounts, **options,
         )  # fmt: skip

@@ -10,12 +10,13 @@ import typer
 from rigidid.cli.common import (
     add_mounts,
     check_force_unit,
+    check_options,
     check_outputs,
     identify_files,
-    make_console,
     noise_overrides,
     parse_modes,
     reported,
+    stage_tables,
     write_csv,
     write_json,
 )
@@ -98,6 +99,9 @@ def identify(
         from rigidid.jsonout import result_to_dict
 
         if method in ("massline", "residues") or frf is not None:
+            if records:
+                raise InputError("give --records or --frf, not both", source="--frf")
+            check_options(mass=mass, band=band)
             check_outputs({"--json": json_path})
             _identify_massline(
                 layout, frf, references, mass=mass, band=band, method=method, json_path=json_path,
@@ -134,15 +138,11 @@ def identify(
                 )
             if csv is not None:
                 write_csv(csv, result, force_unit)
-        if json_path != "-":
-            from rigidid.render import result_tables
+            if json_path != "-":
+                from rigidid.render import estimate_tables, result_tables
 
-            console = make_console()
-            if estimate is not None:
-                from rigidid.render import estimate_tables
-
-                console.print(estimate_tables(estimate))
-            console.print(result_tables(result, force_unit))
+                tables = [estimate_tables(estimate)] if estimate is not None else []
+                stage_tables(*tables, result_tables(result, force_unit))
 
 
 def _identify_massline(
@@ -177,9 +177,12 @@ def _identify_massline(
     result = api_frf.identify_massline(
         layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels, method=method
     )
-    if json_path is not None:
-        write_json(json_path, massline_to_dict(result))
-    if json_path != "-":
-        from rigidid.render import massline_tables
+    from rigidid.io.atomic import OutputSet
 
-        make_console().print(massline_tables(result))
+    with OutputSet():  # standard output first, then the file: every output or none
+        if json_path is not None:
+            write_json(json_path, massline_to_dict(result))
+        if json_path != "-":
+            from rigidid.render import massline_tables
+
+            stage_tables(massline_tables(result))

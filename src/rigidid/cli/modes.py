@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rigidid.cli.common import check_options, check_outputs, make_console, parse_units, reported, write_json
+from rigidid.cli.common import check_options, check_outputs, parse_units, reported, stage_tables, write_json
 from rigidid.cli.options import Band, Decimate, Geometry, MaxOrder, ModalMethod, NModes, ReferencesPath, Units
 from rigidid.errors import InputError
 
@@ -75,7 +75,7 @@ def modes(
         try:
             with terminal_progress() as progress:
                 table, estimate = api.estimate_records_modes(
-                    layout, records or [], modal, units=parse_units(units), geometry=geometry, progress=progress
+                    layout, records or [], modal, units=parse_units(units, layout), geometry=geometry, progress=progress
                 )
         except InputError as exc:  # name the option the user typed, the deprecated one included
             if exc.source == "modal_method" and method is not None:
@@ -89,11 +89,11 @@ def modes(
                 outs.stdout(text)
             else:
                 write_text_atomic(output, text)
-        if output != "-":
-            if json_path != "-":
-                from rigidid.render import estimate_tables
+                if json_path != "-":
+                    from rigidid.render import estimate_tables
 
-                make_console().print(estimate_tables(estimate))
+                    stage_tables(estimate_tables(estimate))
+        if output != "-":
             shape = f"{len(table.labels)} modes x {len(table.sensor_ids)} sensors"
             sys.stderr.write(f"rigidid: wrote {shape} to {output}\n")
 
@@ -122,6 +122,7 @@ def _modes_frf(
         raise InputError("--frf needs --references REFS.json", source="--references")
     if output == "-" and json_path == "-":
         raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
+    check_options(n_modes=n_modes, band=band, max_order=max_order)
     check_outputs({"--output": output, "--json": json_path})
     with terminal_progress() as progress:
         table, fitted = api_frf.fit_modes_frf(

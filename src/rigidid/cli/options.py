@@ -270,6 +270,11 @@ FLAGS = {
     "refine": "--no-refine",
     "n_modes": "--n-modes",
     "decimate": "--decimate",
+    "records_format": "--records-format",
+    "frequency_noise": "--add-frequency-noise",
+    "damping_noise": "--add-damping-noise",
+    "mass": "--mass",
+    "pretrigger": "--pretrigger",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -11,11 +12,11 @@ from rigidid.cli.common import (
     EXIT_IDENTIFICATION,
     check_options,
     check_outputs,
-    make_console,
     noise_overrides,
     old_name,
     parse_units,
     reported,
+    stage_tables,
     write_json,
 )
 from rigidid.cli.options import (
@@ -33,7 +34,7 @@ from rigidid.cli.options import (
 from rigidid.errors import InputError, named_source
 
 if TYPE_CHECKING:
-    pass
+    from rigidid.results import PlanResult
 
 
 def plan(
@@ -107,18 +108,29 @@ def plan(
         with named_source(str(body) if body is not None else None), terminal_progress() as progress:
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
-                units=parse_units(units), geometry=geometry, progress=progress, references=references,
+                units=parse_units(units, layout), geometry=geometry, progress=progress, references=references,
                 mounts=mounts,
             )  # fmt: skip
-        with OutputSet():
+        with OutputSet():  # a verdict (exit 1) writes its report too: standard output first, then the file
             if json_path is not None:
                 write_json(json_path, plan_to_dict(result))
-        if json_path != "-":
-            from rigidid.render import plan_tables
+            if json_path != "-":
+                from rigidid.render import plan_tables
 
-            make_console().print(plan_tables(result))
+                stage_tables(plan_tables(result))
         if not result.report.ok or (result.references is not None and not result.references.ok):
+            _verdict(result, layout, references)
             raise typer.Exit(EXIT_IDENTIFICATION)
+
+
+def _verdict(result: PlanResult, layout: Path, references: Path | None) -> None:
+    """One line on stderr for plan's exit-1 verdict, naming the file at fault (its report is written too)."""
+    if not result.report.ok:
+        first = next(f for f in result.report.findings if f.severity == "error")
+        sys.stderr.write(f"rigidid: error: {layout}: the layout is not usable: {first.message}\n")
+    elif result.references is not None:
+        statement = result.references.statement.split(". ")[0].rstrip(".")
+        sys.stderr.write(f"rigidid: error: {references}: the references are not usable: {statement}\n")
 
 
 def parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:

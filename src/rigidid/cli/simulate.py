@@ -93,6 +93,7 @@ def simulate(
             ("--add-damping-noise", damping_noise),
             ("--add-shape-noise", shape_noise),
             ("--add-record-noise", record_noise),
+            ("--add-frf-noise", frf_noise),
         ):
             check_number(value, name, nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)

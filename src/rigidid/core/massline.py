@@ -193,7 +193,13 @@ def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) ->
     theta = sol / norms
     m = float(theta[0])
     if not m > 0.0:
-        raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive")
+        hint = (
+            ": the FRFs have the opposite sign convention (accelerance is acceleration per force, its mass line "
+            "positive); negate them or the reference directions"
+            if m < 0.0
+            else ""
+        )
+        raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive{hint}")
     c_scaled = theta[1:4] / m
     j_o = _mass_matrix(theta)[3:, 3:]
     j_g_scaled = j_o + m * skew(c_scaled) @ skew(c_scaled)

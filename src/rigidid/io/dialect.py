@@ -119,3 +119,9 @@ def column_key(name: str) -> str:
     if unit is not None and unit not in _DIMENSIONLESS:
         key = key + "_" + re.sub(r"\s+", "", unit)
     return key
+
+
+def plain_number(text: str) -> bool:
+    """Whether a cell may be read as a number: ASCII only, no ``_`` (Python's float reads ``1_0`` as 10
+    and full-width or Arabic-Indic digits as numbers; modes.csv and the records refuse them)."""
+    return text.isascii() and "_" not in text

@@ -110,6 +110,8 @@ def _first_error(exc: ValidationError) -> tuple[str, str]:
         message = "required field is missing"
     elif err["type"] == "extra_forbidden":
         message = "unknown field"
+    elif err["type"] in ("literal_error", "enum") and isinstance(err.get("input"), str | int | float):
+        message = f"{message}, not {err['input']!r}"
     return loc, message
 
 

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError
+from rigidid.io.dialect import plain_number
 from rigidid.io.uff_codes import FUNCTION_TYPES
 from rigidid.models import ReferencesFile
 from rigidid.units import check_same_units
@@ -65,6 +66,14 @@ def reference_arrays(refs: ReferencesFile) -> tuple[tuple[str, ...], NDArray[np.
     return ids, positions, directions
 
 
+def _rows(reader: csv.DictReader[str], src: str) -> Any:
+    """The rows of a CSV reader; a malformed line (a cell above the field limit...) one InputError naming it."""
+    try:
+        yield from reader
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV: {exc}", source=src, location=f"row {reader.line_num}") from None
+
+
 def load_frf_csv(
     path: str | os.PathLike[str], sensor_ids: Sequence[str], reference_ids: Sequence[str]
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
@@ -99,7 +108,10 @@ def load_frf_csv(
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read: {exc}", source=src) from None
     reader = csv.DictReader(io.StringIO(text))
-    header = [h.strip() for h in (reader.fieldnames or [])]
+    try:
+        header = [h.strip() for h in (reader.fieldnames or [])]
+    except csv.Error as exc:  # a cell above the csv module's field limit, a NUL...
+        raise InputError(f"not valid CSV: {exc}", source=src, location="row 1") from None
     missing = [c for c in FRF_COLUMNS if c not in header]
     if missing:
         raise InputError(f"missing column {missing[0]!r} (need {', '.join(FRF_COLUMNS)})", source=src, location="row 1")
@@ -107,7 +119,10 @@ def load_frf_csv(
     s_index = {s: i for i, s in enumerate(sensor_ids)}
     r_index = {r: j for j, r in enumerate(reference_ids)}
     values: dict[tuple[int, int], dict[float, complex]] = {}
-    for n, row in enumerate(reader, start=2):
+    for n, row in enumerate(_rows(reader, src), start=2):
+        if None in row or any(v is None for v in row.values()):
+            cells = len(header) + len(row.get(None) or []) - sum(v is None for v in row.values())
+            raise InputError(f"{cells} fields, the header has {len(header)}", source=src, location=f"row {n}")
         resp = (row.get("response") or "").strip()
         ref = (row.get("reference") or "").strip()
         if resp not in s_index:
@@ -117,7 +132,10 @@ def load_frf_csv(
         nums = []
         for col in ("frequency_hz", "real", "imag"):
             try:
-                v = float((row.get(col) or "").strip())
+                cell = (row.get(col) or "").strip()
+                if not plain_number(cell):
+                    raise ValueError(cell)
+                v = float(cell)
             except ValueError:
                 raise InputError(f"{col}: not a number: {row.get(col)!r}", source=src, location=f"row {n}") from None
             if not math.isfinite(v):
@@ -143,6 +161,8 @@ def load_frf_csv(
             if len(pair) != freqs.size or np.any(np.array(sorted(pair)) != freqs):
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
             frf[i, j] = [pair[f] for f in freqs]
+    if not np.any(frf):
+        raise InputError("every FRF value is zero: no response to fit", source=src)
     return freqs, frf
 
 
@@ -176,6 +196,31 @@ def _uff_id(node: int, code: int, ids: Sequence[str]) -> str | None:
         if candidate in ids:
             return candidate
     return None
+
+
+_ROTATIONS = {4: "x", 5: "y", 6: "z"}
+
+
+def _check_uff_record(dset: dict[str, Any], src: str, where: str) -> None:
+    """Refuse a dataset 58 FRF whose directions are no translation or whose point count is not its values'."""
+    for role in ("rsp", "ref"):
+        code = int(dset.get(f"{role}_dir", 0))
+        name = "response" if role == "rsp" else "reference"
+        if abs(code) in _ROTATIONS:
+            raise InputError(
+                f"{name} direction {code} is a rotation about {_ROTATIONS[abs(code)]}: rigidid reads translations "
+                "(+-1, +-2, +-3 for x, y, z)",
+                source=src, location=where,
+            )  # fmt: skip
+        if abs(code) not in (1, 2, 3):
+            raise InputError(
+                f"{name} direction {code} is not a UFF direction code (+-1, +-2, +-3 for x, y, z)",
+                source=src, location=where,
+            )  # fmt: skip
+    n = int(dset.get("num_pts", -1))
+    size = int(np.size(dset.get("data", [])))
+    if size != n or n < 1:
+        raise InputError(f"{size} values where the header says {dset.get('num_pts')}", source=src, location=where)
 
 
 def _uff_units_factor(sets: list[dict[str, Any]], src: str, units: dict[str, str] | None) -> float:
@@ -229,6 +274,7 @@ def _frf_dataset(
             source=src,
             location=where,
         )
+    _check_uff_record(dset, src, where)
     rsp = _uff_id(int(dset.get("rsp_node", 0)), int(dset.get("rsp_dir", 0)), list(s_index))
     ref = _uff_id(int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0)), list(r_index))
     if rsp is None:
@@ -309,6 +355,12 @@ def load_frf_uff(
         n58 += 1
         where = f"dataset 58 #{n58}"
         key, frf_pair = _frf_dataset(dset, where, src, s_index, r_index)
+        if key in found:
+            raise InputError(
+                f"a second FRF for response {sensor_ids[key[0]]!r} and reference {reference_ids[key[1]]!r}",
+                source=src,
+                location=where,
+            )
         found[key] = frf_pair
     if not found:
         raise InputError("no FRF (dataset 58, function type 4) in the file", source=src)
@@ -325,6 +377,8 @@ def load_frf_uff(
             if pair[0].shape != freqs.shape or not np.allclose(pair[0], freqs, rtol=1e-9, atol=0.0):
                 raise InputError(f"FRF {s}/{r} has other frequency lines than the first pair", source=src)
             frf[i, j] = pair[1]
+    if not np.any(frf):
+        raise InputError("every FRF value is zero: no response to fit", source=src)
     return freqs, frf
 
 

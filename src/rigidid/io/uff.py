@@ -245,8 +245,14 @@ def units_from_164(dset: dict[str, Any], source: str, where: str) -> dict[str, s
     length_f = float(dset.get("length", 0.0))
     force_f = float(dset.get("force", 0.0))
     code = dset.get("units_code")
-    if not (length_f > 0.0 and force_f > 0.0) and code in CODE_FACTORS:
-        length_f, force_f = CODE_FACTORS[code]
+    if not isinstance(code, int | np.integer) or not 1 <= int(code) <= 10:
+        raise InputError(
+            f"units code {code} is not a UFF units code (1-8 and 10 name units, 9 is user defined)",
+            source=source,
+            location=where,
+        )
+    if not (length_f > 0.0 and force_f > 0.0) and int(code) in CODE_FACTORS:
+        length_f, force_f = CODE_FACTORS[int(code)]
 
     def match(value: float, table: dict[str, float]) -> str | None:
         for name, ref in table.items():
@@ -472,11 +478,15 @@ def read_all(path: Path) -> list[dict[str, Any]]:
         raise InputError("not a regular file (a device or pipe cannot be read as UFF)", source=src)
     if path.stat().st_size > MAX_UFF_BYTES:
         raise InputError(f"larger than the limit of {MAX_UFF_BYTES // 2**20} MiB for a UFF file", source=src)
-    from rigidid.io.uff_scan import scan
+    from rigidid.io.uff_scan import BOM, scan
 
     blocks = scan(path)
-    if blocks is not None and any(b.binary58 for b in blocks):
+    with path.open("rb") as fh:
+        bom = fh.read(len(BOM)) == BOM
+    if blocks is not None and (bom or any(b.binary58 for b in blocks)):  # pyuff would lose the first dataset
         return _read_binary58(path, blocks)
+    if bom:
+        raise InputError("starts with a byte-order mark and its datasets are not delimited as UFF wants", source=src)
     try:
         uff = pyuff.UFF(src)
         n = uff.get_n_sets()
@@ -790,8 +800,16 @@ def _sensors_from_modes(
     for dset, where in reader.modes:
         if int(dset.get("analysis_type", 0)) not in (2, 3, 7):
             continue
-        vectors = np.column_stack([np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)])
-        for node, vec in zip(np.asarray(dset.get("node_nums", []), dtype=int), vectors, strict=True):
+        columns = [np.asarray(dset.get(f"r{k}", []), dtype=complex).reshape(-1) for k in (1, 2, 3)]
+        node_nums = np.asarray(dset.get("node_nums", []), dtype=int).reshape(-1)
+        if any(c.shape != node_nums.shape for c in columns):  # a line lost from the node-by-node values
+            raise reader.error(
+                f"{node_nums.size} nodes but {', '.join(str(c.size) for c in columns)} values per direction "
+                "(a damaged or truncated dataset)",
+                where,
+            )
+        vectors = np.column_stack(columns)
+        for node, vec in zip(node_nums, vectors, strict=True):
             for axis in range(3):
                 key = (int(node), axis + 1)
                 if vec[axis] != 0 and key not in sensors:

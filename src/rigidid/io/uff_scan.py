@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Block", "read_58b", "scan"]
+__all__ = ["BOM", "Block", "read_58b", "scan"]
 
 _DELIMITER = b"    -1"
 _MAX_HEADER_LINES = 64  # the specification has 11
@@ -100,6 +100,10 @@ def _is_delimiter(line: bytes) -> bool:
     return line.startswith(_DELIMITER) and not line[len(_DELIMITER) :].strip()
 
 
+BOM = b"\xef\xbb\xbf"
+"""The UTF-8 byte-order mark, skipped at the start of a file."""
+
+
 def scan(path: str | os.PathLike[str]) -> list[Block] | None:
     """The datasets of a universal file, in order (None when its layout is not followed).
 
@@ -119,6 +123,8 @@ def scan(path: str | os.PathLike[str]) -> list[Block] | None:
     blocks: list[Block] = []
     with open(path, "rb") as fh:
         size = os.fstat(fh.fileno()).st_size
+        if fh.read(3) != BOM:  # a byte-order mark some editors put first: not part of the first line
+            fh.seek(0)
         while True:
             start = fh.tell()
             line = fh.readline()

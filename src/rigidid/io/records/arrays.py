@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.io.records.columns import RESERVED_FIELDS, channel_names
 
-__all__ = ["MatVar", "is_mat73", "mat73_fields", "open_blocks", "scan_mat5"]
+__all__ = ["MatVar", "is_mat73", "mat73_fields", "npz_headers", "open_blocks", "scan_mat5"]
 
 Array = NDArray[np.float64]
 Reader = Callable[[int], Array]  # next `count` samples, (count, m)
@@ -288,6 +288,43 @@ def _numeric(dtype: np.dtype[Any]) -> bool:
 # ---------------------------------------------------------------- .npz
 
 
+def npz_headers(zf: Any, src: str) -> dict[str, tuple[tuple[int, ...], bool, np.dtype[Any], int]]:
+    """Each ``.npy`` member's (shape, Fortran order, dtype, header bytes), checked against its zip entry.
+
+    Raises
+    ------
+    InputError
+        A member whose array header does not fit its zip entry's size (a
+        header claiming a huge array, a size field that lies), or is no
+        ``.npy`` header.
+    """
+    import zipfile
+
+    out = {}
+    for info in zf.infolist():
+        member = info.filename
+        if not member.endswith(".npy"):
+            continue
+        with zf.open(member) as fh:
+            version = np.lib.format.read_magic(fh)
+            if version == (1, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+            else:
+                shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+            skip = fh.tell()
+        dtype = np.dtype(dtype)
+        if not dtype.hasobject:
+            expected = skip + math.prod(int(d) for d in shape) * dtype.itemsize
+            stored = info.compress_type == zipfile.ZIP_STORED
+            if info.file_size != expected or (stored and info.compress_size != info.file_size):
+                raise InputError(
+                    f"its zip entry holds {info.file_size} bytes, its array header {tuple(shape)} needs {expected}",
+                    source=src, location=f"field {member[:-4]!r}",
+                )  # fmt: skip
+        out[member] = (tuple(int(d) for d in shape), bool(fortran), dtype, skip)
+    return out
+
+
 def _npz_arrays(path: Path) -> tuple[Any, dict[str, _Array]] | None:
     import zipfile
 
@@ -295,21 +332,13 @@ def _npz_arrays(path: Path) -> tuple[Any, dict[str, _Array]] | None:
         zf = zipfile.ZipFile(path)
     except (zipfile.BadZipFile, OSError):
         return None
+    try:
+        headers = npz_headers(zf, str(path))
+    except Exception:  # a damaged header raises many types (TokenError too): read_binary names it
+        zf.close()
+        return None
     arrays: dict[str, _Array] = {}
-    for member in zf.namelist():
-        if not member.endswith(".npy"):
-            continue
-        try:
-            with zf.open(member) as fh:
-                version = np.lib.format.read_magic(fh)
-                if version == (1, 0):
-                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
-                else:
-                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
-                skip = fh.tell()
-        except (ValueError, OSError, EOFError, KeyError):
-            zf.close()
-            return None
+    for member, (shape, fortran, dtype, skip) in headers.items():
 
         def opener(member: str = member, skip: int = skip) -> _Raw:
             raw = _Raw(zf.open(member), str(path), member[:-4])
@@ -317,7 +346,7 @@ def _npz_arrays(path: Path) -> tuple[Any, dict[str, _Array]] | None:
             return raw
 
         deflated = zf.getinfo(member).compress_type != zipfile.ZIP_STORED
-        arrays[member[:-4]] = _Array(tuple(int(s) for s in shape), bool(fortran), np.dtype(dtype), opener, deflated)
+        arrays[member[:-4]] = _Array(shape, fortran, dtype, opener, deflated)
     return zf, arrays
 
 

@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.errors import InputError
+from rigidid.io.guard import guarded, reading
 from rigidid.io.records.columns import RESERVED_FIELDS, channel_names
 
 __all__ = ["BINARY_SUFFIXES", "BlockRecord", "RawRecord", "named_blocks", "npy_blocks", "read_binary", "write_binary"]
@@ -87,6 +88,8 @@ def _field(name: str) -> str:
 
 
 def _floats(value: Any, src: str, name: str) -> Array:
+    if np.iscomplexobj(value):
+        raise InputError("has complex values: records are real", source=src, location=_field(name))
     try:
         return np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -123,9 +126,7 @@ def _from_mapping(fields: dict[str, Any], attrs: dict[str, Any], src: str) -> Ra
         if data.ndim == 1:
             data = data.reshape(-1, 1)
         if data.ndim != 2:
-            raise InputError(
-                f"must be 2-D (samples x channels), is {data.ndim}-D", source=src, location=_field("data")
-            )
+            raise InputError(f"must be 2-D (samples x channels), is {data.ndim}-D", source=src, location=_field("data"))
         if "channels" not in fields:
             raise InputError(
                 "'data' needs 'channels', the names of its columns", source=src, location=_field("channels")
@@ -201,7 +202,7 @@ def npy_blocks(path: str | os.PathLike[str], rows: int) -> tuple[int, int, Any] 
                 shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
             else:
                 return None
-        except (ValueError, OSError, EOFError):
+        except Exception:  # a damaged header (numpy's tokenizer raises TokenError too): read_binary names it
             return None
         offset = fh.tell()
     if fortran or dtype != np.dtype("<f8") or len(shape) != 2 or shape[1] < 2:
@@ -218,7 +219,7 @@ def npy_blocks(path: str | os.PathLike[str], rows: int) -> tuple[int, int, Any] 
                     raise InputError("the file is shorter than its header says", source=str(path))
                 yield block.reshape(-1, columns)
 
-    return n, columns, blocks()
+    return n, columns, guarded(blocks(), str(path), ".npy")
 
 
 @dataclass(frozen=True)
@@ -264,14 +265,21 @@ def _wav(path: Path, src: str, mmap: bool) -> tuple[float, Any]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", wavfile.WavFileWarning)  # chunks it skips (metadata)
             rate, data = wavfile.read(path, mmap=mmap)
-    except ValueError as exc:
+    except ZeroDivisionError:
+        raise InputError(
+            "its channel count, block size and bit depth disagree (0 bytes per sample)", source=src, location="header"
+        ) from None
+    except (ValueError, TypeError, UnboundLocalError) as exc:  # a format field scipy maps to no type; no data chunk
         if mmap:
-            raise
-        raise InputError(f"not a WAV file scipy reads ({exc})", source=src) from None
+            raise ValueError(str(exc)) from None
+        reason = "no data chunk" if isinstance(exc, UnboundLocalError) else str(exc).splitlines()[0]
+        raise InputError(f"not a WAV file scipy reads ({reason})", source=src) from None
     except OSError as exc:
         raise InputError(f"cannot read it as WAV ({exc})", source=src) from None
     if not float(rate) > 0.0:
         raise InputError(f"its sample rate is {rate}", source=src, location="header")
+    if data.ndim == 2 and data.shape[1] == 0:
+        raise InputError("its header gives 0 channels", source=src, location="header")
     values = data.reshape(-1, 1) if data.ndim == 1 else data
     return float(rate), values
 
@@ -319,9 +327,21 @@ def named_blocks(path: str | os.PathLike[str], rows: int) -> BlockRecord | None:
         then loads it whole and names what is wrong.
     """
     p = Path(path)
-    suffix = p.suffix.lower()
     if not p.is_file():
         return None
+    try:
+        with reading(str(p), p.suffix.lower()):
+            found = _named_blocks(p, rows)
+    except InputError:
+        return None  # read_binary names the fault
+    if found is None:
+        return None
+    return BlockRecord(found.names, found.rows, found.dt, guarded(found.blocks, str(p), p.suffix.lower()), found.field,
+                       found.columns)  # fmt: skip
+
+
+def _named_blocks(p: Path, rows: int) -> BlockRecord | None:
+    suffix = p.suffix.lower()
     if suffix in (".npz", ".h5", ".hdf5", ".mat"):
         from rigidid.io.records.arrays import open_blocks
 
@@ -361,11 +381,16 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
     """
     src = str(path)
     p = Path(path)
-    suffix = p.suffix.lower()
     if not p.exists():
         raise InputError("file not found", source=src)
     if p.is_dir():
         raise InputError("is a folder, not a file", source=src)
+    with reading(src, p.suffix.lower()):
+        return _read_binary(p, src)
+
+
+def _read_binary(p: Path, src: str) -> RawRecord:
+    suffix = p.suffix.lower()
     if suffix in (".h5", ".hdf5"):
         return _read_h5(p, src)
     if suffix == ".npy":
@@ -380,6 +405,14 @@ def read_binary(path: str | os.PathLike[str]) -> RawRecord:
             )
         return RawRecord(None, np.ascontiguousarray(arr[:, 1:]), np.ascontiguousarray(arr[:, 0]), None, "columns")
     if suffix == ".npz":
+        import zipfile
+
+        if not zipfile.is_zipfile(p):
+            raise InputError("not a .npz file (not a zip archive, or truncated)", source=src)
+        from rigidid.io.records.arrays import npz_headers
+
+        with zipfile.ZipFile(p) as zf:
+            npz_headers(zf, src)
         try:
             with np.load(p, allow_pickle=False) as npz:
                 fields = {key: npz[key] for key in npz.files}

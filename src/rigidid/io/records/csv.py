@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.errors import InputError, NonSensorColumnWarning
-from rigidid.io.dialect import Dialect, column_key, decimal_point, sniff_dialect
+from rigidid.io.dialect import Dialect, column_key, decimal_point, plain_number, sniff_dialect
 from rigidid.io.records.columns import NON_SENSOR_PREFIXES, match_columns
 from rigidid.io.records.columns import column as _column
 from rigidid.io.records.columns import row as _where
@@ -158,6 +158,8 @@ def _diagnose(path: Path, dialect: Dialect, header: list[str], line: int, src: s
         if not value:
             return InputError("empty cell", source=src, location=where)
         try:
+            if not plain_number(value):
+                raise ValueError(value)
             number = float(decimal_point(value, dialect))
         except ValueError:
             return InputError(f"{value!r} is not a number", source=src, location=where)
@@ -347,6 +349,17 @@ def _byte_chunks(fh: Any, size: int, src: str) -> Iterator[bytes]:
         yield rest
 
 
+def _strict_numeric(column: Any) -> Array:
+    """A parsed column as floats: text NaN, and so is a number Python reads but the contract does not (``1_0``)."""
+    import pandas as pd
+
+    out: Array = pd.to_numeric(column, errors="coerce").to_numpy(dtype=np.float64, copy=True)
+    if not pd.api.types.is_numeric_dtype(column.dtype):  # text cells (object or pandas' string dtype)
+        odd = column.astype(str).str.contains(r"[^\x00-\x7f]|_", regex=True).to_numpy(dtype=bool)
+        out[odd] = np.nan
+    return out
+
+
 class _Parser:
     """Chunks of data lines to checked ``(time, sensors)`` blocks: polars first, pandas where it declines.
 
@@ -423,13 +436,11 @@ class _Parser:
                 if frame.shape[1] != n_fields:
                     start = _line_map(p, dialect, self.filled + frame.shape[0])(self.filled)
                     raise _diagnose(p, dialect, header, _first_bad_line(p, dialect, n_fields, start), src)
-                try:  # all columns numeric (the usual case): one array, no copy of a column subset
-                    values = frame.to_numpy(dtype=np.float64)
-                    yield self._checked(values, 0, self.order)
-                except (ValueError, TypeError):  # text somewhere: coerce the columns used, find it below
-                    values = np.column_stack(
-                        [pd.to_numeric(frame.iloc[:, j], errors="coerce").to_numpy(dtype=np.float64) for j in columns]
-                    )
+                numeric = all(pd.api.types.is_numeric_dtype(t) for t in frame.dtypes)
+                if numeric:  # the usual case: one array, no copy of a column subset
+                    yield self._checked(frame.to_numpy(dtype=np.float64), 0, self.order)
+                else:  # text somewhere (numpy would read '1_0' as 10): coerce the columns used, find it below
+                    values = np.column_stack([_strict_numeric(frame.iloc[:, j]) for j in columns])
                     yield self._checked(values, 0, list(range(1, len(columns))))
         except pd.errors.ParserError:
             start = _line_map(p, dialect, self.filled + 1)(self.filled) if self.filled else 2

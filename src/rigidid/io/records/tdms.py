@@ -35,13 +35,19 @@ Array = NDArray[np.float64]
 @contextmanager
 def _quiet() -> Iterator[None]:
     """npTDMS's logged warnings (a short last segment) off: they would be lines of their own on stderr."""
-    logger = logging.getLogger("nptdms")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
+    import nptdms  # noqa: F401  (its module loggers exist once it is imported)
+
+    # npTDMS gives each module's logger (nptdms.reader, nptdms.tdms_segment...) a level of its own
+    names = ["nptdms"] + [n for n in logging.root.manager.loggerDict if n.startswith("nptdms.")]
+    loggers = [logging.getLogger(n) for n in names]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.ERROR)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        for lg, level in zip(loggers, levels, strict=True):
+            lg.setLevel(level)
 
 
 def _channel(name: str) -> str:
