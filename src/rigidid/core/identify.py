@@ -566,21 +566,7 @@ def _identify(
             g_b, j_b = weighted[0], weighted[1]
         g, j = g_b[0], j_b[0]
     omega, phi = float(prep.omega[0]), prep.coordinates[0]
-    observability = inertia_observability(q, g)
-    if observability < UNOBSERVABLE:
-        raise IdentificationError(
-            "the inertia is not observable: the supports do not couple rotations to translations "
-            "(e.g. mounts symmetric about the CG), so inertia and stiffness cannot be separated "
-            f"(inertia observability {observability:.1e})"
-        )
-    if observability < WEAKLY_OBSERVABLE:
-        notices.append(
-            Notice(
-                IllConditionedWarning,
-                f"the inertia is poorly determined (inertia observability {observability:.2g}, typically "
-                "0.1-0.3): the supports couple rotations to translations only weakly",
-            )
-        )
+    observability = _checked_observability(q, g, notices)
     dq = estimator.at_cg(q[None], g[None], j[None])[0]
     dp = estimator.at_cg(p[None], g[None], j[None])[0]
     structure = float(np.linalg.norm(dq - dq.T)) / max(float(np.linalg.norm(dq)), 1e-300)
@@ -621,6 +607,26 @@ def _identify(
             residual_weights=None if weighted is None else weighted[3],
         ),
     )
+
+def _checked_observability(q: Array, g: Array, notices: list[Notice]) -> float:
+    """The inertia observability of ``M^-1 K`` about `g`: refused when none, a notice when weak."""
+    observability = inertia_observability(q, g)
+    if observability < UNOBSERVABLE:
+        raise IdentificationError(
+            "the inertia is not observable: the supports do not couple rotations to translations "
+            "(e.g. mounts symmetric about the CG), so inertia and stiffness cannot be separated "
+            f"(inertia observability {observability:.1e})"
+        )
+    if observability < WEAKLY_OBSERVABLE:
+        notices.append(
+            Notice(
+                IllConditionedWarning,
+                f"the inertia is poorly determined (inertia observability {observability:.2g}, typically "
+                "0.1-0.3): the supports couple rotations to translations only weakly",
+            )
+        )
+    return observability
+
 
 
 def _weighted(

@@ -360,8 +360,6 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
         mode, frequency or damping differing between rows of one mode, a mode
         missing a sensor, or no rows at all.
     """
-    from rigidid.limits import MAX_MAGNITUDE
-
     p = Path(path)
     src = str(p)
     text = _read_text(p)
@@ -373,29 +371,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
             "then the modes (swapped?)",
             source=src,
         )
-    header = next(reader, None)
-    if header is None:
-        raise InputError("file is empty", source=src)
-    if header and column_key(header[0]).startswith("time"):
-        raise InputError(
-            "this is a time record (its first column is time), not a modes table: give records as "
-            "`records` (modes are estimated from them first)",
-            source=src,
-            location="row 1",
-        )
-    columns = _modes_columns(header)
-    for name in _REQUIRED:
-        if name not in columns:
-            raise InputError(
-                f"missing column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
-            )
-    for name in columns:
-        if name not in MODES_COLUMNS and name not in MODES_OPTIONAL:
-            raise InputError(
-                f"unknown column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
-            )
-    if len(set(columns)) != len(columns):
-        raise InputError("a column appears twice", source=src, location="row 1")
+    columns = _modes_header(next(reader, None), src)
     rows: list[ModeValue] = []
     scalings: dict[int, str] = {}
     for line, row in enumerate(reader, start=2):
@@ -406,22 +382,7 @@ def load_modes(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> ModeT
             raise InputError(f"{len(row)} fields, the header has {len(columns)}", source=src, location=where)
         record: dict[str, Any] = {c: _modes_cell(c, v, dialect) for c, v in zip(columns, row, strict=True)}
         scale = record.pop("scaling", None)
-        for name in ("mode", "frequency_hz", "damping_ratio", "real", "imag"):
-            cell = record.get(name)
-            if cell is None:
-                continue
-            if cell == "":
-                raise InputError("empty cell", source=src, location=f"{where}: {name}")
-            if not _NUMBER.fullmatch(cell):
-                if _python_float(cell) is None:
-                    continue  # not a number at all: the model says so
-                raise InputError(
-                    f"{cell[:40]!r} is not a plain decimal number", source=src, location=f"{where}: {name}"
-                )
-            if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
-                raise InputError(
-                    f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}"
-                )
+        _check_number_cells(record, src, where)
         try:
             parsed = ModeRow.model_validate(record)
         except ValidationError as exc:
@@ -453,6 +414,51 @@ class ModeValue(NamedTuple):
     damping_ratio: float
     sensor: str
     value: complex
+
+def _modes_header(header: list[str] | None, src: str) -> list[str]:
+    """The modes table's columns from its header row, checked: required, known, each once."""
+    if header is None:
+        raise InputError("file is empty", source=src)
+    if header and column_key(header[0]).startswith("time"):
+        raise InputError(
+            "this is a time record (its first column is time), not a modes table: give records as "
+            "`records` (modes are estimated from them first)",
+            source=src,
+            location="row 1",
+        )
+    columns = _modes_columns(header)
+    for name in _REQUIRED:
+        if name not in columns:
+            raise InputError(
+                f"missing column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
+            )
+    for name in columns:
+        if name not in MODES_COLUMNS and name not in MODES_OPTIONAL:
+            raise InputError(
+                f"unknown column {name!r}; expected {', '.join(MODES_COLUMNS)}", source=src, location="row 1"
+            )
+    if len(set(columns)) != len(columns):
+        raise InputError("a column appears twice", source=src, location="row 1")
+    return columns
+
+
+def _check_number_cells(record: dict[str, Any], src: str, where: str) -> None:
+    """The numeric cells of a modes row: not empty, plain decimal numbers, within the magnitude limit."""
+    from rigidid.limits import MAX_MAGNITUDE
+
+    for name in ("mode", "frequency_hz", "damping_ratio", "real", "imag"):
+        cell = record.get(name)
+        if cell is None:
+            continue
+        if cell == "":
+            raise InputError("empty cell", source=src, location=f"{where}: {name}")
+        if not _NUMBER.fullmatch(cell):
+            if _python_float(cell) is None:
+                continue  # not a number at all: the model says so
+            raise InputError(f"{cell[:40]!r} is not a plain decimal number", source=src, location=f"{where}: {name}")
+        if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
+            raise InputError(f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}")
+
 
 
 def mode_table_from_rows(rows: Sequence[ModeValue], sensor_ids: Sequence[str], source: str | None) -> ModeTable:
