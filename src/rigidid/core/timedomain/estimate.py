@@ -535,7 +535,7 @@ def _decimated(
 
 def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) -> ModalEstimate:
     """Steps (3)-(7) of :func:`estimate_modes` on the decays decimated by `factor` (sample interval `dt`)."""
-    n_modes, band, max_order = options.n_modes, options.band, options.max_order
+    n_modes, band = options.n_modes, options.band
     dt_fit = dt * factor
     nyquist_fit = 0.5 / dt_fit
 
@@ -569,39 +569,12 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
     to_sensors = scales[:, None] * basis
 
     # (5)-(6) sweep
-    min_samples = min(f.shape[0] for f in fitted)
     models: list[tuple[int, CArray, CArray]] = []
     adequate: int | None = None
     if options.method == "ar":
-        p_min = max(1, math.ceil(2 * n_modes / r))
-        p_max = max_order if max_order is not None else p_min + math.ceil(_AR_EXTRA_STATES / r)
-        if p_max < p_min:
-            raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
-        if min_samples <= 2 * p_max + 1:
-            raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
-        gram, columns = _scaled_gram(fitted, p_max, unscale)
-        orders = list(range(p_min, p_max + 1))
-        fits = ar_fits(gram, r, orders)
-        adequate = f_test_order([f.rss for f in fits], orders, columns, r)
-        stop = min(p_max, max(adequate + 4, p_min + 8))
-        step = max(1, math.ceil((stop - p_min) / _AR_SWEEP_MODELS))
-        for fit in fits[stop - p_min :: -step][::-1]:
-            poles, shapes = ar_modes(fit, dt_fit)
-            models.append((fit.order, poles, to_sensors @ shapes))
+        adequate = _ar_sweep(fitted, unscale, to_sensors, r, dt_fit, options, models)
     else:
-        n_max = max_order if max_order is not None else max(8 * n_modes, 48)
-        n_max += n_max % 2
-        f_low = options.content[0]
-        rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, f_low)
-        if min_samples <= 2 * rows + 1:
-            raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
-        gram, _ = _scaled_gram(fitted, rows, unscale)
-        basis_era = era_basis(gram, r, max_order=n_max)
-        for n in range(2, n_max + 1, 2):
-            if options.progress is not None:
-                options.progress("model-order sweep", n // 2 - 1, n_max // 2)
-            poles, shapes = era_modes(basis_era, n, dt_fit)
-            models.append((n, poles, to_sensors @ shapes))
+        _era_sweep(fitted, unscale, to_sensors, r, dt_fit, options, models)
 
     # (7) stabilisation and selection
     diagram = stabilise(models, fit_band, options.criteria)
@@ -632,3 +605,59 @@ def _estimate(decays: list[Array], dt: float, factor: int, options: _Options) ->
         adequate_order=adequate,
         impacts=(),
     )
+
+
+def _ar_sweep(
+    fitted: list[Array],
+    unscale: Array | None,
+    to_sensors: Array,
+    r: int,
+    dt_fit: float,
+    options: _Options,
+    models: list[tuple[int, CArray, CArray]],
+) -> int:
+    """Steps (5)-(6) with vector AR: models up to a few orders past the adequate one (F test) into `models`."""
+    n_modes, max_order = options.n_modes, options.max_order
+    min_samples = min(f.shape[0] for f in fitted)
+    p_min = max(1, math.ceil(2 * n_modes / r))
+    p_max = max_order if max_order is not None else p_min + math.ceil(_AR_EXTRA_STATES / r)
+    if p_max < p_min:
+        raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
+    if min_samples <= 2 * p_max + 1:
+        raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
+    gram, columns = _scaled_gram(fitted, p_max, unscale)
+    orders = list(range(p_min, p_max + 1))
+    fits = ar_fits(gram, r, orders)
+    adequate = f_test_order([f.rss for f in fits], orders, columns, r)
+    stop = min(p_max, max(adequate + 4, p_min + 8))
+    step = max(1, math.ceil((stop - p_min) / _AR_SWEEP_MODELS))
+    for fit in fits[stop - p_min :: -step][::-1]:
+        poles, shapes = ar_modes(fit, dt_fit)
+        models.append((fit.order, poles, to_sensors @ shapes))
+    return adequate
+
+
+def _era_sweep(
+    fitted: list[Array],
+    unscale: Array | None,
+    to_sensors: Array,
+    r: int,
+    dt_fit: float,
+    options: _Options,
+    models: list[tuple[int, CArray, CArray]],
+) -> None:
+    """Steps (5)-(6) with Gram-form ERA: the models of every even order up to the highest into `models`."""
+    n_modes, max_order = options.n_modes, options.max_order
+    min_samples = min(f.shape[0] for f in fitted)
+    n_max = max_order if max_order is not None else max(8 * n_modes, 48)
+    n_max += n_max % 2
+    rows = block_rows(n_max, r, n_modes, min_samples, dt_fit, options.content[0])
+    if min_samples <= 2 * rows + 1:
+        raise InputError(f"records too short ({min_samples} samples after trimming) for {rows} Hankel block rows")
+    gram, _ = _scaled_gram(fitted, rows, unscale)
+    basis_era = era_basis(gram, r, max_order=n_max)
+    for n in range(2, n_max + 1, 2):
+        if options.progress is not None:
+            options.progress("model-order sweep", n // 2 - 1, n_max // 2)
+        poles, shapes = era_modes(basis_era, n, dt_fit)
+        models.append((n, poles, to_sensors @ shapes))
