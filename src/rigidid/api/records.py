@@ -849,14 +849,7 @@ def identify_test(
     data = TestData(load_layout(layout)) if streamed else load_test(
         layout, inputs or [], records=records, units=units, geometry=geometry
     )
-    if resample and data.records:  # before any estimation: blame the option, not the records
-        shortest = min(values.shape[0] for values, _ in data.records)
-        if resample * 16 > shortest:
-            raise InputError(
-                f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
-                f"the limit here is {shortest // 16}",
-                source="segments",
-            )
+    _check_segments(data, resample)  # before any estimation: blame the option, not the records
     paths = list(inputs or []) if streamed else None
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     estimate = None
@@ -906,6 +899,18 @@ def identify_test(
             estimate_options={k: v for k, v in options.items() if v is not None},
         )  # fmt: skip
     return TestRun(result, estimate, None if streamed else data.records, summed)
+
+def _check_segments(data: TestData, resample: int) -> None:
+    """Refuse `resample` segments that would leave fewer than 16 samples of the shortest record each."""
+    if not (resample and data.records):
+        return
+    shortest = min(values.shape[0] for values, _ in data.records)
+    if resample * 16 > shortest:
+        raise InputError(
+            f"{resample} segments of records of {shortest} samples leave fewer than 16 samples each; "
+            f"the limit here is {shortest // 16}",
+            source="segments",
+        )
 
 
 def identify_records(

@@ -680,17 +680,12 @@ def fit_mount_model(
     from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
     from rigidid.core.selection import project_rigid
 
-    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
-    dirs = normalise_directions(directions)
-    lam = np.asarray(poles, dtype=complex).ravel()
-    psi = np.asarray(shapes, dtype=complex)
+    pos, dirs = np.asarray(positions, dtype=float).reshape(-1, 3), normalise_directions(directions)
+    lam, psi = np.asarray(poles, dtype=complex).ravel(), np.asarray(shapes, dtype=complex)
     if lam.size < 5 or psi.shape != (pos.shape[0], lam.size):
         raise InputError(f"need five or more modes with shapes (sensors, modes); got {psi.shape}", source="shapes")
-    mp = np.asarray(mount_positions, dtype=float).reshape(-1, 3)
+    mp, u, ties = _mount_geometry(mount_positions, mount_axes, groups)
     q = mp.shape[0]
-    u = np.broadcast_to(np.eye(3), (q, 3, 3)).copy() if mount_axes is None else np.asarray(mount_axes, dtype=float)
-    u = u / np.linalg.norm(u, axis=1, keepdims=True)
-    ties = group_matrix(groups, q)
     shared = ties.shape[1]
     frame = layout_frame(pos)
     length = frame.scale
@@ -722,13 +717,10 @@ def fit_mount_model(
         return rates, a @ rates - b
 
     if start is None:
-        g0 = np.zeros(3)
-        j0 = 0.3 * np.eye(3)
+        g0, j0 = np.zeros(3), 0.3 * np.eye(3)
     else:
-        g0 = frame.to_local(np.asarray(start[0], dtype=float))
-        j0 = np.asarray(start[1], dtype=float) / length**2
-    chol = np.linalg.cholesky(feasible_inertia(j0))
-    x0 = np.concatenate([g0, chol[np.tril_indices(3)]])
+        g0, j0 = frame.to_local(np.asarray(start[0], dtype=float)), np.asarray(start[1], dtype=float) / length**2
+    x0 = np.concatenate([g0, np.linalg.cholesky(feasible_inertia(j0))[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
     f_result = cost = None
@@ -755,6 +747,15 @@ def fit_mount_model(
         p_value=None if f_result is None else f_result[2],
         cost=cost,
     )
+
+def _mount_geometry(
+    mount_positions: ArrayLike, mount_axes: ArrayLike | None, groups: Any
+) -> tuple[Array, Array, Array]:
+    """Mount positions (q, 3), unit axes (q, 3, 3) as columns, and the group ties of their rates."""
+    mp = np.asarray(mount_positions, dtype=float).reshape(-1, 3)
+    q = mp.shape[0]
+    u = np.broadcast_to(np.eye(3), (q, 3, 3)).copy() if mount_axes is None else np.asarray(mount_axes, dtype=float)
+    return mp, u / np.linalg.norm(u, axis=1, keepdims=True), group_matrix(groups, q)
 
 
 def _refit_output_error(
