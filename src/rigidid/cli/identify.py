@@ -53,7 +53,8 @@ from rigidid.cli.options import (
 from rigidid.errors import InputError
 
 if TYPE_CHECKING:
-    pass
+    from rigidid.core.timedomain import ModalEstimate
+    from rigidid.results import IdentifyResult
 
 
 def identify(
@@ -95,9 +96,6 @@ def identify(
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with reported():
-        from rigidid.io.atomic import OutputSet
-        from rigidid.jsonout import result_to_dict
-
         if method in ("massline", "residues") or frf is not None:
             if records:
                 raise InputError("give --records or --frf, not both", source="--frf")
@@ -122,27 +120,42 @@ def identify(
         )  # fmt: skip
         result, estimate = run.result, run.estimate
         result = add_mounts(result, mounts, torque_axis)
-        with OutputSet():  # every output or none
-            if json_path is not None:
-                out = result_to_dict(result, force_unit)
-                if estimate is not None:
-                    from rigidid.jsonout import estimate_to_dict
+        _publish(result, estimate, json_path=json_path, uff=uff, csv=csv, force_unit=force_unit)
 
-                    out["modal_estimation"] = estimate_to_dict(estimate)
-                write_json(json_path, out)
-            if uff is not None:
-                from rigidid.io.uff import write_uff
+def _publish(
+    result: IdentifyResult,
+    estimate: ModalEstimate | None,
+    *,
+    json_path: str | None,
+    uff: Path | None,
+    csv: Path | None,
+    force_unit: str | None,
+) -> None:
+    """Every output of ``identify`` or none: the result JSON, the UFF, the CSV matrices, the tables."""
+    from rigidid.io.atomic import OutputSet
+    from rigidid.jsonout import result_to_dict
 
-                write_uff(
-                    uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units
-                )
-            if csv is not None:
-                write_csv(csv, result, force_unit)
-            if json_path != "-":
-                from rigidid.render import estimate_tables, result_tables
+    with OutputSet():  # every output or none
+        if json_path is not None:
+            out = result_to_dict(result, force_unit)
+            if estimate is not None:
+                from rigidid.jsonout import estimate_to_dict
 
-                tables = [estimate_tables(estimate)] if estimate is not None else []
-                stage_tables(*tables, result_tables(result, force_unit))
+                out["modal_estimation"] = estimate_to_dict(estimate)
+            write_json(json_path, out)
+        if uff is not None:
+            from rigidid.io.uff import write_uff
+
+            write_uff(
+                uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units
+            )
+        if csv is not None:
+            write_csv(csv, result, force_unit)
+        if json_path != "-":
+            from rigidid.render import estimate_tables, result_tables
+
+            tables = [estimate_tables(estimate)] if estimate is not None else []
+            stage_tables(*tables, result_tables(result, force_unit))
 
 
 def _identify_massline(

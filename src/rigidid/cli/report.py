@@ -37,7 +37,8 @@ from rigidid.cli.options import (
 )
 
 if TYPE_CHECKING:
-    pass
+    from rigidid.models import BodyFile
+    from rigidid.results import IdentifyResult, TestRun
 
 
 def report(
@@ -84,8 +85,6 @@ def report(
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures."""
     with reported():
-        from rigidid import api
-        from rigidid.io.atomic import OutputSet, write_text_atomic
         from rigidid.io.files import load_body
         from rigidid.units import check_same_units
 
@@ -100,31 +99,49 @@ def report(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, spectrum=True, refine=refine, mounts=mounts,
         )  # fmt: skip
-        result, estimate = run.result, run.estimate
-        result = add_mounts(result, mounts, torque_axis)
+        result = add_mounts(run.result, mounts, torque_axis)
         spec = None
         if body is not None:
             spec = load_body(body)
             check_same_units(spec.units, result.units, source=str(body))
-        diagram = None if estimate is None else estimate.diagram
-        from rigidid.progress import terminal_progress
+        named = [str(p) for p in (layout, *(inputs or []))]
+        _write_report(run, result, spec, output=output, png=png, title=title, inputs=named, force_unit=force_unit)
 
-        with terminal_progress() as progress:
-            text = api.report(
-                result, stabilisation=diagram, title=title, inputs=[str(p) for p in (layout, *(inputs or []))],
-                force_unit=force_unit, body=spec, records=run.records, progress=progress,
-                spectrum=run.spectrum,
-            )  # fmt: skip
-        paths: list[Any] = []
-        with OutputSet() as outs:  # every output or none
-            write_text_atomic(output, text)
-            if png is not None:
-                outs.folder(png, option="--png")
-                with terminal_progress() as progress:
-                    paths = api.report_pngs(
-                        result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
-                        records=run.records, progress=progress, spectrum=run.spectrum,
-                    )  # fmt: skip
-        sys.stderr.write(f"rigidid: wrote {output}\n")
+
+def _write_report(
+    run: TestRun,
+    result: IdentifyResult,
+    spec: BodyFile | None,
+    *,
+    output: Path,
+    png: Path | None,
+    title: str | None,
+    inputs: list[str],
+    force_unit: str | None,
+) -> None:
+    """The HTML report (and the PNG figures) of `result`, every file or none."""
+    from rigidid import api
+    from rigidid.io.atomic import OutputSet, write_text_atomic
+
+    diagram = None if run.estimate is None else run.estimate.diagram
+    from rigidid.progress import terminal_progress
+
+    with terminal_progress() as progress:
+        text = api.report(
+            result, stabilisation=diagram, title=title, inputs=inputs,
+            force_unit=force_unit, body=spec, records=run.records, progress=progress,
+            spectrum=run.spectrum,
+        )  # fmt: skip
+    paths: list[Any] = []
+    with OutputSet() as outs:  # every output or none
+        write_text_atomic(output, text)
         if png is not None:
-            sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
+            outs.folder(png, option="--png")
+            with terminal_progress() as progress:
+                paths = api.report_pngs(
+                    result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
+                    records=run.records, progress=progress, spectrum=run.spectrum,
+                )  # fmt: skip
+    sys.stderr.write(f"rigidid: wrote {output}\n")
+    if png is not None:
+        sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
