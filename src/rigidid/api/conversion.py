@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,9 +11,6 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.atomic import write_text_atomic
 from rigidid.results import PathLike
-
-if TYPE_CHECKING:
-    pass
 
 
 def convert(

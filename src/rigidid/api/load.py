@@ -21,7 +21,6 @@ from rigidid.results import Arrays, PathLike, TestData
 from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
-    pass
     from rigidid.io.files import ModeTable
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import TYPE_CHECKING, Annotated, NoReturn
+from typing import Annotated, NoReturn
 
 import typer
 
@@ -17,10 +17,6 @@ from rigidid.cli.modes import modes
 from rigidid.cli.plan import plan
 from rigidid.cli.report import report
 from rigidid.cli.simulate import simulate
-
-if TYPE_CHECKING:
-    pass
-
 
 app = typer.Typer(
     name="rigidid",

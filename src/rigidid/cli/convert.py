@@ -4,15 +4,12 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 
 from rigidid.cli.common import check_outputs, parse_units, reported
 from rigidid.cli.options import Geometry, Units
-
-if TYPE_CHECKING:
-    pass
 
 
 def convert(

@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 
 from rigidid.cli.common import check_options, check_outputs, parse_units, reported, stage_tables, write_json
 from rigidid.cli.options import Band, Decimate, Geometry, MaxOrder, ModalMethod, NModes, ReferencesPath, Units
 from rigidid.errors import InputError
-
-if TYPE_CHECKING:
-    pass
 
 
 def modes(

@@ -4,13 +4,9 @@ parameter names to the options that set them (:data:`FLAGS`)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
-
-if TYPE_CHECKING:
-    pass
-
 
 UFF_SUFFIXES = (".uff", ".unv")
 

@@ -23,7 +23,7 @@ from rigidid.cli.plan import parse_impact
 from rigidid.errors import InputError, named_source
 
 if TYPE_CHECKING:
-    pass
+    from rigidid.io.files import ModeTable
 
 
 def simulate(
@@ -84,18 +84,10 @@ def simulate(
         records = old_name("simulate", "--records", "--write-records", old_records, records, None)
         frf = old_name("simulate", "--frf", "--write-frf", old_frf, frf, None)
         from rigidid import api
-        from rigidid.io.atomic import OutputSet, write_text_atomic
-        from rigidid.io.files import modes_csv_text
         from rigidid.limits import check_number
 
-        for name, value in (
-            ("--add-frequency-noise", frequency_noise),
-            ("--add-damping-noise", damping_noise),
-            ("--add-shape-noise", shape_noise),
-            ("--add-record-noise", record_noise),
-            ("--add-frf-noise", frf_noise),
-        ):
-            check_number(value, name, nonnegative=True)
+        for kind, value in zip(("frequency", "damping", "shape", "record", "frf"), renamed, strict=True):
+            check_number(value, f"--add-{kind}-noise", nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
         check_outputs({"--output": output, "--write-frf": frf}, {"--write-records": records})
         impacts = [parse_impact(text) for text in impact] if impact else None
@@ -106,26 +98,46 @@ def simulate(
                 body, layout, frequency_noise=frequency_noise, damping_noise=damping_noise, shape_noise=shape_noise,
                 seed=seed,
             )  # fmt: skip
-        text = modes_csv_text(table)
-        with OutputSet() as outs:  # every output or none
-            written = []
-            if records is not None:
-                written = _simulate_records(
-                    body, layout, records, impacts=impacts, sample_rate=sample_rate, duration=duration,
-                    pretrigger=pretrigger, noise=record_noise, seed=seed,
-                )  # fmt: skip
-            if frf is not None:
-                _simulate_frf(body, layout, frf, references, frf_noise, seed, frf_format)
-            if output == "-":
-                outs.stdout(text)
-            else:
-                write_text_atomic(output, text)
+        _publish(
+            table, body, layout, output=output, records=records, frf=frf, references=references, frf_noise=frf_noise,
+            seed=seed, frf_format=frf_format,
+            record_options={"impacts": impacts, "sample_rate": sample_rate, "duration": duration,
+                            "pretrigger": pretrigger, "noise": record_noise, "seed": seed},
+        )  # fmt: skip
+
+def _publish(
+    table: ModeTable,
+    body: Path,
+    layout: Path,
+    *,
+    output: str,
+    records: Path | None,
+    frf: Path | None,
+    references: Path | None,
+    frf_noise: float,
+    seed: int | None,
+    frf_format: str | None,
+    record_options: dict[str, Any],
+) -> None:
+    """Every output of ``simulate`` or none: modes.csv, the records, the FRFs."""
+    from rigidid.io.atomic import OutputSet, write_text_atomic
+    from rigidid.io.files import modes_csv_text
+
+    text = modes_csv_text(table)
+    with OutputSet() as outs:  # every output or none
+        written = []
         if records is not None:
-            sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
-        if output != "-":
-            sys.stderr.write(
-                f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n"
-            )
+            written = _simulate_records(body, layout, records, **record_options)
+        if frf is not None:
+            _simulate_frf(body, layout, frf, references, frf_noise, seed, frf_format)
+        if output == "-":
+            outs.stdout(text)
+        else:
+            write_text_atomic(output, text)
+    if records is not None:
+        sys.stderr.write(f"rigidid: wrote {len(written)} records to {records}\n")
+    if output != "-":
+        sys.stderr.write(f"rigidid: wrote {len(table.labels)} modes x {len(table.sensor_ids)} sensors to {output}\n")
 
 
 def _old_names(*given: tuple[float | None, float, str]) -> list[float]:
