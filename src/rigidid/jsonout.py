@@ -90,30 +90,11 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
     """
     ident = result.identification
     diag = ident.diagnostics
-    modes = [
-        {
-            "mode": label,
-            "frequency_hz": float(ident.frequency_hz[k]),
-            "damping_ratio": float(ident.damping_ratio[k]),
-            "rigid_fit_residual": float(diag.rigid_fit_residual[k]),
-            "model_frequency_hz": float(diag.model_frequency_hz[k]),
-            "model_damping_ratio": float(diag.model_damping_ratio[k]),
-            "model_mac": float(diag.model_mac[k]),
-        }
-        for k, label in enumerate(result.modes_used)
-    ]
+    modes = _modes_used_rows(result)
     candidates = None
     if result.candidate_residuals is not None:
         candidates = [{"mode": label, "rigid_fit_residual": r} for label, r in result.candidate_residuals.items()]
-    from rigidid.core.energy import kinetic_energy_distribution, kinetic_energy_distribution_principal
-
-    energy = {
-        "dof": ["x", "y", "z", "rx", "ry", "rz"],
-        "principal_dof": ["x", "y", "z", "r1", "r2", "r3"],
-        "modes": list(result.modes_used),
-        "cg_axes": _rows(kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)),
-        "principal_axes": _rows(kinetic_energy_distribution_principal(ident.inertia_per_mass, ident.mode_shapes_cg)),
-    }
+    energy = _energy_distribution(result)
     out: dict[str, Any] = {
         "rigidid_version": __version__,
         "method": ident.method,
@@ -177,6 +158,37 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
     if result.record_bound is not None:
         out["uncertainty_records_crb"] = record_bound_to_dict(result.record_bound)
     return out
+
+def _modes_used_rows(result: IdentifyResult) -> list[dict[str, Any]]:
+    """``diagnostics.modes``: each mode used, measured and as the identified model gives it."""
+    ident = result.identification
+    diag = ident.diagnostics
+    return [
+        {
+            "mode": label,
+            "frequency_hz": float(ident.frequency_hz[k]),
+            "damping_ratio": float(ident.damping_ratio[k]),
+            "rigid_fit_residual": float(diag.rigid_fit_residual[k]),
+            "model_frequency_hz": float(diag.model_frequency_hz[k]),
+            "model_damping_ratio": float(diag.model_damping_ratio[k]),
+            "model_mac": float(diag.model_mac[k]),
+        }
+        for k, label in enumerate(result.modes_used)
+    ]
+
+
+def _energy_distribution(result: IdentifyResult) -> dict[str, Any]:
+    """``energy_distribution``: each mode's kinetic energy by CG axis and by principal axis."""
+    from rigidid.core.energy import kinetic_energy_distribution, kinetic_energy_distribution_principal
+
+    ident = result.identification
+    return {
+        "dof": ["x", "y", "z", "rx", "ry", "rz"],
+        "principal_dof": ["x", "y", "z", "r1", "r2", "r3"],
+        "modes": list(result.modes_used),
+        "cg_axes": _rows(kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)),
+        "principal_axes": _rows(kinetic_energy_distribution_principal(ident.inertia_per_mass, ident.mode_shapes_cg)),
+    }
 
 
 def scaled_modes_to_dict(scaled: ScaledBody, mass_given: float | None) -> dict[str, Any]:
