@@ -173,11 +173,7 @@ def rigid_frf_fit(
     scale = 1.0 / (u**2 * np.linalg.norm(xs.reshape(n, -1), axis=1))
     # columns: each unknown's contribution to every line's 6 x q equation, scaled per line
     cols_m = [-(u**2)[:, None, None] * (mass_matrix_from_parameters(e) @ xs) for e in np.eye(10)]
-    cols_k = []
-    for k in range(21):
-        e = np.zeros(21)
-        e[k] = 1.0
-        cols_k.append(_sym(e) @ xs)
+    cols_k = [_sym(e) @ xs for e in np.eye(21)]
     cols_c = [1j * u[:, None, None] * c for c in cols_k] if damping else []
     cols_g = []
     for jb in range(basis.shape[1]):
@@ -221,6 +217,40 @@ def rigid_frf_fit(
     cv = rest[21:42] if damping else np.zeros(21)
 
     x_flat = xs.reshape(n, -1)
+    refined = False
+    if refine:
+        theta, kv, cv, refined = _refine_output_error(u, x_flat, basis, tft, (theta, kv, cv), damping)
+    r_out = x_flat - _model(u, theta, kv, cv, tft).reshape(n, -1)
+    r2 = np.concatenate([r_out.real, r_out.imag])
+    if basis.shape[1]:
+        g_un = np.concatenate([basis, np.zeros_like(basis)])
+        r2 = r2 - g_un @ np.linalg.lstsq(g_un, r2, rcond=None)[0]
+    misfit = float(np.linalg.norm(r2) / np.linalg.norm(x_flat))
+    return RigidFrfFit(
+        parameters=theta,
+        mass_matrix=mass_matrix_from_parameters(theta),
+        stiffness=_sym(kv) * w0**2,
+        damping=_sym(cv) * w0,
+        residual=misfit,
+        refined=refined,
+    )
+
+
+def _refine_output_error(
+    u: Array,
+    x_flat: CArray,
+    basis: Array,
+    tft: Array,
+    start: tuple[Array, Array, Array],
+    damping: bool,
+) -> tuple[Array, Array, Array, bool]:
+    """The equation-error fit refined by output error (relative per line, the upper residual projected out).
+
+    Returns the parameters (``theta``, ``K`` and ``C`` per ``w0^2`` and ``w0``, packed) and whether the
+    refinement lowered the misfit (otherwise the start is returned).
+    """
+    n, q = x_flat.shape[0], tft.shape[1]
+    theta, kv, cv = start
     wline = 1.0 / np.linalg.norm(x_flat, axis=1)  # output error: relative per line
     gw = basis * wline[:, None]
     g2 = np.concatenate([gw, np.zeros_like(gw)])  # the residual coefficients are real
@@ -265,7 +295,7 @@ def rigid_frf_fit(
     res0 = fun(p0)
     misfit = rms(res0)
     refined = False
-    if refine and np.all(np.isfinite(res0)) and misfit > 1e-12:
+    if np.all(np.isfinite(res0)) and misfit > 1e-12:
         from scipy.optimize import least_squares
 
         xs0 = np.maximum(np.abs(p0), 1e-6 * np.abs(theta).max())
@@ -276,17 +306,4 @@ def rigid_frf_fit(
             if new < misfit:
                 theta, kv, cv = unpack(sol_ls.x)
                 misfit, refined = new, True
-    r_out = x_flat - _model(u, theta, kv, cv, tft).reshape(n, -1)
-    r2 = np.concatenate([r_out.real, r_out.imag])
-    if basis.shape[1]:
-        g_un = np.concatenate([basis, np.zeros_like(basis)])
-        r2 = r2 - g_un @ np.linalg.lstsq(g_un, r2, rcond=None)[0]
-    misfit = float(np.linalg.norm(r2) / np.linalg.norm(x_flat))
-    return RigidFrfFit(
-        parameters=theta,
-        mass_matrix=mass_matrix_from_parameters(theta),
-        stiffness=_sym(kv) * w0**2,
-        damping=_sym(cv) * w0,
-        residual=misfit,
-        refined=refined,
-    )
+    return theta, kv, cv, refined
