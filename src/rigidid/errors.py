@@ -100,6 +100,8 @@ def emit(notices: Iterable[Notice], stacklevel: int = 3) -> None:
     """Issue collected notices as warnings (the caller's caller is named as their origin by default)."""
     for notice in notices:
         warnings.warn(notice.message, notice.category, stacklevel=stacklevel)
+
+
 class SensorFitWarning(RigididWarning):
     """One sensor's readings fit rigid-body motion much worse than the others' (wrong position or direction?)."""
 

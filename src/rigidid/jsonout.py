@@ -159,6 +159,7 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         out["uncertainty_records_crb"] = record_bound_to_dict(result.record_bound)
     return out
 
+
 def _modes_used_rows(result: IdentifyResult) -> list[dict[str, Any]]:
     """``diagnostics.modes``: each mode used, measured and as the identified model gives it."""
     ident = result.identification

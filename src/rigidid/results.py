@@ -135,7 +135,6 @@ class TestInfo:
         return cls(block.id, block.specimen, block.date, block.operator, block.notes)
 
 
-
 @dataclass(frozen=True)
 class MountModelFit:
     """How well the mount model explains the modes, against the free 6x6 matrices.
@@ -184,7 +183,6 @@ class MountModelFit:
         return self.adequate if self.model.adequate is None else self.model.adequate
 
 
-
 @dataclass(frozen=True)
 class Mounts:
     """Per-mount rates of an identification, with the mounts' ids and positions.
@@ -211,7 +209,6 @@ class Mounts:
     groups: tuple[str | None, ...] | None = None
     stiffness_std: NDArray[np.float64] | None = None
     damping_std: NDArray[np.float64] | None = None
-
 
 
 @dataclass(frozen=True)
@@ -242,7 +239,6 @@ class PlanResult:
     mount_prediction: MountModelPrediction | None = None
 
 
-
 @dataclass(frozen=True)
 class TestData:
     """What a test file set provides: the layout, and modes and/or time records.
@@ -261,7 +257,6 @@ class TestData:
     modes: ModeTable | None = None
     records: list[tuple[NDArray[np.float64], float]] = field(default_factory=list)
     record_names: list[str] = field(default_factory=list)
-
 
 
 @dataclass(frozen=True)
@@ -290,7 +285,6 @@ class Arrays:
     mass: float | None
 
 
-
 @dataclass(frozen=True)
 class FrfData:
     """FRFs of a test with their sensors and references.
@@ -308,7 +302,6 @@ class FrfData:
     frf: NDArray[np.complex128]
     sensor_ids: tuple[str, ...]
     reference_ids: tuple[str, ...]
-
 
 
 @dataclass(frozen=True)
@@ -337,7 +330,6 @@ class MassLineResult:
     reason: str
     route: str = "massline"
     scaled: ScaledBody | None = None
-
 
 
 PathLike = str | os.PathLike[str]

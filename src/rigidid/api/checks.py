@@ -171,9 +171,7 @@ def verdict(
     )
     if misfit <= MISFIT_WARN or (assumed and misfit <= UNEXPLAINED_MISFIT * dof):
         return []
-    parts = misfit_parts(
-        positions, directions, poles, shapes, levels, ident.center_of_gravity, ident.inertia_per_mass
-    )
+    parts = misfit_parts(positions, directions, poles, shapes, levels, ident.center_of_gravity, ident.inertia_per_mass)
     cause = ""
     if parts is not None:
         stiff, damp = parts
@@ -239,9 +237,7 @@ def damping_meaning(ident: Identification, errors: StandardErrors | None) -> lis
     return [(PhysicalPlausibilityWarning, text)]
 
 
-def plausibility(
-    ident: Identification, positions: Array, units: Mapping[str, str]
-) -> list[tuple[type[Warning], str]]:
+def plausibility(ident: Identification, positions: Array, units: Mapping[str, str]) -> list[tuple[type[Warning], str]]:
     """Warnings that the answer cannot be the body the sensors sit on (:func:`rigidid.core.checks.implausible_body`)."""
     from rigidid.core.checks import implausible_body
     from rigidid.errors import PhysicalPlausibilityWarning, UnitsWarning

@@ -22,8 +22,6 @@ if TYPE_CHECKING:
     from rigidid.progress import ProgressCallback
 
 
-
-
 def simulate_frf(
     body: BodyFile | PathLike,
     layout: LayoutFile | PathLike,

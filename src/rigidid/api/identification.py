@@ -69,7 +69,6 @@ def _choose_modes(
     return chosen, "automatic", {label: float(r) for label, r in zip(modes.labels, residual, strict=True)}
 
 
-
 def identify(
     layout: LayoutFile | PathLike,
     modes: ModeTable | PathLike,
@@ -198,7 +197,6 @@ def identify(
     )
 
 
-
 def _scaled_body(
     used: ModeTable, poles: NDArray[np.complex128], positions: NDArray[np.float64], directions: NDArray[np.float64]
 ) -> ScaledBody | None:
@@ -215,7 +213,6 @@ def _scaled_body(
         return None
 
 
-
 def suspect_mode(ident: Identification) -> str:
     """A sentence naming a used mode that fits rigid motion far worse than the others (an elastic mode?), or ''."""
     from rigidid.core.selection import elastic_suspect
@@ -230,7 +227,6 @@ def suspect_mode(ident: Identification) -> str:
         "elastic mode taken for a rigid one, which makes this answer wrong too; estimate one more mode "
         "(--n-modes 7) and choose the six rigid-body modes (--modes), or end --band below it"
     )
-
 
 
 def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -> list[str]:
@@ -272,7 +268,6 @@ def _check_data(t: NDArray[np.float64], used: ModeTable, ids: tuple[str, ...]) -
     return notes
 
 
-
 def _check_result(result: Identification, labels: Sequence[int], length: str, notes: list[str]) -> Identification:
     """Refuse an inertia that is not positive definite; add the data checks' notes to the diagnostics."""
     from rigidid.core.checks import inertia_not_positive
@@ -297,7 +292,6 @@ def _check_result(result: Identification, labels: Sequence[int], length: str, no
     if not notes:
         return result
     return replace(result, diagnostics=replace(result.diagnostics, warnings=(*result.diagnostics.warnings, *notes)))
-
 
 
 def with_warnings(result: IdentifyResult, messages: Sequence[str]) -> IdentifyResult:

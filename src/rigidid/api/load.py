@@ -29,11 +29,9 @@ def load_layout(path: PathLike) -> LayoutFile:
     return files.load_layout(path)
 
 
-
 def load_modes(path: PathLike, layout: LayoutFile) -> ModeTable:
     """Read and validate ``modes.csv`` against a layout (see :func:`rigidid.io.files.load_modes`)."""
     return files.load_modes(path, [s.id for s in layout.sensors])
-
 
 
 def load_arrays(layout: PathLike, modes: PathLike) -> Arrays:
@@ -45,7 +43,6 @@ def load_arrays(layout: PathLike, modes: PathLike) -> Arrays:
     return Arrays(ids, positions, directions, table.labels, poles, table.shapes, lay.mass)
 
 
-
 def body_from_file(body: BodyFile) -> Body:
     """The core :class:`~rigidid.core.simulate.Body` of a validated ``body.json``."""
     return Body(
@@ -54,7 +51,6 @@ def body_from_file(body: BodyFile) -> Body:
         inertia_tensor=np.array(body.inertia_tensor, dtype=float),
         mounts=tuple(Mount.from_values(m.position, m.stiffness, m.damping) for m in body.mounts),
     )
-
 
 
 def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -> BodyFile:
@@ -99,7 +95,6 @@ def body_with_mounts(body: BodyFile | PathLike, mounts: PathLike | MountsFile) -
     return spec.model_copy(update={"mounts": replaced})
 
 
-
 def same_units(other: BodyFile | LayoutFile, layout: LayoutFile, source: str | None) -> None:
     """Refuse a body or layout file whose units differ from the layout's (:func:`rigidid.units.check_same_units`)."""
     check_same_units(other.units, layout.units, source=source)
@@ -140,7 +135,6 @@ def load_records(paths: Sequence[PathLike], layout: LayoutFile) -> list[tuple[ND
 
     ids = [s.id for s in layout.sensors]
     return [read_record(p, ids) for p in paths]
-
 
 
 def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: PathLike | None = None) -> TestData:
@@ -196,9 +190,6 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
             data = data[:, order]
         records.append((data, float(time[1] - time[0])))
     return TestData(layout, modes, records, list(contents.record_labels))
-
-
-
 
 
 UFF_SUFFIXES = (".uff", ".unv")

@@ -21,6 +21,7 @@ from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
     from rigidid.core.noise import NoiseLevels
+
     pass
 
 
@@ -92,7 +93,6 @@ def with_mounts(
     return out
 
 
-
 def read_mount_spec(
     mounts: PathLike | MountsFile, units: Mapping[str, str]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], MountsFile]:
@@ -103,7 +103,6 @@ def read_mount_spec(
     positions = np.array([m.position for m in spec.mounts], dtype=float)
     axes = np.stack([np.eye(3) if m.axes is None else np.asarray(m.axes, dtype=float).T for m in spec.mounts])
     return positions, axes, spec
-
 
 
 def mount_model(

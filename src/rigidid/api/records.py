@@ -846,8 +846,10 @@ def identify_test(
         _refuse_record_options(modal, refine)
     files_in = records and bool(inputs) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
     streamed = files_in and not resample
-    data = TestData(load_layout(layout)) if streamed else load_test(
-        layout, inputs or [], records=records, units=units, geometry=geometry
+    data = (
+        TestData(load_layout(layout))
+        if streamed
+        else load_test(layout, inputs or [], records=records, units=units, geometry=geometry)
     )
     _check_segments(data, resample)  # before any estimation: blame the option, not the records
     paths = list(inputs or []) if streamed else None
@@ -900,6 +902,7 @@ def identify_test(
         )  # fmt: skip
     return TestRun(result, estimate, None if streamed else data.records, summed)
 
+
 def _check_segments(data: TestData, resample: int) -> None:
     """Refuse `resample` segments that would leave fewer than 16 samples of the shortest record each."""
     if not (resample and data.records):
@@ -947,8 +950,10 @@ def estimate_records_modes(
 
     check_uff_options(layout, units, geometry)
     streamed = bool(records) and Path(layout).suffix.lower() not in UFF_SUFFIXES and geometry is None
-    data = TestData(load_layout(layout)) if streamed else load_test(
-        layout, records, records=True, units=units, geometry=geometry
+    data = (
+        TestData(load_layout(layout))
+        if streamed
+        else load_test(layout, records, records=True, units=units, geometry=geometry)
     )
     with named_source(input_source(layout, records)):
         return estimate_test_modes(

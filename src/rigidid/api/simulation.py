@@ -77,7 +77,6 @@ def simulate(
     return ModeTable.numbered(f, z, ids, modes.shapes)
 
 
-
 def simulate_records(
     body: BodyFile | PathLike,
     layout: LayoutFile | PathLike,

@@ -122,6 +122,7 @@ def identify(
         result = add_mounts(result, mounts, torque_axis)
         _publish(result, estimate, json_path=json_path, uff=uff, csv=csv, force_unit=force_unit)
 
+
 def _publish(
     result: IdentifyResult,
     estimate: ModalEstimate | None,
@@ -146,9 +147,7 @@ def _publish(
         if uff is not None:
             from rigidid.io.uff import write_uff
 
-            write_uff(
-                uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units
-            )
+            write_uff(uff, result.positions, result.directions, result.sensor_ids, result.identification, result.units)
         if csv is not None:
             write_csv(csv, result, force_unit)
         if json_path != "-":

@@ -105,6 +105,7 @@ def simulate(
                             "pretrigger": pretrigger, "noise": record_noise, "seed": seed},
         )  # fmt: skip
 
+
 def _publish(
     table: ModeTable,
     body: Path,

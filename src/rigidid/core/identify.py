@@ -608,6 +608,7 @@ def _identify(
         ),
     )
 
+
 def _checked_observability(q: Array, g: Array, notices: list[Notice]) -> float:
     """The inertia observability of ``M^-1 K`` about `g`: refused when none, a notice when weak."""
     observability = inertia_observability(q, g)
@@ -626,7 +627,6 @@ def _checked_observability(q: Array, g: Array, notices: list[Notice]) -> float:
             )
         )
     return observability
-
 
 
 def _weighted(

@@ -281,10 +281,8 @@ def mass_line(
     """
     f = np.asarray(frequencies, dtype=float).reshape(-1)
     h = np.asarray(frf, dtype=complex)
-    pos = np.asarray(positions, dtype=float)
-    dirs = np.asarray(directions, dtype=float)
-    rpos = np.asarray(reference_positions, dtype=float)
-    rdirs = np.asarray(reference_directions, dtype=float)
+    pos, dirs = np.asarray(positions, dtype=float), np.asarray(directions, dtype=float)
+    rpos, rdirs = np.asarray(reference_positions, dtype=float), np.asarray(reference_directions, dtype=float)
     p, q = pos.shape[0], rpos.shape[0]
     if h.shape != (p, q, f.size):
         raise InputError(f"frf must have shape (sensors, references, frequencies) = {(p, q, f.size)}, got {h.shape}")
@@ -295,15 +293,8 @@ def mass_line(
         if elastic_frequency is None:
             elastic_frequency = found
     lo, hi = float(band[0]), float(band[1])
-    sel = (f >= lo) & (f <= hi)
-    if hi < MIN_BAND_RATIO * lo:
-        raise IdentificationError(
-            f"the mass-line band {lo:.4g}-{hi:.4g} Hz spans less than a factor {MIN_BAND_RATIO:g}: the rigid-body "
-            "modes are too close to the elastic ones to separate the mass line from the mounts (use the modal route)"
-        )
+    sel = _band_lines(f, lo, hi)
     n_f = int(np.count_nonzero(sel))
-    if n_f < MIN_LINES:
-        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {MIN_LINES}")
     # scaled frame: origin at the sensor centroid, lengths in units of the span
     origin, span, t = scaled_frame(pos, dirs)
     # in scaled coordinates rotations are per unit span: force columns T_f^T unchanged in form
@@ -314,25 +305,7 @@ def mass_line(
     extra = tuple(
         name for name, on in (("stiffness", stiffness), ("damping", damping), ("upper_residual", upper_residual)) if on
     )
-    w0 = float(np.sqrt(w[0] * w[-1]))
-    u = w / w0
-    cols_re = [np.ones_like(u)]
-    cols_im = [np.zeros_like(u)]
-    for name in extra:
-        if name == "stiffness":
-            cols_re.append(1.0 / u**2)
-            cols_im.append(np.zeros_like(u))
-        elif name == "damping":
-            cols_re.append(np.zeros_like(u))
-            cols_im.append(1.0 / u)
-        elif elastic_frequency is not None:
-            x = (w / (2.0 * np.pi * elastic_frequency)) ** 2
-            cols_re.extend([x / (1.0 - x), u**2])
-            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
-        else:
-            cols_re.extend([u**2, u**4])
-            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
-    design = np.concatenate([np.stack(cols_re, axis=1), np.stack(cols_im, axis=1)])
+    design = _correction_design(w, extra, elastic_frequency)
     target = np.concatenate([y.real, y.imag], axis=1).T  # (2 n_f, 6 q)
     coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
     if rank < design.shape[1]:
@@ -343,18 +316,7 @@ def mass_line(
     support_model, why = _support_model(supports, stiffness)
     fit: RigidFrfFit | None = None
     if support_model in ("exact", "auto"):
-        from rigidid.core.rigidfrf import rigid_frf_fit
-
-        upper = design[:n_f, 1 + int(stiffness) + int(damping) :]  # the upper-residual columns (real)
-        every = -(-n_f // EXACT_LINES)  # every k-th line: the exact fit's cost grows with lines x references^2
-        try:
-            fit = rigid_frf_fit(
-                w[::every], y.reshape(6, q, n_f)[:, :, ::every], tf.T, damping=damping, residual_basis=upper[::every]
-            )
-        except IdentificationError:
-            if support_model == "exact":
-                raise
-            fit = None
+        fit = _exact_fit(w, y.reshape(6, q, n_f), tf, design, stiffness, damping, required=support_model == "exact")
         if support_model == "auto":
             noise = _noise_residual(fitted - target, target, design.shape[1])
             support_model, why = _auto_supports(fit, residual, noise)
@@ -383,6 +345,68 @@ def mass_line(
         misfit_noise_units=units,
         misfit_where=where,
     )
+
+
+def _band_lines(f: Array, lo: float, hi: float) -> NDArray[np.bool_]:
+    """The lines of the mass-line band `lo`-`hi` Hz, refused when it is too narrow or holds too few lines."""
+    if hi < MIN_BAND_RATIO * lo:
+        raise IdentificationError(
+            f"the mass-line band {lo:.4g}-{hi:.4g} Hz spans less than a factor {MIN_BAND_RATIO:g}: the rigid-body "
+            "modes are too close to the elastic ones to separate the mass line from the mounts (use the modal route)"
+        )
+    sel: NDArray[np.bool_] = (f >= lo) & (f <= hi)
+    n_f = int(np.count_nonzero(sel))
+    if n_f < MIN_LINES:
+        raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {MIN_LINES}")
+    return sel
+
+
+def _exact_fit(
+    w: Array, y: NDArray[np.complex128], tf: Array, design: Array, stiffness: bool, damping: bool, *, required: bool
+) -> RigidFrfFit | None:
+    """The exact support fit (:func:`rigidid.core.rigidfrf.rigid_frf_fit`) on every k-th line of the band.
+
+    `y` (6, q, lines) are the rigid coordinates per unit force; the upper-residual columns of the mass
+    line's `design` go with it. None when the fit fails and was not `required`.
+    """
+    from rigidid.core.rigidfrf import rigid_frf_fit
+
+    n_f = w.size
+    upper = design[:n_f, 1 + int(stiffness) + int(damping) :]  # the upper-residual columns (real)
+    every = -(-n_f // EXACT_LINES)  # every k-th line: the exact fit's cost grows with lines x references^2
+    try:
+        return rigid_frf_fit(w[::every], y[:, :, ::every], tf.T, damping=damping, residual_basis=upper[::every])
+    except IdentificationError:
+        if required:
+            raise
+        return None
+
+
+def _correction_design(w: Array, extra: tuple[str, ...], elastic_frequency: float | None) -> Array:
+    """Design matrix (real rows, then imaginary) of the mass line: a constant plus the `extra` corrections.
+
+    Stiffness ``1/u^2``, damping ``i/u``, and the upper residual (``x/(1-x)`` and ``u^2`` below an elastic
+    mode at `elastic_frequency`, else ``u^2`` and ``u^4``), with ``u`` the frequency over the band's centre.
+    """
+    u = w / float(np.sqrt(w[0] * w[-1]))
+    cols_re = [np.ones_like(u)]
+    cols_im = [np.zeros_like(u)]
+    for name in extra:
+        if name == "stiffness":
+            cols_re.append(1.0 / u**2)
+            cols_im.append(np.zeros_like(u))
+        elif name == "damping":
+            cols_re.append(np.zeros_like(u))
+            cols_im.append(1.0 / u)
+        elif elastic_frequency is not None:
+            x = (w / (2.0 * np.pi * elastic_frequency)) ** 2
+            cols_re.extend([x / (1.0 - x), u**2])
+            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
+        else:
+            cols_re.extend([u**2, u**4])
+            cols_im.extend([np.zeros_like(u), np.zeros_like(u)])
+    design: Array = np.concatenate([np.stack(cols_re, axis=1), np.stack(cols_im, axis=1)])
+    return design
 
 
 def _first_order_misfit(misfit: Array, n_params: int, q: int) -> tuple[float, str]:

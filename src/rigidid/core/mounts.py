@@ -748,6 +748,7 @@ def fit_mount_model(
         cost=cost,
     )
 
+
 def _mount_geometry(
     mount_positions: ArrayLike, mount_axes: ArrayLike | None, groups: Any
 ) -> tuple[Array, Array, Array]:

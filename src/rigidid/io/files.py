@@ -415,6 +415,7 @@ class ModeValue(NamedTuple):
     sensor: str
     value: complex
 
+
 def _modes_header(header: list[str] | None, src: str) -> list[str]:
     """The modes table's columns from its header row, checked: required, known, each once."""
     if header is None:
@@ -458,7 +459,6 @@ def _check_number_cells(record: dict[str, Any], src: str, where: str) -> None:
             raise InputError(f"{cell[:40]!r} is not a plain decimal number", source=src, location=f"{where}: {name}")
         if math.isfinite(float(cell)) and abs(float(cell)) > MAX_MAGNITUDE:
             raise InputError(f"must be at most {MAX_MAGNITUDE:g} in magnitude", source=src, location=f"{where}: {name}")
-
 
 
 def mode_table_from_rows(rows: Sequence[ModeValue], sensor_ids: Sequence[str], source: str | None) -> ModeTable:

@@ -124,6 +124,7 @@ CArray = NDArray[np.complex128]
 ModeRow = tuple[int, float, float, str, float, float]
 """One ``modes.csv`` row: ``(mode, frequency_hz, damping_ratio, sensor_id, real, imag)``."""
 
+
 class UffRecord(NamedTuple):
     """The time records of one impact.
 
@@ -1079,9 +1080,7 @@ def _record_datasets(
     d = d.reshape(-1, 1) if d.ndim == 1 else d
     sids = [str(s) for s in sensor_ids]
     if d.shape != (t.size, len(sids)) or t.size < 2:
-        raise InputError(
-            f"data shape {d.shape} does not match {t.size} samples x {len(sids)} sensors", source=where
-        )
+        raise InputError(f"data shape {d.shape} does not match {t.size} samples x {len(sids)} sensors", source=where)
     step = np.diff(t)
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(d))):
         raise InputError("time and data must be finite", source=where)

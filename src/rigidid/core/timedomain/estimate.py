@@ -149,8 +149,6 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array]
     return arrays, peaks
 
 
-
-
 def _scales_and_covariance(decays: list[Array]) -> tuple[Array, Array]:
     """Per-channel RMS over all decays and their summed product ``sum_k d_k^T d_k`` (one matrix product each)."""
     m = decays[0].shape[1]

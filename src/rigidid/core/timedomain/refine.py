@@ -304,9 +304,7 @@ def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
     return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from)
 
 
-def pretrigger_sigma(
-    counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int
-) -> tuple[Array, str]:
+def pretrigger_sigma(counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int) -> tuple[Array, str]:
     """Each channel's noise level at the fit's rate from the pre-trigger statistics.
 
     Parameters

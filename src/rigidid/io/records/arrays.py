@@ -587,6 +587,7 @@ def _h5_record(path: Path, rows: int, mat73: bool) -> tuple[_Plan, Iterator[Any]
         extra = {k: v for k, v in fh.attrs.items() if k in ("dt", "sample_rate")}
         if "data" in datasets:
             extra.update({k: v for k, v in datasets["data"].attrs.items() if k in ("dt", "sample_rate")})
+
     def small(key: str) -> Any:
         return _mat73_value(fh, datasets[key]) if mat73 else datasets[key][()]
 

@@ -233,4 +233,3 @@ class TimeCheck:
                 "time does not increase from the first to the last row", source=self.src, location=_column("time")
             )
         return dt
-

@@ -51,7 +51,6 @@ def _read_binary_record(path: Path, wanted: list[str], src: str) -> tuple[Array,
     return data, (float(raw.dt) if raw.time is None and raw.dt is not None else dt)
 
 
-
 def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tuple[Array, float]:
     """Read one impact record, its columns ordered like the layout's sensors.
 
@@ -107,7 +106,6 @@ def read_record(path: str | os.PathLike[str], sensor_ids: Sequence[str]) -> tupl
         last = raw.line_of(n - 1) if n else 1
         raise InputError(f"{n} data rows; a record needs at least {MIN_ROWS}", source=src, location=_where(last))
     return check_record(raw.data, raw.time, raw.line_of, raw.time_tokens, src, wanted)
-
 
 
 def write_record(

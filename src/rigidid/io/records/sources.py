@@ -92,7 +92,6 @@ def is_binary_record(path: Path, src: str) -> bool:
     return suffix in BINARY_SUFFIXES
 
 
-
 def open_source(path: Path, wanted: list[str], progress: ProgressCallback | None) -> BlockSource:
     """A record file's row blocks (CSV or binary, by its suffix), its sensor columns in the order of `wanted`."""
     src = str(path)
@@ -200,4 +199,3 @@ def _npy_source(
             raw.close()  # the file, also when a bad value stops the reading
 
     return BlockSource(blocks(), n, _sample_lines, list)
-

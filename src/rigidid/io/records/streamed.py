@@ -94,7 +94,6 @@ class StreamedRecord:
     clipped: NDArray[np.bool_] | None = None
 
 
-
 def read_record_streamed(
     path: str | os.PathLike[str],
     sensor_ids: Sequence[str],
