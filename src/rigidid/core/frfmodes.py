@@ -1309,36 +1309,10 @@ def fit_frf_modes(
         freq, h, lam, band=res_band, lower=lower, upper=upper, weighting=weighting
     )
     n = lam.size
-    shapes = np.zeros((p, n), dtype=complex)
-    part = np.zeros((q, n), dtype=complex)
+    shapes, part = _rank_one_shapes(residues)
     scaled = np.zeros(n, dtype=bool)
-    for k in range(n):
-        left, sv, right = np.linalg.svd(residues[k])
-        a = left[:, 0] * sv[0]
-        b = right[0]
-        big = a[np.argmax(np.abs(a))]
-        shapes[:, k], part[:, k] = a / big, b * big
-    if n >= 6:
-        try:
-            origin, span, t = scaled_frame(pos, dirs)
-        except IdentificationError:
-            pass
-        else:
-            tf = sensor_matrix((rpos - origin) / span, rdirs)
-            u = _rigid_modes(residues[:6], t, tf)[0]
-            rigid_noise = None
-            if structured:
-                others = h
-                if n > 6:  # the other modes of the band as their residues give them
-                    w_all = 2.0 * np.pi * freq
-                    g_all = _design(w_all, lam[6:], False, False)[0]  # (f, 2 (n - 6))
-                    coef = np.stack([residues[6:].real, residues[6:].imag], axis=1).reshape(2 * (n - 6), p, q)
-                    others = h - np.einsum("fc,cpq->pqf", g_all, coef)
-                u, rigid_noise = refine_rigid_modes(freq, others, lam[:6], u, t, tf, band=res_band)
-            # the projection discards the shapes' non-rigid part, the measure of their noise: keep it
-            shapes[:, :6] = with_nonrigid_residual(t @ u, shapes[:, :6], pos, dirs, rigid_noise)
-            part[:, :6] = tf @ u
-            scaled[:6] = True
+    if n >= 6 and _scale_rigid(freq, h, lam, residues, (pos, dirs, rpos, rdirs), shapes, part, structured, res_band):
+        scaled[:6] = True
     return FrfModes(
         poles=lam,
         residues=residues,
@@ -1353,3 +1327,58 @@ def fit_frf_modes(
         upper=up,
         residual=misfit,
     )
+
+
+def _rank_one_shapes(residues: CArray) -> tuple[CArray, CArray]:
+    """Each mode's residue matrix (p, q) as its rank-one shape (largest entry 1) times participation."""
+    n, p, q = residues.shape
+    shapes = np.zeros((p, n), dtype=complex)
+    part = np.zeros((q, n), dtype=complex)
+    for k in range(n):
+        left, sv, right = np.linalg.svd(residues[k])
+        a = left[:, 0] * sv[0]
+        b = right[0]
+        big = a[np.argmax(np.abs(a))]
+        shapes[:, k], part[:, k] = a / big, b * big
+    return shapes, part
+
+
+def _scale_rigid(
+    freq: Array,
+    h: CArray,
+    lam: CArray,
+    residues: CArray,
+    geometry: tuple[Array, Array, Array, Array],
+    shapes: CArray,
+    part: CArray,
+    structured: bool,
+    res_band: tuple[float, float],
+) -> bool:
+    """Scale the first six modes by the force as rigid-body modes (unity modal A), in place in `shapes`, `part`.
+
+    `geometry` is (sensor positions, directions, reference positions, directions). False (nothing scaled)
+    when the layout determines no rigid body.
+    """
+    pos, dirs, rpos, rdirs = geometry
+    n, p, q = residues.shape
+    try:
+        origin, span, t = scaled_frame(pos, dirs)
+    except IdentificationError:
+        pass
+    else:
+        tf = sensor_matrix((rpos - origin) / span, rdirs)
+        u = _rigid_modes(residues[:6], t, tf)[0]
+        rigid_noise = None
+        if structured:
+            others = h
+            if n > 6:  # the other modes of the band as their residues give them
+                w_all = 2.0 * np.pi * freq
+                g_all = _design(w_all, lam[6:], False, False)[0]  # (f, 2 (n - 6))
+                coef = np.stack([residues[6:].real, residues[6:].imag], axis=1).reshape(2 * (n - 6), p, q)
+                others = h - np.einsum("fc,cpq->pqf", g_all, coef)
+            u, rigid_noise = refine_rigid_modes(freq, others, lam[:6], u, t, tf, band=res_band)
+        # the projection discards the shapes' non-rigid part, the measure of their noise: keep it
+        shapes[:, :6] = with_nonrigid_residual(t @ u, shapes[:, :6], pos, dirs, rigid_noise)
+        part[:, :6] = tf @ u
+        return True
+    return False
