@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.timedomain.stamps import token_resolution
 from rigidid.errors import InputError
 from rigidid.io.records.columns import column as _column
 from rigidid.io.records.columns import row as _where
@@ -26,7 +27,6 @@ __all__ = [
     "check_decay",
     "check_record",
     "check_time",
-    "digit_resolution",
     "layout_ids",
 ]
 
@@ -48,18 +48,6 @@ MIN_ROWS = 16
 """Fewest data rows a record may have."""
 
 
-def digit_resolution(token: str) -> float:
-    """Unit of the last digit of a number as written (``"0.125"`` -> 0.001, ``"1.5e-3"`` -> 1e-4)."""
-    text = token.strip().lower()
-    exponent = 0
-    if "e" in text:
-        text, _, exp = text.partition("e")
-        try:
-            exponent = int(exp)
-        except ValueError:
-            return 0.0
-    decimals = len(text.partition(".")[2]) if "." in text else 0
-    return float(10.0 ** (exponent - decimals))
 
 
 def check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callable[[], list[str]], src: str) -> float:
@@ -74,7 +62,7 @@ def check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callable
     bad = np.flatnonzero(deviation > tolerance)
     if bad.size:
         # allow the rounding of the digits written (two roundings of half a unit each)
-        resolution = min((digit_resolution(token) for token in time_tokens()), default=0.0)
+        resolution = min((token_resolution(token) for token in time_tokens()), default=0.0)
         if resolution > 0.5 * typical:
             raise InputError(
                 f"time is written with too few digits (to {resolution:g} s) for the sample interval {typical:.6g} s",
@@ -204,7 +192,7 @@ class TimeCheck:
             tolerance = TIME_TOLERANCE * self.typical
             bad = np.flatnonzero(deviation > (tolerance if self.allowed is None else self.allowed))
             if bad.size and self.allowed is None:
-                resolution = min((digit_resolution(token) for token in self.time_tokens()), default=0.0)
+                resolution = min((token_resolution(token) for token in self.time_tokens()), default=0.0)
                 if resolution > 0.5 * self.typical:
                     raise InputError(
                         f"time is written with too few digits (to {resolution:g} s) for the sample interval "
