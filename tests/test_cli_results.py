@@ -163,3 +163,21 @@ def test_modes_method_is_a_deprecated_alias_of_modal_method(tmp_path: Path) -> N
     assert out.returncode == 2
     assert "--method is deprecated; use --modal-method" in out.stderr
     assert "--method: unknown method 'bogus'" in out.stderr  # the error names the option the user typed
+
+
+def test_numerical_zeros_print_as_zero_in_matrix_tables() -> None:
+    """An entry at the rounding of its diagonals' scale is a zero, a small true coupling is a figure (issue 25)."""
+    from rich.console import Console
+
+    from rigidid.render import ROUNDING_ZERO, _matrix_table
+
+    # mixed units as K at the CG: translations ~1e3, rotations ~1e7, so coupling entries scale as ~1e5
+    a = np.diag([540.0, 470.0, 1160.0, 4.2e7, 6.0e7, 4.0e7])
+    a[0, 2] = a[2, 0] = 0.3 * ROUNDING_ZERO * np.sqrt(540.0 * 1160.0)  # rounding: prints 0
+    a[0, 1] = a[1, 0] = 0.05  # a true coupling 1e-4 of the diagonals: kept
+    a[0, 3] = a[3, 0] = 1e-3  # 6.5e-9 of sqrt(540 * 4.2e7): kept, it is above the rounding
+    console = Console(width=200, record=True)
+    console.print(_matrix_table("K", a, ["x", "y", "z", "rx", "ry", "rz"]))
+    rows = [line.split() for line in console.export_text().splitlines()]
+    cells = next(row for row in rows if row[:1] == ["x"] and row[1:2] != ["y"])  # the row, not the header
+    assert cells[1:5] == ["540.00", "0.050000", "0", "1.0000e-3"], cells

@@ -24,6 +24,11 @@ __all__ = ["estimate_tables", "massline_tables", "plan_tables", "result_csv_file
 DOF = ("x", "y", "z", "rx", "ry", "rz")
 
 
+ROUNDING_ZERO = 1e-9
+"""A square matrix's entry ``a_ij`` below this fraction of ``sqrt(|a_ii a_jj|)`` prints as 0: exact data
+leave entries at about 1e-10 of that scale where the truth is zero."""
+
+
 def _fmt(v: float) -> str:
     """Five significant digits in at most 10 characters: plain from 0.01 to 99999, else engineering notation.
 
@@ -63,8 +68,14 @@ def _matrix_table(title: str, a: NDArray[np.float64], labels: Sequence[str], cap
     table.add_column("")
     for name in labels:
         table.add_column(name, justify="right")
-    for name, row in zip(labels, a, strict=True):
-        table.add_row(name, *(_fmt(float(v)) for v in row))
+    # entries below the rounding of their diagonal's scale are numerical zeros, not figures (60.174e-9 beside
+    # 1e5); sqrt(|a_ii a_jj|) has the entry's own unit in the mixed-unit blocks of K and C
+    floor = np.zeros_like(a)
+    if a.ndim == 2 and a.shape[0] == a.shape[1] and np.all(np.isfinite(a)):
+        scale = np.sqrt(np.abs(np.diag(a)))
+        floor = ROUNDING_ZERO * np.outer(scale, scale)
+    for name, row, low in zip(labels, a, floor, strict=True):
+        table.add_row(name, *(_fmt(0.0 if abs(float(v)) < f else float(v)) for v, f in zip(row, low, strict=True)))
     return table
 
 
