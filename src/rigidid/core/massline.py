@@ -439,7 +439,7 @@ def _exact_verdict(fit: RigidFrfFit, origin: Array, span: float) -> tuple[float,
         lambda theta: _body_from_parameters(theta, origin, span),
         fit.parameters,
         fit.covariance,
-        "linearised: Gauss-Newton covariance of the output-error rigid-body fit (M, K and C) from its weighted misfit",
+        "linearised: sandwich covariance of the output-error rigid-body fit, clustered per line and reference",
     )
     return units, where, intervals
 

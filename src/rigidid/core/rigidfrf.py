@@ -58,7 +58,7 @@ class RigidFrfFit:
     refined : bool
         Whether the output-error fit moved from the equation-error start.
     covariance : ndarray, shape (10, 10), or None
-        Covariance of `parameters` (Gauss-Newton, from the output-error fit's weighted misfit);
+        Covariance of `parameters` (sandwich of the output-error fit, clustered per line and reference);
         None without the output-error fit.
     misfit_rows : ndarray, shape (12 q, n), or None
         The output-error fit's weighted misfit (real then imaginary parts, per rigid coordinate
@@ -176,8 +176,8 @@ def rigid_frf_fit(
     the data's norm there (the noise of an FRF grows with its level), minimised by the
     core's Levenberg-Marquardt (:func:`rigidid.core.optimize.levenberg_marquardt`): the
     noise is in the residual only, so the estimate is consistent. The covariance of the
-    parameters is the Gauss-Newton one, ``s^2 (J^T J)^+``, with ``s^2`` the weighted
-    misfit per degree of freedom (``covariance``, the ten inertial parameters).
+    ten inertial parameters (``covariance``) is the sandwich of the fit clustered per line
+    and reference (:meth:`_Problem.covariance`).
     """
     w = np.asarray(omega, dtype=float).reshape(-1)
     x = np.asarray(coordinates, dtype=complex)
@@ -342,16 +342,25 @@ class _Problem:
         return self.residual(self.pack(theta, kv, cv)).reshape(-1, self.u.size)
 
     def covariance(self, theta: Array, kv: Array, cv: Array) -> Array:
-        """Gauss-Newton covariance of the ten inertial parameters, ``s^2 (J^T J)^+`` (scaled columns)."""
+        """Covariance of the ten inertial parameters: the sandwich ``B S^T S B`` clustered per line and reference.
+
+        ``B = (J^T J)^+`` (scaled columns, numerical rank), ``S`` the scores ``J_c^T r_c`` of each line and
+        reference (its twelve misfits: six coordinates at the sensors, real and imaginary parts, correlated
+        through the sensors), times ``N / (N - k)``: right whatever the noise's level per value, where
+        the weights (the data's norm per line and reference) only approximate it.
+        """
         r, jm = self.jacobian(self.pack(theta, kv, cv))
+        n, q = self.u.size, self.tft.shape[1]
         cn = np.linalg.norm(jm, axis=0)
         cn[cn == 0.0] = 1.0
         _, s, vt = np.linalg.svd(jm / cn, full_matrices=False)
         k = int(numerical_rank(s, jm.shape[0]))
-        dof = max(self.n_residuals - self.n_projected - k, 1)
-        var = float(r @ r) / dof
-        g = vt[:k, :10].T / s[:k] / cn[:10, None]
-        cov: Array = var * (g @ g.T)
+        bread = vt[:k].T / s[:k] ** 2 @ vt[:k]  # (J^T J)^+ of the scaled columns
+        scores = np.einsum("cqnp,cqn->qnp", (jm / cn).reshape(12, q, n, -1), r.reshape(12, q, n)).reshape(q * n, -1)
+        n_res = self.n_residuals - self.n_projected
+        meat = scores.T @ scores * n_res / max(n_res - k, 1)
+        g = (bread @ meat @ bread)[:10, :10]
+        cov: Array = g / cn[:10, None] / cn[None, :10]
         return cov
 
 
