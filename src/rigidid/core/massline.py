@@ -24,7 +24,6 @@ parameters and ``q >= 2`` references in general position determine them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -32,10 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.frfmodes import residue_limit, scaled_frame
 from rigidid.core.frfstats import BodyIntervals, body_intervals, misfit_units
 from rigidid.core.geometry import sensor_matrix, skew
+from rigidid.core.rigidfrf import RigidFrfFit, mass_matrix_from_parameters
 from rigidid.errors import IdentificationError, InputError
-
-if TYPE_CHECKING:
-    from rigidid.core.rigidfrf import RigidFrfFit
 
 __all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line"]
 
@@ -164,23 +161,10 @@ def _auto_band(f: Array, h: NDArray[np.complex128]) -> tuple[tuple[float, float]
     return (float(low), float(high)), elastic
 
 
-def _mass_matrix(theta: Array) -> Array:
-    """``M`` at the origin from ``(m, m c_x, m c_y, m c_z, Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)`` (about the origin)."""
-    m = theta[0]
-    mc = theta[1:4]
-    jo = np.array([[theta[4], theta[7], theta[8]], [theta[7], theta[5], theta[9]], [theta[8], theta[9], theta[6]]])
-    out = np.zeros((6, 6))
-    out[:3, :3] = m * np.eye(3)
-    out[:3, 3:] = -skew(mc)
-    out[3:, :3] = skew(mc)
-    out[3:, 3:] = jo
-    return out
-
-
 def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) -> tuple[float, Array, Array]:
     """Mass, CG and inertia about the CG from ``y0 = M^-1 T_f^T`` (scaled frame): ``M y0 = T_f^T``, linear."""
     q = tf.shape[0]
-    a_mat = np.stack([(_mass_matrix(e) @ y0).reshape(-1) for e in np.eye(10)], axis=1)
+    a_mat = np.stack([(mass_matrix_from_parameters(e) @ y0).reshape(-1) for e in np.eye(10)], axis=1)
     b_vec = tf.T.reshape(-1)
     norms = np.linalg.norm(a_mat, axis=0)
     norms[norms == 0.0] = 1.0
@@ -200,11 +184,7 @@ def _body_from_inverse_mass(y0: Array, tf: Array, origin: Array, span: float) ->
             else ""
         )
         raise IdentificationError(f"the mass line gives a mass of {m:.4g}, not positive{hint}")
-    c_scaled = theta[1:4] / m
-    j_o = _mass_matrix(theta)[3:, 3:]
-    j_g_scaled = j_o + m * skew(c_scaled) @ skew(c_scaled)
-    inertia = span**2 * j_g_scaled
-    return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
+    return _body_from_parameters(theta, origin, span)
 
 
 def mass_line(
@@ -574,7 +554,7 @@ def _body_from_parameters(theta: Array, origin: Array, span: float) -> tuple[flo
     """Mass, CG and inertia about the CG from the ten parameters of ``M`` in the scaled frame."""
     m = float(theta[0])
     c_scaled = theta[1:4] / m
-    j_o = _mass_matrix(theta)[3:, 3:]
+    j_o = mass_matrix_from_parameters(theta)[3:, 3:]
     inertia = span**2 * (j_o + m * skew(c_scaled) @ skew(c_scaled))
     return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
 
