@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.frfmodes import residue_limit, scaled_frame
+from rigidid.core.frfmodes import peak_split, residue_limit, scaled_frame
 from rigidid.core.frfstats import BodyIntervals, body_intervals, misfit_units
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.core.rigidfrf import RigidFrfFit, mass_matrix_from_parameters
@@ -99,14 +99,6 @@ class MassLine:
     misfit_where: str = ""
 
 
-def _peaks(s: Array) -> NDArray[np.intp]:
-    """Indices of local maxima of ``log s`` standing at least a factor 2 above both neighbours' valleys."""
-    from scipy.signal import find_peaks
-
-    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
-    return np.asarray(idx, dtype=np.intp)
-
-
 def auto_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float]:
     """Choose the mass-line band from the FRF magnitude sum.
 
@@ -131,23 +123,20 @@ def auto_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float]:
 
     Notes
     -----
-    Peaks of ``sum |H|^2`` over all FRFs are split at the largest frequency
-    ratio between neighbouring peaks; that ratio must exceed 6 for the band
-    to exist. A single cluster of peaks is taken as the rigid-body modes.
+    Peaks of ``sum |H|^2`` over all FRFs are split into rigid-body and elastic
+    ones by :func:`rigidid.core.frfmodes.peak_split`; their ratio must exceed 6
+    for the band to exist. A single cluster of peaks is taken as the rigid-body
+    modes.
     """
     return _auto_band(np.asarray(frequencies, dtype=float), np.asarray(frf))[0]
 
 
 def _auto_band(f: Array, h: NDArray[np.complex128]) -> tuple[tuple[float, float], float | None]:
     """:func:`auto_band` and the first elastic peak (Hz, None if none is seen)."""
-    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
-    idx = _peaks(s)
-    if idx.size == 0:
+    fp, split = peak_split(f, h)
+    if fp.size == 0:
         raise IdentificationError("no resonance peak in the FRFs: give the band")
-    fp = f[idx]
-    ratios = fp[1:] / fp[:-1]
-    if ratios.size and ratios.max() > 6.0:
-        split = int(np.argmax(ratios))
+    if split is not None:
         low, high = 3.0 * fp[split], 0.5 * fp[split + 1]
         elastic: float | None = float(fp[split + 1])
     else:
