@@ -144,7 +144,6 @@ def _identify_route(
     method: str,
 ) -> MassLineResult:
     """One FRF route by name (``massline`` or ``residues``, the latter from `modes` if given), with its verdict."""
-    from rigidid.core.massline import mass_line
     from rigidid.io.frf import reference_arrays
 
     ids, pos, dirs = files.layout_arrays(lay)
@@ -164,7 +163,7 @@ def _identify_route(
         )
     elif modes is None:
         poles = None
-        result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+        result = _mass_line(freqs, h, pos, dirs, rpos, rdirs, band)
         reason = (
             "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
             "the mass is measured through the force, no mounts or mass needed"
@@ -183,6 +182,22 @@ def _identify_route(
     scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled)
+
+
+def _mass_line(
+    freqs: Arr, h: NDArray[np.complex128], pos: Arr, dirs: Arr, rpos: Arr, rdirs: Arr, band: tuple[float, float] | None
+) -> MassLine:
+    """:func:`rigidid.core.massline.mass_line`; FRFs without a resonance peak but flat (free-free data measured
+    above the suspension modes) get the plateau as their band (``band_source`` ``"plateau"``)."""
+    import dataclasses
+
+    from rigidid.core.frfband import plateau_band
+    from rigidid.core.massline import mass_line
+
+    plateau = plateau_band(freqs, h) if band is None else None
+    if plateau is None:
+        return mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+    return dataclasses.replace(mass_line(freqs, h, pos, dirs, rpos, rdirs, band=plateau), band_source="plateau")
 
 
 def _modes_poles(modes: PathLike, ids: tuple[str, ...], modes_used: tuple[int, ...] | None) -> NDArray[np.complex128]:
@@ -216,6 +231,12 @@ Arr = NDArray[np.float64]
 
 AUTO_ROUTES = ("residues", "massline")
 """The routes ``method="auto"`` tries, in order."""
+
+NO_PEAKS = (
+    "no resonance peak in the FRFs and a flat accelerance (free-free, above the suspension modes): "
+    "no rigid-body poles to fit"
+)
+"""Why the residues route does not apply to a plateau (:func:`rigidid.core.frfband.plateau_band`)."""
 
 
 def identify_frf_auto(
@@ -266,7 +287,13 @@ def identify_frf_auto(
 
     answers: list[RouteAnswer] = []
     ran: dict[str, tuple[MassLineResult, list[warnings.WarningMessage]]] = {}
+    from rigidid.core.frfband import plateau_band
+
+    flat = band is None and plateau_band(data.frequencies, data.frf) is not None
     for route in AUTO_ROUTES:
+        if route == "residues" and flat:
+            answers.append(RouteAnswer(route, False, NO_PEAKS))
+            continue
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")

@@ -1,0 +1,63 @@
+"""The mass-line band of a free-free test whose FRFs show no resonance: the plateau.
+
+A body hung on soft cords and measured above its suspension modes has an
+accelerance that tends to the constant ``T M^-1 T_f^T`` (the mass line, eq. (1)
+of the mass-line notes): no rigid-body peak lies in the band, so the automatic
+band of :func:`rigidid.core.massline.auto_band` (3x the highest rigid-body
+peak to half the first elastic one) has nothing to start from. This module
+finds that band from the FRFs alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["PLATEAU_SLOPE", "plateau_band"]
+
+PLATEAU_SLOPE = 0.5
+"""Largest log-log slope of the summed FRF magnitude over the band still called a plateau (a
+stiffness line below the rigid-body modes has slope 2, a mass line 0)."""
+
+
+def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] | None:
+    """The band of FRFs that hold no resonance peak and are flat: all their lines, or None.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz, ascending, positive.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance.
+
+    Returns
+    -------
+    (float, float) or None
+        ``(f[0], f[-1])`` when the summed magnitude ``sum |H|^2`` has no peak
+        standing a factor 2 above both neighbouring valleys and its log-log
+        slope (least squares over the band) is within :data:`PLATEAU_SLOPE`
+        of zero; None otherwise (peaks, or the FRFs still rise or fall: the
+        band is below the suspension modes or across them).
+
+    Notes
+    -----
+    The peak test is the one of the automatic band (prominence ``log 2`` of
+    ``log sum |H|^2``), so a file it refuses for "no resonance peak" is the
+    file this function looks at.
+    """
+    from scipy.signal import find_peaks
+
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    h = np.asarray(frf)
+    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    if f.size < 3 or s.shape != f.shape:
+        return None
+    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    if idx.size:
+        return None
+    x = np.log(f)
+    design = np.column_stack([np.ones_like(x), x])
+    slope = np.linalg.lstsq(design, 0.5 * np.log(s), rcond=None)[0][1]  # of |H|, not |H|^2
+    if abs(slope) > PLATEAU_SLOPE:
+        return None
+    return float(f[0]), float(f[-1])
