@@ -443,7 +443,7 @@ def load_frf_test(
         ``layout.json``, or a UFF file with geometry (15/2411, 18/2420) and
         FRFs (58, function type 4).
     frf : path-like or None
-        The FRFs (CSV or UFF) of a ``layout.json``; None for a UFF `layout`.
+        The FRFs (CSV or UFF) of a ``layout.json``; None (or `layout` itself) for a UFF `layout`.
     references : ReferencesFile, path-like or None
         ``references.json``.
     units, geometry
@@ -470,8 +470,8 @@ def load_frf_test(
     from rigidid.api.load import UFF_SUFFIXES, check_uff_options, load_uff
 
     if not isinstance(layout, LayoutFile) and Path(layout).suffix.lower() in UFF_SUFFIXES:
-        if frf is not None:
-            raise InputError("with a UFF file of FRFs as LAYOUT, give no --frf file", source="--frf")
+        if frf is not None and Path(frf).resolve() != Path(layout).resolve():
+            raise InputError("with a UFF file of FRFs as LAYOUT, give no other --frf file", source="--frf")
         test = load_uff(layout, units=units, geometry=geometry)
         if test.frf is None:
             raise InputError("no FRFs (datasets 58, function type 4) in the file", source=str(layout))

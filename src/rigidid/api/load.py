@@ -257,7 +257,7 @@ def load_test(
         if not records and data.modes is None and data.frf is not None:
             raise InputError(
                 "the file holds FRFs (datasets 58, function type 4), not modes: `rigidid identify FILE` identifies "
-                "the body from them; `rigidid modes FILE --frf` fits their modes",
+                "the body from them; `rigidid modes FILE --frf FILE` fits their modes",
                 source=str(layout),
             )
         if not records and data.modes is None:
