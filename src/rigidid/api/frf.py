@@ -595,7 +595,7 @@ def _agreed_references(sources: list[tuple[str, ReferencesFile]], lay: LayoutFil
 def fit_modes_frf(
     layout: LayoutFile | PathLike,
     frf: PathLike,
-    references: ReferencesFile | PathLike,
+    references: ReferencesFile | PathLike | None,
     *,
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
@@ -610,8 +610,9 @@ def fit_modes_frf(
         The sensors (responses).
     frf : path-like
         FRF CSV or UFF (as :func:`identify_massline`).
-    references : ReferencesFile or path-like
-        The force points and directions.
+    references : ReferencesFile, path-like or None
+        The force points and directions (or from the layout or UFF headers, as
+        :func:`load_frf_test`).
     band : (float, float), optional
         Band of the fit (Hz); default from the FRF peaks
         (:func:`rigidid.core.frfmodes.rigid_band`).
