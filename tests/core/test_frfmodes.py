@@ -268,3 +268,14 @@ def test_the_order_is_raised_until_six_stable_modes_are_found() -> None:
     true = np.sort_complex(body_modes(light, pos, dirs).poles)
     assert len(fitted.diagram) > 16
     np.testing.assert_allclose(np.sort_complex(fitted.poles), true, rtol=2e-3)  # observed 6.5e-4
+
+
+def test_a_high_max_order_stops_once_six_modes_are_stable() -> None:
+    """`max_order` is the ceiling of the raising, not a sweep to run in full: 200 gives the default's modes."""
+    body, pos, dirs, rpos, f, h = _test(3, noise=0.01, lines=200)
+    default = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6)
+    high = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6, max_order=200)
+    assert len(high.diagram) < 200
+    np.testing.assert_allclose(high.poles, default.poles, rtol=1e-12)
+    truth = np.sort_complex(body_modes(body, pos, dirs).poles)
+    np.testing.assert_allclose(np.sort_complex(high.poles), truth, rtol=1e-2)

@@ -1275,10 +1275,12 @@ def fit_frf_modes(
         Keep the `n_modes` modes stable at the most orders; default every mode
         stable at a third of the orders or more.
     max_order : int, optional
-        Highest polynomial order of the sweep (``n q`` poles); default
-        ``max(8, ceil(48 / q))``, doubled (up to :data:`ORDER_RAISE` times)
-        until `n_modes` stable modes are found; the orders already fitted are
-        kept, so raising costs only the new ones.
+        Highest polynomial order of the sweep (``n q`` poles). The sweep
+        starts at ``max(8, ceil(48 / q))`` (or `max_order`, if lower) and, with
+        `n_modes` given, the order is doubled until `n_modes` stable modes are
+        found, up to `max_order` (default: :data:`ORDER_RAISE` times the
+        start); the orders already fitted are kept, so raising costs only the
+        new ones. Without `n_modes`, every order up to `max_order` is fitted.
     lower, upper : bool
         Residual terms of the LSFD (:func:`residues_lsfd`).
     weighting : {"relative", "none"}
@@ -1326,8 +1328,11 @@ def fit_frf_modes(
     auto_poles = rigid_band(freq, h)[0]
     (lo, hi), _ = _band_lines(freq, band if band is not None else auto_poles)
     res_band = residue_band if residue_band is not None else (lo, hi)
+    if max_order is not None and n_modes is not None:  # raised up to the order given, stopped once stable
+        top, cap = min(top, max(8, -(-48 // q))), top
+    else:
+        cap = top if n_modes is None else ORDER_RAISE * top
     first = top
-    cap = top if max_order is not None or n_modes is None else ORDER_RAISE * top
     diagram, clusters, top = _stable_modes(freq, h, (lo, hi), top, cap, n_modes, weighting, criteria, progress)
     if n_modes is not None:
         if len(clusters) < n_modes:
