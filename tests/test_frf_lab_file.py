@@ -106,3 +106,18 @@ def test_a_layout_lists_its_references_once(tmp_path: Path) -> None:
     (tmp_path / "layout.json").write_text(json.dumps(layout))
     out = run("identify", tmp_path / "layout.json", "--frf", CASE / "frf.csv")
     assert out.returncode == 2 and "duplicate reference id" in out.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (("--records",), "holds FRFs .* not time records"),
+        (("--method", "structured"), "FRFs are identified with --method auto, massline, residues"),
+    ],
+)
+def test_a_uff_of_frfs_with_an_option_of_the_other_routes_is_one_line(args: tuple[str, ...], says: str) -> None:
+    import re
+
+    out = run("identify", CASE / "test.uff", *args)
+    assert out.returncode == 2 and re.search(says, out.stderr), out.stderr
+    assert out.stderr.strip().count("\n") == 0

@@ -253,6 +253,12 @@ def load_test(
             raise InputError("with a UFF file, give no other input files", source=str(inputs[0]))
         data = load_uff(layout, units=units, geometry=geometry)
         if records and not data.records:
+            if data.frf is not None:
+                raise InputError(
+                    "the file holds FRFs (datasets 58, function type 4), not time records: without --records, "
+                    "`rigidid identify FILE` identifies the body from them",
+                    source=str(layout),
+                )
             raise InputError("no time records (dataset 58) in the file", source=str(layout))
         if not records and data.modes is None and data.frf is not None:
             raise InputError(
