@@ -233,8 +233,8 @@ AUTO_ROUTES = ("residues", "massline")
 """The routes ``method="auto"`` tries, in order."""
 
 NO_PEAKS = (
-    "no resonance peak in the FRFs and a flat accelerance (free-free, above the suspension modes): "
-    "no rigid-body poles to fit"
+    "no rigid-body peak: the accelerance is flat up to the first peak or the band's end (free-free, above "
+    "the suspension modes): no rigid-body poles to fit"
 )
 """Why the residues route does not apply to a plateau (:func:`rigidid.core.frfband.plateau_band`)."""
 

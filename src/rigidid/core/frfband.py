@@ -13,7 +13,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["PLATEAU_SLOPE", "plateau_band"]
+__all__ = ["MIN_PLATEAU_LINES", "PLATEAU_SLOPE", "plateau_band"]
+
+MIN_PLATEAU_LINES = 10
+"""Fewest lines a plateau band holds."""
 
 PLATEAU_SLOPE = 0.5
 """Largest log-log slope of the summed FRF magnitude over the band still called a plateau (a
@@ -21,7 +24,7 @@ stiffness line below the rigid-body modes has slope 2, a mass line 0)."""
 
 
 def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] | None:
-    """The band of FRFs that hold no resonance peak and are flat: all their lines, or None.
+    """The band where the FRFs are flat below their first peak (free-free, above the suspension modes), or None.
 
     Parameters
     ----------
@@ -33,11 +36,14 @@ def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] 
     Returns
     -------
     (float, float) or None
-        ``(f[0], f[-1])`` when the summed magnitude ``sum |H|^2`` has no peak
-        standing a factor 2 above both neighbouring valleys and its log-log
-        slope (least squares over the band) is within :data:`PLATEAU_SLOPE`
-        of zero; None otherwise (peaks, or the FRFs still rise or fall: the
-        band is below the suspension modes or across them).
+        From the first line to the last one (without a peak in the summed
+        magnitude ``sum |H|^2``, a peak standing a factor 2 above both
+        neighbouring valleys) or to half the first peak (an elastic mode:
+        the band is kept clear of it), when the magnitude's log-log slope
+        there (least squares) is within :data:`PLATEAU_SLOPE` of zero and the
+        band holds :data:`MIN_PLATEAU_LINES` lines; None otherwise (below
+        the first peak the FRFs still rise or fall: a rigid-body peak on
+        mounts, or a band across the suspension modes).
 
     Notes
     -----
@@ -53,11 +59,13 @@ def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] 
     if f.size < 3 or s.shape != f.shape:
         return None
     idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
-    if idx.size:
+    hi = float(f[-1]) if idx.size == 0 else 0.5 * float(f[idx[0]])  # kept clear of the first (elastic) peak
+    sel = f <= hi
+    if np.count_nonzero(sel) < MIN_PLATEAU_LINES:
         return None
-    x = np.log(f)
+    x = np.log(f[sel])
     design = np.column_stack([np.ones_like(x), x])
-    slope = np.linalg.lstsq(design, 0.5 * np.log(s), rcond=None)[0][1]  # of |H|, not |H|^2
+    slope = np.linalg.lstsq(design, 0.5 * np.log(s[sel]), rcond=None)[0][1]  # of |H|, not |H|^2
     if abs(slope) > PLATEAU_SLOPE:
         return None
-    return float(f[0]), float(f[-1])
+    return float(f[0]), float(f[sel][-1])
