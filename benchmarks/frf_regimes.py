@@ -38,7 +38,7 @@ from frf_sim import Rig, add_elastic, make_rig, truth_errors
 from rigidid.core.frfmodes import fit_frf_modes, rigid_band
 from rigidid.core.frfstats import verdict
 from rigidid.core.massline import MassLine, mass_from_residues, mass_line
-from rigidid.errors import FrfMisfitWarning, FrfRoutesDisagreeWarning, RigididError, emit
+from rigidid.errors import ElasticNearBandWarning, FrfMisfitWarning, FrfRoutesDisagreeWarning, RigididError, emit
 
 BASE: dict[str, Any] = {
     "zeta": 0.02,
@@ -116,7 +116,8 @@ def judged(rig: Rig, run: Any) -> dict[str, Any]:
     except (RigididError, np.linalg.LinAlgError) as exc:
         return {**out, "status": "refused", "line": str(exc).splitlines()[0][:150]}
     out["err"] = truth_errors(rig, ml.mass, ml.center_of_gravity, ml.inertia_tensor)
-    if any(issubclass(w.category, (FrfMisfitWarning, FrfRoutesDisagreeWarning)) for w in caught):
+    flagged = (FrfMisfitWarning, FrfRoutesDisagreeWarning, ElasticNearBandWarning)
+    if any(issubclass(w.category, flagged) for w in caught):
         out["status"] = "warned"
     if ml.intervals is not None:
         iv = ml.intervals

@@ -179,6 +179,7 @@ def _identify_route(
         )
     route = "massline" if modes is None and method != "residues" else "residues"
     _frf_verdict(result, "mass line" if route == "massline" else "residues")
+    _elastic_near(data, result.band)
     scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled)
@@ -198,6 +199,24 @@ def _mass_line(
     if plateau is None:
         return mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
     return dataclasses.replace(mass_line(freqs, h, pos, dirs, rpos, rdirs, band=plateau), band_source="plateau")
+
+
+def _elastic_near(data: FrfData, band: tuple[float, float]) -> None:
+    """Warn (ElasticNearBandWarning) when the FRFs rise over the top fifth of `band` (an elastic mode just above)."""
+    import warnings
+
+    from rigidid.core.frfband import PLATEAU_SLOPE, top_slope
+    from rigidid.errors import ElasticNearBandWarning
+
+    slope = top_slope(data.frequencies, data.frf, band)
+    if slope > PLATEAU_SLOPE:
+        warnings.warn(
+            f"the FRFs rise towards the top of the band {band[0]:.4g}-{band[1]:.4g} Hz (log-log slope {slope:.2g}, "
+            "flat above the rigid-body modes): an elastic mode just above it biases the answer beyond its interval; "
+            "measure further up or end the band lower (--band)",
+            ElasticNearBandWarning,
+            stacklevel=3,
+        )
 
 
 def _modes_poles(modes: PathLike, ids: tuple[str, ...], modes_used: tuple[int, ...] | None) -> NDArray[np.complex128]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["MIN_PLATEAU_LINES", "PLATEAU_SLOPE", "plateau_band"]
+__all__ = ["MIN_PLATEAU_LINES", "PLATEAU_SLOPE", "plateau_band", "top_slope"]
 
 MIN_PLATEAU_LINES = 10
 """Fewest lines a plateau band holds."""
@@ -69,3 +69,40 @@ def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] 
     if abs(slope) > PLATEAU_SLOPE:
         return None
     return float(f[0]), float(f[sel][-1])
+
+
+def top_slope(frequencies: ArrayLike, frf: ArrayLike, band: tuple[float, float], fraction: float = 0.2) -> float:
+    """Log-log slope of the summed FRF magnitude over the top `fraction` of `band`.
+
+    Above the rigid-body modes the accelerance tends to the flat mass line
+    (slope 0; a mode below the band makes it fall towards it); an elastic mode
+    just above the band makes it rise (slope ``2 r^2 / (1 - r^2)`` at ``r = f /
+    f_elastic``: 1 at ``r = 0.58``, 7.5 at ``r = 0.89``). The FRF routes model
+    the modes above the band by a residual that such a near mode escapes.
+
+    Parameters
+    ----------
+    frequencies : array_like, shape (f,)
+        Hz, ascending.
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance.
+    band : (float, float)
+        The band a route used (Hz).
+    fraction : float
+        Part of the band, from its top, that the slope is fitted over.
+
+    Returns
+    -------
+    float
+        The slope of ``log |H|`` (root of the summed ``|H|^2``) over ``log f``;
+        0 when fewer than 5 lines lie there.
+    """
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    s = np.sum(np.abs(np.asarray(frf)) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    lo, hi = float(band[0]), float(band[1])
+    sel = (f >= hi - fraction * (hi - lo)) & (f <= hi)
+    if np.count_nonzero(sel) < 5:
+        return 0.0
+    x = np.log(f[sel])
+    design = np.column_stack([np.ones_like(x), x])
+    return float(np.linalg.lstsq(design, 0.5 * np.log(s[sel]), rcond=None)[0][1])
