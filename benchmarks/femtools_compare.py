@@ -30,6 +30,11 @@ at the corners of a box, 6 inputs, exact accelerance 6-15 Hz, 21 lines) through 
 rigidid on the same body measured 30-75 Hz (the supports' modes are at 2.6, 4.3 and 4.7 Hz,
 three motions are free).
 
+First (issue 21, ``--cases-only`` for these alone, ``--seeds N``): femtools' two soft-mount
+cases (its docstring example and case 15 of its acceptance tests) exact and with 1 % and 3 %
+complex noise, rigidid's mass line (band 6-15 Hz given) beside femtools' inertia restraint with
+fitted stiffness (:func:`femtools_cases`).
+
 Errors: mass (relative), CG (distance over the largest sensor-box edge), inertia diagonal
 (largest relative error); median and worst over the trials; a failure (exception, or a
 non-finite or non-positive result) is counted and left out of the statistics. Times are
@@ -230,10 +235,107 @@ def documented_example(rbpe: Any) -> None:
             print(f"  {label:48s} failed: {type(exc).__name__}: {exc}")
 
 
+def femtools_case(which: int) -> dict[str, Any]:
+    """femtools' two soft-mount cases, FRFs written afresh from M and K (undamped, as femtools builds them).
+
+    1: its ``rigid_body_properties`` docstring example, 12.5 kg, CG (0.1, -0.05, 0.2) m, inertia
+    diag(0.8, 1.1, 1.5) kg m^2 on four vertical 900 N/m springs. 2: case 15 of its acceptance tests
+    (tests/test_round11_o5f_acceptance.py), 10 kg, CG (0.1, 0.05, 0.2) m, inertia diag(0.5, 0.8, 1.0)
+    on the same four springs plus two lateral 400 N/m ones. Both: 24 sensors (x, y, z at the corners of
+    a 1 x 0.8 x 0.6 m box), 6 references (sensors 0, 4, 8, 13, 17, 22), 21 lines 6-15 Hz.
+    """
+    corners = [[x, y, z] for x in (-0.5, 0.5) for y in (-0.4, 0.4) for z in (-0.3, 0.3)]
+    pos, dirs = np.repeat(corners, 3, axis=0).astype(float), np.tile(np.eye(3), (8, 1))
+    springs = [((x, y, -0.3), (0, 0, 1), 900.0) for x in (-0.5, 0.5) for y in (-0.4, 0.4)]
+    if which == 1:
+        mass, cg, inertia = 12.5, np.array([0.1, -0.05, 0.2]), np.diag([0.8, 1.1, 1.5])
+    else:
+        mass, cg, inertia = 10.0, np.array([0.1, 0.05, 0.2]), np.diag([0.5, 0.8, 1.0])
+        springs += [((0.0, y, -0.3), (1, 0, 0), 400.0) for y in (-0.4, 0.4)]
+    t = np.hstack([dirs, np.cross(pos, dirs)])
+    c = np.array([[0.0, -cg[2], cg[1]], [cg[2], 0.0, -cg[0]], [-cg[1], cg[0], 0.0]])
+    m6 = np.block([[mass * np.eye(3), -mass * c], [mass * c, inertia - mass * c @ c]])
+    k6 = np.zeros((6, 6))
+    for p, d, k in springs:
+        row = np.concatenate([d, np.cross(p, d)])
+        k6 += k * np.outer(row, row)
+    f = np.linspace(6.0, 15.0, 21)
+    drive = [0, 4, 8, 13, 17, 22]
+    h = np.stack([-(w**2) * t @ np.linalg.solve(k6 - w**2 * m6, t[drive].T) for w in 2 * np.pi * f], axis=2)
+    body = Body(mass, cg, inertia, ())
+    return {"body": body, "pos": pos, "dirs": dirs, "rpos": pos[drive], "rdirs": dirs[drive], "f": f, "h": h}
+
+
+def femtools_cases(rbpe: Any, seeds: int) -> None:
+    """Both femtools cases exact and with 1 % and 3 % complex noise (relative to each value), `seeds` draws.
+
+    rigidid: ``mass_line`` with the band 6-15 Hz given (its automatic mount model: the exact
+    rigid-body fit, by output error); femtools: ``restraint="inertia", mount_k="fit"``. Per route:
+    the worst mass, CG (m) and inertia-diagonal errors over the seeds, and for rigidid the largest
+    error in its own standard errors (mass, CG, inertia diagonal).
+    """
+    for which, name in ((1, "docstring example, 12.5 kg on 4 springs"), (2, "acceptance case 15, 10 kg on 6 springs")):
+        c = femtools_case(which)
+        body = c["body"]
+        print(f"\nfemtools' {name} (24 sensors, 6 references, 21 lines 6-15 Hz), worst over {seeds} seeds")
+        for level in (0.0, 0.01, 0.03):
+            rows: dict[str, list[tuple[float, ...]]] = {}
+            for seed in range(seeds if level else 1):
+                rng = np.random.default_rng(seed)
+                noise = (rng.standard_normal(c["h"].shape) + 1j * rng.standard_normal(c["h"].shape)) / np.sqrt(2)
+                h = c["h"] * (1.0 + level * noise)
+                args = (c["f"], h, c["pos"], c["dirs"], c["rpos"], c["rdirs"])
+                try:
+                    r = mass_line(*args, band=(6.0, 15.0))
+                    iv = r.intervals
+                    z = (np.nan, np.nan, np.nan)
+                    if iv is not None:
+                        dj = np.abs(np.diag(r.inertia_tensor - body.inertia_tensor))
+                        z = (
+                            abs(r.mass - body.mass) / iv.mass.std,
+                            float(
+                                np.max(np.abs(r.center_of_gravity - body.center_of_gravity) / iv.center_of_gravity.std)
+                            ),
+                            float(np.max(dj / np.diag(iv.inertia_tensor.std))),
+                        )
+                    err = _abs_errors(body, r.mass, r.center_of_gravity, r.inertia_tensor)
+                    rows.setdefault(f"rigidid mass_line ({r.supports})", []).append((*err, *z))
+                except Exception as exc:  # a refusal is counted as a failure
+                    rows.setdefault("rigidid mass_line", []).append((np.inf,) * 3 + (np.nan,) * 3)
+                    print(f"    rigidid seed {seed}: {type(exc).__name__}: {str(exc)[:90]}")
+                if rbpe is not None:
+                    fe = rbpe(h, c["f"], sensors=(c["pos"], c["dirs"]), inputs=(c["rpos"], c["rdirs"]),
+                              band=(6.0, 15.0), restraint="inertia", mount_k="fit")  # fmt: skip
+                    err = _abs_errors(body, fe.mass, fe.cog_global, fe.inertia)
+                    rows.setdefault("femtools inertia restraint + fitted K", []).append((*err, np.nan, np.nan, np.nan))
+            for label, vals in rows.items():
+                e = np.array(vals)
+                zs = (
+                    ""
+                    if np.all(np.isnan(e[:, 3:]))
+                    else "  worst in own SE: mass {:.2f}, CG {:.2f}, J {:.2f}".format(*np.max(e[:, 3:], axis=0))
+                )
+                print(
+                    f"  noise {100 * level:.0f} %  {label:42s} mass {e[:, 0].max():.2e}  CG {e[:, 1].max():.2e} m  "
+                    f"J diag {e[:, 2].max():.2e}{zs}"
+                )
+
+
+def _abs_errors(body: Body, mass: float, cg: np.ndarray, inertia: np.ndarray) -> tuple[float, float, float]:
+    """Mass (relative), CG (m) and the largest relative inertia-diagonal error."""
+    return (
+        abs(mass / body.mass - 1.0),
+        float(np.linalg.norm(cg - body.center_of_gravity)),
+        float(np.max(np.abs(np.diag(inertia) / np.diag(body.inertia_tensor) - 1.0))),
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--trials", type=int, default=10)
     parser.add_argument("--femtools", type=Path, default=None, help="folder holding the femtools package")
+    parser.add_argument("--seeds", type=int, default=5, help="noise draws per femtools case")
+    parser.add_argument("--cases-only", action="store_true", help="only femtools' two cases (issue 21)")
     args = parser.parse_args()
     rbpe = None
     if args.femtools is not None:
@@ -241,6 +343,9 @@ def main() -> None:
         from femtools.rbpe.rbfit import rigid_body_properties
 
         rbpe = rigid_body_properties
+    femtools_cases(rbpe, args.seeds)
+    if args.cases_only:
+        return
     warm = test_case(0, 0.01, 3)  # imports and first calls out of the timings
     mass_line(warm["f"], warm["h"], warm["pos"], warm["dirs"], warm["rpos"], warm["rdirs"])
     documented_example(rbpe)

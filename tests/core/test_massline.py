@@ -55,7 +55,7 @@ def test_free_free_with_noise_and_an_elastic_mode(seed):
     assert 150.0 - 1.0 < high < 150.0 + 1.0  # half the elastic peak
     r = mass_line(f, h, pos, dirs, rpos, rdirs)
     assert r.band_source == "automatic" and r.band == (low, high)
-    assert r.supports == "first_order" and "fits the band to the noise" in r.supports_reason
+    assert r.supports == "exact" and "whatever the supports" in r.supports_reason
     mass, cg, inertia = _errors(r, body, pos)
     assert mass < MASSLINE_FREE_FREE["mass"]
     assert cg < MASSLINE_FREE_FREE["cg_span"]
@@ -112,3 +112,24 @@ def test_sensors_that_do_not_see_six_rigid_motions_are_refused_by_both_routes():
         mass_line(f, h, pos, flat, rpos, rdirs)
     with pytest.raises(IdentificationError, match="six independent rigid-body motions"):
         mass_from_residues(f, h, pos, flat, rpos, rdirs, poles)
+
+
+def test_one_peak_splitter_an_elastic_mode_5x_above_the_rigid_ones_is_not_a_rigid_peak():
+    """The modal route and the mass line split the peaks alike (frfmodes.peak_split, ratio 4): with the
+    elastic mode 5x above the highest rigid peak the mass line refuses (no room for its band) instead
+    of taking the elastic peak for the last rigid one and fitting a band above it."""
+    from rigidid.core.frfmodes import peak_split, rigid_band
+
+    rng, body, pos, dirs, rpos, rdirs = _free_free(2)
+    f = np.linspace(0.1, 60.0, 600)
+    clean = accelerance(body, pos, dirs, rpos, rdirs, f)
+    fp, split = peak_split(f, clean)
+    assert split is None  # the suspension modes: one cluster
+    top = float(fp[-1])
+    elastic = random_elastic_modes(rng, [5.0 * top], 8, 3, mass=body.mass)
+    h = accelerance(body, pos, dirs, rpos, rdirs, f, elastic=elastic)
+    fp, split = peak_split(f, h)
+    assert split is not None and abs(fp[split + 1] / (5.0 * top) - 1.0) < 0.05
+    assert rigid_band(f, h)[1][1] == pytest.approx(0.5 * fp[split + 1])
+    with pytest.raises(IdentificationError, match="no room"):
+        auto_band(f, h)

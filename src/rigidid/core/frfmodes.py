@@ -54,6 +54,7 @@ __all__ = [
     "body_from_scaled_modes",
     "body_from_scaled_shapes",
     "fit_frf_modes",
+    "peak_split",
     "plscf_poles",
     "refine_poles",
     "refine_rigid_modes",
@@ -186,26 +187,56 @@ def rigid_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[tuple[float, flo
     Notes
     -----
     Peaks of ``sum |H|^2`` standing a factor 2 above their valleys; they are
-    split into rigid and elastic ones at the largest ratio between
-    neighbouring peaks when it exceeds 4 (one cluster: all rigid). Without
-    any peak, both bands are every line.
+    split into rigid and elastic ones by :func:`peak_split` (one cluster: all
+    rigid). Without any peak, both bands are every line.
     """
-    from scipy.signal import find_peaks
-
     freq, h = _check(frequencies, frf)
-    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
-    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    fp, split = peak_split(freq, h)
     first, last = float(freq[0]), float(freq[-1])
-    if idx.size == 0:
+    if fp.size == 0:
         return (first, last), (first, last)
-    fp = freq[idx]
-    ratios = fp[1:] / fp[:-1]
-    if ratios.size and ratios.max() > 4.0:
-        split = int(np.argmax(ratios))
+    if split is not None:
         top, elastic = float(fp[split]), float(fp[split + 1])
         return (first, min(2.0 * top, float(np.sqrt(top * elastic)))), (first, 0.5 * elastic)
     top = float(fp[-1])
     return (first, min(2.0 * top, last)), (first, last)
+
+
+PEAK_SPLIT_RATIO = 4.0
+"""Neighbouring FRF peaks further apart than this frequency ratio are taken for the last rigid-body
+mode and the first elastic one (:func:`peak_split`; the mass line's band then needs a ratio above 6,
+3x the one to half the other)."""
+
+
+def peak_split(frequencies: Array, frf: CArray) -> tuple[Array, int | None]:
+    """The peaks of the FRFs and where they split into rigid-body and elastic ones.
+
+    Parameters
+    ----------
+    frequencies : ndarray, shape (f,)
+        Hz, ascending.
+    frf : ndarray of complex, shape (p, q, f)
+        Accelerance.
+
+    Returns
+    -------
+    peaks : ndarray
+        Frequencies (Hz) of the maxima of ``sum |H|^2`` standing a factor 2 above both
+        neighbouring valleys.
+    split : int or None
+        Index of the last rigid-body peak when the largest ratio between neighbouring
+        peaks exceeds :data:`PEAK_SPLIT_RATIO` (the next peak is the first elastic one);
+        None: one cluster, all rigid.
+    """
+    from scipy.signal import find_peaks
+
+    s = np.sum(np.abs(frf) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    fp: Array = np.asarray(frequencies, dtype=float)[idx]
+    ratios = fp[1:] / fp[:-1]
+    if ratios.size and ratios.max() > PEAK_SPLIT_RATIO:
+        return fp, int(np.argmax(ratios))
+    return fp, None
 
 
 def _band_lines(f: Array, band: tuple[float, float] | None) -> tuple[tuple[float, float], NDArray[np.bool_]]:
