@@ -29,7 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.geometry import numerical_rank, skew
+from rigidid.core.geometry import skew
+from rigidid.core.linalg import numerical_rank
 from rigidid.errors import IdentificationError, InputError
 
 __all__ = ["RigidFrfFit", "mass_matrix_from_parameters", "rigid_frf_fit"]
@@ -265,7 +266,7 @@ def _equation_error(u: Array, xs: CArray, tft: Array, basis: Array, damping: boo
 def _project_out(a_o: Array, a_m: Array, b: Array) -> tuple[Array, Array, tuple[Array, Array, Array], Array]:
     """Project the nuisance columns `a_o` (scaled to unit norm) out of `a_m` and `b`.
 
-    Their numerical rank is the one rank tolerance (:func:`rigidid.core.geometry.numerical_rank`):
+    Their numerical rank is the one rank tolerance (:func:`rigidid.core.linalg.numerical_rank`):
     the directions of ``K`` and ``C`` the references do not see are dropped, harmless to ``M``.
     Returns the projected ``a_m``, ``b``, the kept SVD ``(U, s, V^T)`` and the column norms.
     """
