@@ -1,7 +1,11 @@
 """The FRF routes with their defaults across the regimes labs meet (issue 21).
 
 Run: ``OPENBLAS_NUM_THREADS=1 PYTHONPATH=src .venv/bin/python benchmarks/frf_regimes.py
-[--seeds 3] [--cells NAME,NAME] [--routes residues,massline] [--coverage N]``
+[--seeds 3] [--cells NAME,NAME] [--routes residues,massline,auto] [--coverage N]``
+
+Route ``auto`` is ``identify --frf`` with its defaults (``--method auto``: every route the data
+allow, one chosen, a FrfRoutesDisagreeWarning counted as a warning). Per cell, the RMS errors of
+each route's answers over the seeds are printed beside the oracle's (ratio > 1.5 flagged).
 
 FRFs from ``benchmarks/frf_sim.py`` (written afresh: M, K, C of a box-like body on four
 mounts, elastic modes as modal sums; no rigidid code). Noise: half relative to each value,
@@ -34,7 +38,7 @@ from frf_sim import Rig, add_elastic, make_rig, truth_errors
 from rigidid.core.frfmodes import fit_frf_modes, rigid_band
 from rigidid.core.frfstats import verdict
 from rigidid.core.massline import MassLine, mass_from_residues, mass_line
-from rigidid.errors import FrfMisfitWarning, RigididError, emit
+from rigidid.errors import ElasticNearBandWarning, FrfMisfitWarning, FrfRoutesDisagreeWarning, RigididError, emit
 
 BASE: dict[str, Any] = {
     "zeta": 0.02,
@@ -112,7 +116,8 @@ def judged(rig: Rig, run: Any) -> dict[str, Any]:
     except (RigididError, np.linalg.LinAlgError) as exc:
         return {**out, "status": "refused", "line": str(exc).splitlines()[0][:150]}
     out["err"] = truth_errors(rig, ml.mass, ml.center_of_gravity, ml.inertia_tensor)
-    if any(issubclass(w.category, FrfMisfitWarning) for w in caught):
+    flagged = (FrfMisfitWarning, FrfRoutesDisagreeWarning, ElasticNearBandWarning)
+    if any(issubclass(w.category, flagged) for w in caught):
         out["status"] = "warned"
     if ml.intervals is not None:
         iv = ml.intervals
@@ -140,7 +145,38 @@ def routes(rig: Rig, f: np.ndarray, h: np.ndarray, which: list[str]) -> dict[str
         res["oracle"] = judged(rig, lambda: mass_from_residues(f, h, *args, poles_of(rig)))
     if "massline" in which:
         res["massline"] = judged(rig, lambda: mass_line(f, h, *args))
+    if "auto" in which:
+        res["auto"] = judged(rig, lambda: auto(rig, f, h))
+        if "oracle" not in res:
+            res["oracle"] = judged(rig, lambda: mass_from_residues(f, h, *args, poles_of(rig)))
     return res
+
+
+def auto(rig: Rig, f: np.ndarray, h: np.ndarray) -> MassLine:
+    """``identify --frf`` with its defaults (``--method auto``), as the API runs it."""
+    from rigidid.api.frf import identify_frf_auto
+    from rigidid.models import LayoutFile, ReferencesFile
+    from rigidid.results import FrfData
+
+    lay = LayoutFile.model_validate(
+        {
+            "units": {"length": "m", "mass": "kg"},
+            "sensors": [
+                {"id": f"s{i}", "position": list(map(float, p)), "direction": list(map(float, d))}
+                for i, (p, d) in enumerate(zip(rig.sensors, rig.sensor_dirs, strict=True))
+            ],
+        }
+    )
+    refs = ReferencesFile.model_validate(
+        {
+            "references": [
+                {"id": f"r{j}", "position": list(map(float, p)), "direction": list(map(float, d))}
+                for j, (p, d) in enumerate(zip(rig.refs, rig.ref_dirs, strict=True))
+            ]
+        }
+    )
+    data = FrfData(f, h, tuple(s.id for s in lay.sensors), tuple(r.id for r in refs.references))
+    return identify_frf_auto(lay, refs, data).massline
 
 
 def main() -> None:
@@ -153,11 +189,14 @@ def main() -> None:
     which = a.routes.split(",")
     total = {"finished": 0, "warned": 0, "refused": 0, "silent": 0}
     for name in a.cells.split(","):
+        errs: dict[str, list[tuple[float, float, float]]] = {}
         for seed in range(a.seeds):
             t0 = time.perf_counter()
             rig, f, h = draw(CELLS[name], seed)
             for route, r in routes(rig, f, h, which).items():
                 silent = r["status"] == "finished" and r["z"] > 4.0
+                if r["status"] != "refused":
+                    errs.setdefault(route, []).append(r["err"])
                 if route != "oracle":
                     total[r["status"]] += 1
                     total["silent"] += int(silent)
@@ -168,6 +207,16 @@ def main() -> None:
                     flush=True,
                 )
             print(f"   ({time.perf_counter() - t0:.0f} s)", flush=True)
+        rms = {k: np.sqrt(np.mean(np.square(v), axis=0)) for k, v in errs.items()}
+        if "oracle" in rms:
+            for route in (k for k in rms if k != "oracle"):
+                ratio = rms[route] / rms["oracle"]
+                print(
+                    f"{name:14s} RMS {route:9s} over {len(errs[route])} answers: mass {rms[route][0]:.4f} "
+                    f"cg {rms[route][1]:.4f} inertia {rms[route][2]:.4f}; / oracle's: {np.round(ratio, 2)}"
+                    f"{'  (> 1.5x)' if np.any(ratio > 1.5) else ''}",
+                    flush=True,
+                )
     print("totals (routes other than the oracle):", total)
     if a.coverage:
         zs = []

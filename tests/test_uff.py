@@ -355,7 +355,7 @@ def test_records_group_by_load_case_and_reference(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("func", "message"),
     [
-        (4, r"dataset 58 #2, node 2: function type 4 is a frequency response function \(FRF\).*--frf FILE.*massline"),
+        (4, r"dataset 58 #2: time records \(function type 1\) and FRFs \(function type 4\) in one file"),
         (9, r"dataset 58 #2, node 2: function type 9 \(power spectral density \(PSD\)\) is not a time record"),
         (3, r"function type 3 \(cross spectrum\) is not a time record"),
     ],

@@ -226,7 +226,7 @@ def test_plan_takes_units_and_geometry(tmp_path: Path) -> None:
     [
         ("testlab_161_164_18_15_82.uff", r"no sensors: .*geometry only \(36 nodes\).*--geometry"),
         ("nx_2411_2414_excerpt.unv", r"no sensors: .*dataset 2414 \(analysis results\) is not read"),
-        ("non_ascii_header_frf.uff", r"dataset 58 #1, node 0: function type 4 is a frequency response function"),
+        ("non_ascii_header_frf.uff", r"dataset 58 #1, node 0: the record names no response node .* no geometry"),
         ("catman_time_history.uff", r"dataset 58 #1, node 0: the record names no response node .* no geometry"),
     ],
 )

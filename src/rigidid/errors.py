@@ -126,6 +126,14 @@ class FrfMisfitWarning(RigididWarning):
     """An FRF route's model misfits the FRFs by more than their noise explains (its answer may be off)."""
 
 
+class ElasticNearBandWarning(RigididWarning):
+    """The FRFs rise towards the top of the band: an elastic mode just above it biases the FRF routes."""
+
+
+class FrfRoutesDisagreeWarning(RigididWarning):
+    """Two FRF routes (``--method auto``) give answers further apart than their 95 % intervals allow."""
+
+
 class RefinementWarning(RigididWarning):
     """The output-error refinement on the records did not reach a good fit; the structured answer is kept."""
 

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.layout_check import LayoutReport
+    from rigidid.core.massline import MassLine
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.plan import PredictedFigures, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
@@ -646,6 +647,18 @@ def estimate_to_dict(estimate: ModalEstimate) -> dict[str, Any]:
     }
 
 
+def _frf_intervals(ml: MassLine) -> dict[str, Any] | None:
+    """The ``intervals`` block of an FRF route's answer (None without intervals)."""
+    if ml.intervals is None:
+        return None
+    return {
+        "method": ml.intervals.method,
+        "mass": interval_to_dict(ml.intervals.mass),
+        "center_of_gravity": interval_to_dict(ml.intervals.center_of_gravity),
+        "inertia_tensor": interval_to_dict(ml.intervals.inertia_tensor),
+    }
+
+
 def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
     """The JSON of ``identify --method massline`` (FORMATS.md, "Mass line result")."""
     ml = result.massline
@@ -669,19 +682,28 @@ def massline_to_dict(result: MassLineResult) -> dict[str, Any]:
         "mass_difference_relative": None,
         "misfit_noise_units": None if ml.misfit_noise_units is None else float(ml.misfit_noise_units),
         "misfit_where": ml.misfit_where,
-        "intervals": None
-        if ml.intervals is None
-        else {
-            "method": ml.intervals.method,
-            "mass": interval_to_dict(ml.intervals.mass),
-            "center_of_gravity": interval_to_dict(ml.intervals.center_of_gravity),
-            "inertia_tensor": interval_to_dict(ml.intervals.inertia_tensor),
-        },
+        "intervals": _frf_intervals(ml),
     }
     if result.mass_given is not None:
         out["mass_given"] = float(result.mass_given)
         out["mass_difference"] = float(ml.mass - result.mass_given)
         out["mass_difference_relative"] = float(ml.mass / result.mass_given - 1.0)
+    out["routes"] = [
+        {
+            "route": a.route,
+            "applies": a.applies,
+            "chosen": a.applies and a.route == result.route,
+            "reason": a.reason,
+            "mass_measured": None if a.massline is None else float(a.massline.mass),
+            "center_of_gravity": None if a.massline is None else _vec(a.massline.center_of_gravity),
+            "inertia_tensor": None if a.massline is None else _rows(a.massline.inertia_tensor),
+            "misfit_noise_units": None
+            if a.massline is None or a.massline.misfit_noise_units is None
+            else float(a.massline.misfit_noise_units),
+            "intervals": None if a.massline is None else _frf_intervals(a.massline),
+        }
+        for a in result.routes
+    ]
     sb = result.scaled
     out["scaled_modes"] = (
         None

@@ -142,6 +142,12 @@ class LayoutFile(_Strict):
     tolerances: SensorTolerances | None = Field(
         default=None, description="the sensors' error bounds, propagated into the records' intervals (type B)"
     )
+    references: list[SensorSpec] | None = Field(
+        default=None,
+        min_length=1,
+        description="FRF tests: the reference (force, hammer) points: id, position, force direction "
+        "(as references.json has them)",
+    )
 
     @field_validator("mass")
     @classmethod
@@ -155,6 +161,11 @@ class LayoutFile(_Strict):
             if sensor.id in seen:
                 raise ValueError(f"sensors.{i}.id: duplicate sensor id {sensor.id!r}")
             seen.add(sensor.id)
+        refs: set[str] = set()
+        for i, ref in enumerate(self.references or []):
+            if ref.id in refs:
+                raise ValueError(f"references.{i}.id: duplicate reference id {ref.id!r}")
+            refs.add(ref.id)
         return self
 
 

@@ -251,12 +251,16 @@ class TestData:
         Per impact: samples x sensors (layout order) and the sample interval (s).
     record_names : list of str
         Where each record came from.
+    frf : FrfData or None
+        A UFF file of FRFs (datasets 58, function type 4): the FRFs, sensors in
+        layout order, references in the order of ``layout.references``.
     """
 
     layout: LayoutFile
     modes: ModeTable | None = None
     records: list[tuple[NDArray[np.float64], float]] = field(default_factory=list)
     record_names: list[str] = field(default_factory=list)
+    frf: FrfData | None = None
 
 
 @dataclass(frozen=True)
@@ -322,6 +326,9 @@ class MassLineResult:
     scaled : rigidid.core.frfmodes.ScaledBody or None
         Route residues: the body from the six scaled rigid-body modes, with the
         stiffness and damping in absolute units.
+    routes : tuple of RouteAnswer
+        ``--method auto``: every route tried, in order, with its answer or why
+        it does not apply (empty for a route asked by name).
     """
 
     massline: MassLine
@@ -330,6 +337,29 @@ class MassLineResult:
     reason: str
     route: str = "massline"
     scaled: ScaledBody | None = None
+    routes: tuple[RouteAnswer, ...] = ()
+
+
+@dataclass(frozen=True)
+class RouteAnswer:
+    """One FRF route tried by ``--method auto``: whether it applies, its answer, why it was (not) chosen.
+
+    Attributes
+    ----------
+    route : str
+        ``"residues"`` or ``"massline"``.
+    applies : bool
+        Whether the data allow it (it ran and gave an answer).
+    reason : str
+        One line: what in the data made it apply, or why not.
+    massline : rigidid.core.massline.MassLine or None
+        Its answer (with intervals where it has them), when it applies.
+    """
+
+    route: str
+    applies: bool
+    reason: str
+    massline: MassLine | None = None
 
 
 PathLike = str | os.PathLike[str]

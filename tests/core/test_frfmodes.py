@@ -240,3 +240,42 @@ def test_a_bad_scaling_word_is_refused_naming_the_row(tmp_path: Path) -> None:
         load_modes(path, ["a", "b"])
     path.write_text("\n".join(lines) + "\n")
     assert load_modes(path, ["a", "b"]).scaling == ("modal_a",)
+
+
+def test_the_order_is_raised_until_six_stable_modes_are_found() -> None:
+    """Light mount damping (0.04-0.7 %) and a noise floor: order 16 finds too few stable modes and says so; the
+    default raises the order (keeping the orders already fitted) until six are stable, at the true poles."""
+    import dataclasses
+
+    from rigidid import api
+    from rigidid.errors import IdentificationError
+    from rigidid.io.files import load_body
+
+    body = api.body_from_file(load_body(SAMPLES / "four-mounts" / "body.json"))
+    light = dataclasses.replace(
+        body, mounts=tuple(dataclasses.replace(m, damping=0.1 * m.damping) for m in body.mounts)
+    )
+    rng = np.random.default_rng(1)
+    pos, dirs = rng.uniform(-0.3, 0.3, (6, 3)), np.eye(3)[np.arange(6) % 3]
+    rpos, rdirs = np.array([[0.3, 0.2, 0.15], [-0.3, 0.2, -0.15], [0.3, -0.2, -0.15]]), np.eye(3)
+    f = np.arange(2.0, 32.0, 0.1)
+    h = accelerance(light, pos, dirs, rpos, rdirs, f, noise=0.005, rng=rng)
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=2, keepdims=True))
+    h = h + 0.005 * rms * (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)) / np.sqrt(2)
+    with pytest.raises(IdentificationError, match=r"stable mode\(s\) in .* 6 asked"):
+        fit_frf_modes(f, h, pos, dirs, rpos, rdirs, n_modes=6, max_order=16)
+    fitted = fit_frf_modes(f, h, pos, dirs, rpos, rdirs, n_modes=6)
+    true = np.sort_complex(body_modes(light, pos, dirs).poles)
+    assert len(fitted.diagram) > 16
+    np.testing.assert_allclose(np.sort_complex(fitted.poles), true, rtol=2e-3)  # observed 6.5e-4
+
+
+def test_a_high_max_order_stops_once_six_modes_are_stable() -> None:
+    """`max_order` is the ceiling of the raising, not a sweep to run in full: 200 gives the default's modes."""
+    body, pos, dirs, rpos, f, h = _test(3, noise=0.01, lines=200)
+    default = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6)
+    high = fit_frf_modes(f, h, pos, dirs, rpos, np.eye(3), n_modes=6, max_order=200)
+    assert len(high.diagram) < 200
+    np.testing.assert_allclose(high.poles, default.poles, rtol=1e-12)
+    truth = np.sort_complex(body_modes(body, pos, dirs).poles)
+    np.testing.assert_allclose(np.sort_complex(high.poles), truth, rtol=1e-2)

@@ -3,6 +3,7 @@ mass line or from force-scaled residues."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -13,10 +14,10 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile, ReferencesFile
-from rigidid.results import FrfData, MassLineResult, PathLike
+from rigidid.results import FrfData, MassLineResult, PathLike, RouteAnswer
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import FrfModes
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.massline import MassLine
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
@@ -72,26 +73,34 @@ def simulate_frf(
 
 def identify_massline(
     layout: LayoutFile | PathLike,
-    frf: PathLike,
-    references: ReferencesFile | PathLike,
+    frf: PathLike | None,
+    references: ReferencesFile | PathLike | None,
     *,
     mass: float | None = None,
     band: tuple[float, float] | None = None,
     modes: PathLike | None = None,
     modes_used: tuple[int, ...] | None = None,
     method: str = "massline",
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
 ) -> MassLineResult:
-    """Mass, CG and inertia of a body from FRFs by the mass line, or from scaled modes.
+    """Mass, CG and inertia of a body from FRFs: mass line, residues, or both (``method="auto"``).
 
     Parameters
     ----------
     layout : LayoutFile or path-like
-        The sensors (responses).
-    frf : path-like
+        The sensors (responses), with their ``references`` if the layout lists
+        them; or a UFF file holding geometry (15/2411, 18/2420) and FRFs (58,
+        function type 4): sensors from the response nodes and directions,
+        references from the reference nodes and directions.
+    frf : path-like or None
         FRF CSV (see :func:`rigidid.io.frf.load_frf_csv`), or a UFF file
-        (``.uff``/``.unv``, :func:`rigidid.io.frf.load_frf_uff`).
-    references : ReferencesFile or path-like
-        The force points and directions.
+        (``.uff``/``.unv``, :func:`rigidid.io.frf.load_frf_uff`); None when
+        `layout` is a UFF file of FRFs.
+    references : ReferencesFile, path-like or None
+        The force points and directions. They may come from ``references.json``,
+        from the layout's ``references`` list, or from a UFF file's headers:
+        every source given must say the same (:func:`load_frf_test`).
     mass : float, optional
         A known mass to compare the measured one with (overrides the layout's).
     band : (float, float), optional
@@ -101,28 +110,45 @@ def identify_massline(
         scaled modes (:func:`rigidid.core.massline.mass_from_residues`).
     modes_used : tuple of int, optional
         The six rigid-body mode labels of `modes` (default: all, if there are six).
-    method : {"massline", "residues"}
+    method : {"massline", "residues", "auto"}
         ``"residues"`` without `modes`: the six rigid-body poles are fitted to
-        the FRFs (:func:`rigidid.core.frfmodes.fit_frf_modes`).
+        the FRFs (:func:`rigidid.core.frfmodes.fit_frf_modes`). ``"auto"``:
+        every route the data allow is run and one is chosen
+        (:func:`identify_frf_auto`).
+    units, geometry
+        As for :func:`rigidid.api.load.load_uff` (UFF `layout` only).
 
     Returns
     -------
     MassLineResult
     """
-    from rigidid.core.massline import mass_line
-    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
-
-    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = load_references_for(references, lay)
-    ids, pos, dirs = files.layout_arrays(lay)
-    rids, rpos, rdirs = reference_arrays(refs)
-    is_uff = str(frf).lower().endswith((".uff", ".unv"))
-    if is_uff:
-        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
-    else:
-        freqs, h = load_frf_csv(frf, ids, rids)
+    lay, refs, data = load_frf_test(layout, frf, references, units=units, geometry=geometry)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
+    if method == "auto" and modes is None:
+        return identify_frf_auto(lay, refs, data, mass=mass, band=band)
+    if method not in ("massline", "residues", "auto"):
+        raise InputError(f"FRFs are identified with method auto, massline or residues, not {method!r}")
+    return _identify_route(lay, refs, data, mass=mass, band=band, modes=modes, modes_used=modes_used, method=method)
+
+
+def _identify_route(
+    lay: LayoutFile,
+    refs: ReferencesFile,
+    data: FrfData,
+    *,
+    mass: float | None,
+    band: tuple[float, float] | None,
+    modes: PathLike | None = None,
+    modes_used: tuple[int, ...] | None = None,
+    method: str,
+) -> MassLineResult:
+    """One FRF route by name (``massline`` or ``residues``, the latter from `modes` if given), with its verdict."""
+    from rigidid.io.frf import reference_arrays
+
+    ids, pos, dirs = files.layout_arrays(lay)
+    _, rpos, rdirs = reference_arrays(refs)
+    freqs, h = data.frequencies, data.frf
     if modes is None and method == "residues":
         from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
@@ -137,48 +163,266 @@ def identify_massline(
         )
     elif modes is None:
         poles = None
-        result = mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+        result = _mass_line(freqs, h, pos, dirs, rpos, rdirs, band)
         reason = (
             "method massline: the accelerance between the rigid-body and the elastic modes is T M^-1 T_f^T; "
             "the mass is measured through the force, no mounts or mass needed"
         ) + (f"; supports: {result.supports_reason}" if result.supports_reason else "")
     else:
         from rigidid.core.massline import mass_from_residues
-        from rigidid.core.statespace import poles_from_modal
 
-        table = files.load_modes(modes, ids)
-        labels = modes_used if modes_used is not None else table.labels
-        if len(labels) != 6 or any(label not in table.labels for label in labels):
-            raise InputError(
-                f"scaled modes need six rigid-body modes of the modes file, got labels {list(labels)}",
-                source="modes_used",
-            )
-        cols = [table.labels.index(label) for label in labels]
-        poles = poles_from_modal(table.frequency_hz[cols], table.damping_ratio[cols])
+        poles = _modes_poles(modes, ids, modes_used)
         result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
         reason = (
             "method residues: residues of the FRFs fitted with the six rigid-body poles of the modes file "
             "(scaled modes); their high-frequency limit is T M^-1 T_f^T, so the mass is measured through the force"
         )
-    _frf_verdict(result, "mass line" if modes is None and method != "residues" else "residues")
-    scaled = None
-    if poles is not None:
-        from rigidid.core.frfmodes import body_from_frfs, rigid_band
+    route = "massline" if modes is None and method != "residues" else "residues"
+    _frf_verdict(result, "mass line" if route == "massline" else "residues")
+    _elastic_near(data, result.band)
+    scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
+    units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled)
 
-        lam = np.asarray(poles)[np.argsort(np.abs(poles))]
-        fit_band = band if band is not None else rigid_band(freqs, h)[0]
-        scaled = body_from_frfs(freqs, h, lam, pos, dirs, rpos, rdirs, band=fit_band)
-    return MassLineResult(
-        result,
-        {"length": lay.units.length, "mass": lay.units.mass},
-        mass if mass is not None else lay.mass,
-        reason,
-        "massline" if modes is None and method != "residues" else "residues",
-        scaled,
-    )
+
+def _mass_line(
+    freqs: Arr, h: NDArray[np.complex128], pos: Arr, dirs: Arr, rpos: Arr, rdirs: Arr, band: tuple[float, float] | None
+) -> MassLine:
+    """:func:`rigidid.core.massline.mass_line`; FRFs without a resonance peak but flat (free-free data measured
+    above the suspension modes) get the plateau as their band (``band_source`` ``"plateau"``)."""
+    import dataclasses
+
+    from rigidid.core.frfband import plateau_band
+    from rigidid.core.massline import mass_line
+
+    plateau = plateau_band(freqs, h) if band is None else None
+    if plateau is None:
+        return mass_line(freqs, h, pos, dirs, rpos, rdirs, band=band)
+    return dataclasses.replace(mass_line(freqs, h, pos, dirs, rpos, rdirs, band=plateau), band_source="plateau")
+
+
+def _elastic_near(data: FrfData, band: tuple[float, float]) -> None:
+    """Warn (ElasticNearBandWarning) when the FRFs rise over the top fifth of `band` (an elastic mode just above)."""
+    import warnings
+
+    from rigidid.core.frfband import PLATEAU_SLOPE, top_slope
+    from rigidid.errors import ElasticNearBandWarning
+
+    slope = top_slope(data.frequencies, data.frf, band)
+    if slope > PLATEAU_SLOPE:
+        warnings.warn(
+            f"the FRFs rise towards the top of the band {band[0]:.4g}-{band[1]:.4g} Hz (log-log slope {slope:.2g}, "
+            "flat above the rigid-body modes): an elastic mode just above it biases the answer beyond its interval; "
+            "measure further up or end the band lower (--band)",
+            ElasticNearBandWarning,
+            stacklevel=3,
+        )
+
+
+def _modes_poles(modes: PathLike, ids: tuple[str, ...], modes_used: tuple[int, ...] | None) -> NDArray[np.complex128]:
+    """The six rigid-body poles of ``modes.csv`` (the labels `modes_used`, or all six)."""
+    from rigidid.core.statespace import poles_from_modal
+
+    table = files.load_modes(modes, ids)
+    labels = modes_used if modes_used is not None else table.labels
+    if len(labels) != 6 or any(label not in table.labels for label in labels):
+        raise InputError(
+            f"scaled modes need six rigid-body modes of the modes file, got labels {list(labels)}",
+            source="modes_used",
+        )
+    cols = [table.labels.index(label) for label in labels]
+    return np.asarray(poles_from_modal(table.frequency_hz[cols], table.damping_ratio[cols]), dtype=complex)
+
+
+def _scaled_body(
+    data: FrfData, pos: Arr, dirs: Arr, rpos: Arr, rdirs: Arr, poles: NDArray[np.complex128],
+    band: tuple[float, float] | None,
+) -> ScaledBody:  # fmt: skip
+    """The body from the six force-scaled rigid-body modes (stiffness and damping included)."""
+    from rigidid.core.frfmodes import body_from_frfs, rigid_band
+
+    lam = np.asarray(poles)[np.argsort(np.abs(poles))]
+    fit_band = band if band is not None else rigid_band(data.frequencies, data.frf)[0]
+    return body_from_frfs(data.frequencies, data.frf, lam, pos, dirs, rpos, rdirs, band=fit_band)
 
 
 Arr = NDArray[np.float64]
+
+AUTO_ROUTES = ("residues", "massline")
+"""The routes ``method="auto"`` tries, in order."""
+
+NO_PEAKS = (
+    "no rigid-body peak: the accelerance is flat up to the first peak or the band's end (free-free, above "
+    "the suspension modes): no rigid-body poles to fit"
+)
+"""Why the residues route does not apply to a plateau (:func:`rigidid.core.frfband.plateau_band`)."""
+
+
+def identify_frf_auto(
+    lay: LayoutFile, refs: ReferencesFile, data: FrfData, *, mass: float | None = None,
+    band: tuple[float, float] | None = None,
+) -> MassLineResult:  # fmt: skip
+    """Every FRF route the data allow, run; one chosen; a warning when two disagree beyond their intervals.
+
+    The residues route applies when six stable rigid-body modes are found in
+    the band (:func:`rigidid.core.frfmodes.fit_frf_modes`); the mass line when
+    a band above the rigid-body peaks and below the elastic ones is found
+    (:func:`rigidid.core.massline.mass_line`, which fits the supports exactly
+    when they reach near the band). A route the data do not allow, or whose
+    verdict refuses its answer, is listed with the one-line reason.
+
+    Parameters
+    ----------
+    lay, refs, data
+        The test (:func:`load_frf_test`).
+    mass : float, optional
+        A known mass to compare the measured one with.
+    band : (float, float), optional
+        The band every route uses (automatic by default).
+
+    Returns
+    -------
+    MassLineResult
+        The chosen route's answer; ``routes`` lists every route tried. The
+        choice: among routes whose misfit the noise explains (at most 1.5
+        noise units), the one with the narrowest 95 % mass interval (a route
+        without intervals last); the reason is in ``reason``.
+
+    Raises
+    ------
+    IdentificationError
+        No route applies (the message lists each route's reason).
+
+    Warns
+    -----
+    FrfRoutesDisagreeWarning
+        Two routes with intervals whose mass, CG or inertia diagonal differ by
+        more than the sum of their 95 % half-widths, naming the route the diagnostics (misfit in
+        noise units) blame. The chosen route's own warnings are passed on.
+    """
+    import warnings
+
+    from rigidid.errors import IdentificationError
+
+    answers: list[RouteAnswer] = []
+    ran: dict[str, tuple[MassLineResult, list[warnings.WarningMessage]]] = {}
+    from rigidid.core.frfband import plateau_band
+
+    flat = band is None and plateau_band(data.frequencies, data.frf) is not None
+    for route in AUTO_ROUTES:
+        if route == "residues" and flat:
+            answers.append(RouteAnswer(route, False, NO_PEAKS))
+            continue
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                result = _identify_route(lay, refs, data, mass=mass, band=band, method=route)
+        except IdentificationError as exc:
+            answers.append(RouteAnswer(route, False, str(exc)))
+            continue
+        ran[route] = (result, list(caught))
+        answers.append(RouteAnswer(route, True, _applies_because(result), result.massline))
+    if not ran:
+        raise IdentificationError("no FRF route applies: " + "; ".join(f"{a.route}: {a.reason}" for a in answers))
+    chosen, why = _choose_route({k: v[0] for k, v in ran.items()})
+    result, caught = ran[chosen]
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    _disagreement({k: v[0] for k, v in ran.items()})
+    reason = f"method auto: {chosen} chosen ({why}); {result.reason}"
+    return MassLineResult(
+        result.massline, result.units, result.mass_given, reason, result.route, result.scaled, tuple(answers)
+    )
+
+
+def _applies_because(result: MassLineResult) -> str:
+    """One line: what in the data let a route run."""
+    ml = result.massline
+    if result.route == "residues":
+        return f"six stable rigid-body modes in the FRFs; residues fitted in {ml.band[0]:.4g}-{ml.band[1]:.4g} Hz"
+    text = f"a mass-line band {ml.band[0]:.4g}-{ml.band[1]:.4g} Hz ({ml.band_source}) clear of the resonances"
+    return text + (f"; supports {ml.supports}: {ml.supports_reason}" if ml.supports_reason else "")
+
+
+def _mass_halfwidth(result: MassLineResult) -> float:
+    """Relative 95 % half-width of the mass (infinite without intervals)."""
+    iv = result.massline.intervals
+    if iv is None:
+        return float("inf")
+    return float((iv.mass.high - iv.mass.low) / 2.0 / abs(result.massline.mass))
+
+
+def _choose_route(ran: dict[str, MassLineResult]) -> tuple[str, str]:
+    """The route to report and why (one phrase)."""
+    if len(ran) == 1:
+        only = next(iter(ran))
+        return only, "the only route the data allow"
+
+    def explained(r: MassLineResult) -> bool:
+        units = r.massline.misfit_noise_units
+        return units is None or units <= 1.5
+
+    fits = [k for k, r in ran.items() if explained(r)] or list(ran)
+    best = min(fits, key=lambda k: _mass_halfwidth(ran[k]))
+    widths = ", ".join(
+        f"{k} +-{100 * _mass_halfwidth(r):.2g} %" if np.isfinite(_mass_halfwidth(r)) else f"{k} none"
+        for k, r in ran.items()
+    )
+    left = [k for k in ran if k not in fits]
+    tail = f"; {', '.join(left)} misfit beyond the noise" if left else ""
+    return best, f"narrowest 95 % mass interval: {widths}{tail}"
+
+
+def _disagreement(ran: dict[str, MassLineResult]) -> None:
+    """Warn (FrfRoutesDisagreeWarning) when two routes differ beyond the sum of their 95 % half-widths."""
+    import warnings
+
+    from rigidid.errors import FrfRoutesDisagreeWarning
+
+    names = list(ran)
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            what = _beyond(ran[a].massline, ran[b].massline)
+            if what is None:
+                continue
+            ua, ub = ran[a].massline.misfit_noise_units, ran[b].massline.misfit_noise_units
+            if ua is not None and ub is not None and max(ua, ub) > 1.2 * min(ua, ub):
+                blame = f"the diagnostics blame {a if ua > ub else b} (misfit {max(ua, ub):.3g} noise units " + (
+                    f"against {min(ua, ub):.3g})"
+                )
+            else:
+                blame = "the misfits do not tell which (both explained by the noise)"
+            warnings.warn(
+                f"routes {a} and {b} disagree beyond their 95 % intervals on {what}: {blame}",
+                FrfRoutesDisagreeWarning,
+                stacklevel=3,
+            )
+
+
+def _beyond(a: MassLine, b: MassLine) -> str | None:
+    """The first of mass, CG, inertia diagonal where `a` and `b` differ by more than their 95 % half-widths.
+
+    None when they agree, or when either has no intervals (the exact support fit has none yet).
+    """
+    pairs = [
+        ("the mass", np.atleast_1d(a.mass), np.atleast_1d(b.mass), "mass"),
+        ("the CG", a.center_of_gravity, b.center_of_gravity, "center_of_gravity"),
+        ("the inertia diagonal", np.diag(a.inertia_tensor), np.diag(b.inertia_tensor), "inertia_tensor"),
+    ]
+    for label, va, vb, key in pairs:
+        width = np.zeros(va.shape)
+        for ml in (a, b):
+            if ml.intervals is not None:
+                iv = getattr(ml.intervals, key)
+                half = np.asarray((iv.high - iv.low) / 2.0, dtype=float)
+                width = width + (np.diag(half) if key == "inertia_tensor" else np.atleast_1d(half))
+        if a.intervals is None or b.intervals is None:  # a route without an interval cannot be judged by it
+            return None
+        width = width + 1e-8 * max(float(np.max(np.abs(va))), float(np.max(np.abs(vb))), 1e-300)  # rounding
+        if np.any(np.abs(va - vb) > width):
+            k = int(np.argmax(np.abs(va - vb) - width))
+            return f"{label} ({va[k]:.6g} against {vb[k]:.6g})"
+    return None
 
 
 def _frf_verdict(result: MassLine, route: str) -> None:
@@ -191,24 +435,186 @@ def _frf_verdict(result: MassLine, route: str) -> None:
 
 
 def _load_frf(
-    layout: LayoutFile | PathLike, frf: PathLike, references: ReferencesFile | PathLike
+    layout: LayoutFile | PathLike, frf: PathLike | None, references: ReferencesFile | PathLike | None
 ) -> tuple[tuple[str, ...], Arr, NDArray[np.complex128], Arr, Arr, Arr, Arr]:
     """Sensor ids, frequencies, FRFs (p, q, f), sensor positions and directions, reference positions and directions."""
+    from rigidid.io.frf import reference_arrays
+
+    lay, refs, data = load_frf_test(layout, frf, references)
+    ids, pos, dirs = files.layout_arrays(lay)
+    _, rpos, rdirs = reference_arrays(refs)
+    return ids, data.frequencies, data.frf, pos, dirs, rpos, rdirs
+
+
+def load_frf_test(
+    layout: LayoutFile | PathLike,
+    frf: PathLike | None = None,
+    references: ReferencesFile | PathLike | None = None,
+    *,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
+) -> tuple[LayoutFile, ReferencesFile, FrfData]:
+    """The layout, its references and its FRFs, from a UFF file of FRFs or from a layout and an FRF file.
+
+    Parameters
+    ----------
+    layout : LayoutFile or path-like
+        ``layout.json``, or a UFF file with geometry (15/2411, 18/2420) and
+        FRFs (58, function type 4).
+    frf : path-like or None
+        The FRFs (CSV or UFF) of a ``layout.json``; None (or `layout` itself) for a UFF `layout`.
+    references : ReferencesFile, path-like or None
+        ``references.json``.
+    units, geometry
+        As for :func:`rigidid.api.load.load_uff`.
+
+    Returns
+    -------
+    layout : LayoutFile
+    references : ReferencesFile
+        From ``references.json``, the layout's ``references`` list, or the
+        UFF FRFs' headers (reference node and direction, with the node's
+        coordinates from the UFF file or from the layout's sensor at that
+        node): whichever are given; they must agree (ids, positions to 1e-5 of
+        the layout's size, UFF keeping 6 digits, and directions).
+    frf : FrfData
+        Sensors in layout order, references in the returned references' order.
+
+    Raises
+    ------
+    InputError
+        No references from any source; two sources that disagree (naming both
+        and the reference); or what the readers raise.
+    """
+    from rigidid.api.load import UFF_SUFFIXES, check_uff_options, load_uff
+
+    if not isinstance(layout, LayoutFile) and Path(layout).suffix.lower() in UFF_SUFFIXES:
+        if frf is not None and Path(frf).resolve() != Path(layout).resolve():
+            raise InputError("with a UFF file of FRFs as LAYOUT, give no other --frf file", source="--frf")
+        test = load_uff(layout, units=units, geometry=geometry)
+        if test.frf is None:
+            raise InputError("no FRFs (datasets 58, function type 4) in the file", source=str(layout))
+        sources = [(f"{Path(layout).name}'s FRF headers", ReferencesFile(references=test.layout.references or []))]
+        if references is not None:
+            sources.insert(0, (str(references), load_references_for(references, test.layout)))
+        chosen = _agreed_references(sources, test.layout)
+        return test.layout, chosen, _reordered(test.frf, chosen)
+    if not isinstance(layout, LayoutFile):
+        check_uff_options(layout, units, geometry)
+    if frf is None:
+        raise InputError("FRFs are given with --frf FILE (CSV or UFF), or as a UFF file of FRFs", source="--frf")
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
+    sources = []
+    if references is not None:
+        sources.append((str(references), load_references_for(references, lay)))
+    if lay.references:
+        sources.append(("the layout's references", ReferencesFile(references=lay.references)))
+    is_uff = str(frf).lower().endswith((".uff", ".unv"))
+    if is_uff:
+        from rigidid.io.frf import references_from_headers
+
+        headers = references_from_headers(frf, lay, units={"length": lay.units.length, "mass": lay.units.mass})
+        if headers is not None:
+            sources.append((f"{Path(frf).name}'s FRF headers", headers))
+    refs = _agreed_references(sources, lay)
+    return lay, refs, _read_frf(lay, refs, frf, is_uff)
+
+
+def _read_frf(lay: LayoutFile, refs: ReferencesFile, frf: PathLike, is_uff: bool) -> FrfData:
+    """The FRF file (CSV or UFF) against the layout's sensors and the references."""
     from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
 
-    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = load_references_for(references, lay)
-    ids, pos, dirs = files.layout_arrays(lay)
-    rids, rpos, rdirs = reference_arrays(refs)
-    is_uff = str(frf).lower().endswith((".uff", ".unv"))
-    freqs, h = (load_frf_uff if is_uff else load_frf_csv)(frf, ids, rids)
-    return ids, freqs, h, pos, dirs, rpos, rdirs
+    ids = tuple(s.id for s in lay.sensors)
+    rids = reference_arrays(refs)[0]
+    if is_uff:
+        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
+    else:
+        freqs, h = load_frf_csv(frf, ids, rids)
+    return FrfData(freqs, h, ids, rids)
+
+
+def _reordered(data: FrfData, refs: ReferencesFile) -> FrfData:
+    """`data` with its references in the order of `refs` (matched by node and axis, see :func:`_reference_key`)."""
+    keys = [_reference_key(r.id, r.unit_direction()) for r in refs.references]
+    have = {k: j for j, k in enumerate(_reference_key(r, None) for r in data.reference_ids)}
+    order = [have.get(k, have.get((k[0], None), -1)) for k in keys]
+    if -1 in order:
+        missing = refs.references[order.index(-1)].id
+        raise InputError(f"reference {missing} has no FRF in the file", source="--references")
+    if order == list(range(len(order))):
+        return FrfData(data.frequencies, data.frf, data.sensor_ids, tuple(r.id for r in refs.references))
+    return FrfData(data.frequencies, data.frf[:, order], data.sensor_ids, tuple(r.id for r in refs.references))
+
+
+def _reference_key(rid: str, direction: tuple[float, float, float] | None) -> tuple[str, str | None]:
+    """What a reference id means: its UFF node and signed axis (``"12+x"``, or ``"12"`` with an axis direction).
+
+    Ids that are no UFF node (``"h1"``) are their own key.
+    """
+    from rigidid.io.uff_codes import ID_PATTERN
+
+    match = ID_PATTERN.match(rid)
+    if match is None:
+        return rid, None
+    axis = match.group(2)
+    if axis:
+        return match.group(1), (axis.lower() if axis[0] in "+-" else "+" + axis.lower())
+    if direction is None:
+        return match.group(1), None
+    d = np.asarray(direction, dtype=float)
+    k = int(np.argmax(np.abs(d)))
+    if abs(abs(d[k]) - 1.0) > 1e-9:
+        return match.group(1), None
+    return match.group(1), ("+" if d[k] > 0 else "-") + "xyz"[k]
+
+
+def _agreed_references(sources: list[tuple[str, ReferencesFile]], lay: LayoutFile) -> ReferencesFile:
+    """The first source's references, once every other source is checked to say the same.
+
+    Raises
+    ------
+    InputError
+        No source; or two that differ in their references, a position (beyond
+        1e-5 of the layout's size: UFF keeps 6 digits) or a direction, naming both.
+    """
+    if not sources:
+        raise InputError(
+            "no references (force points): list them in the layout's `references`, give --references "
+            "REFS.json, or give the FRFs as a UFF file whose headers name the reference nodes",
+            source="--references",
+        )
+    first_name, first = sources[0]
+    scale = max([1.0, *(abs(v) for s in lay.sensors for v in s.position)])
+    # the same ids are paired by id; else by what they mean (UFF node and axis: "12" along +x is "12+x")
+    for name, other in sources[1:]:
+        by_id = {r.id for r in first.references} == {r.id for r in other.references}
+        mine = {r.id if by_id else _reference_key(r.id, r.unit_direction()): r for r in first.references}
+        theirs = {r.id if by_id else _reference_key(r.id, r.unit_direction()): r for r in other.references}
+        if set(mine) != set(theirs):
+            a = ", ".join(r.id for r in first.references)
+            b = ", ".join(r.id for r in other.references)
+            raise InputError(f"references {a} ({first_name}) differ from {b} ({name})", source="--references")
+        for key, ref in mine.items():
+            them = theirs[key]
+            if not np.allclose(ref.position, them.position, rtol=0.0, atol=1e-5 * scale):
+                raise InputError(
+                    f"reference {ref.id} is at {list(ref.position)} in {first_name} but at "
+                    f"{list(them.position)} in {name}",
+                    source="--references",
+                )
+            if not np.allclose(ref.unit_direction(), them.unit_direction(), rtol=0.0, atol=1e-5):
+                raise InputError(
+                    f"reference {ref.id} acts along {ref.direction} in {first_name} but along {them.direction} "
+                    f"in {name}",
+                    source="--references",
+                )
+    return first
 
 
 def fit_modes_frf(
     layout: LayoutFile | PathLike,
     frf: PathLike,
-    references: ReferencesFile | PathLike,
+    references: ReferencesFile | PathLike | None,
     *,
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
@@ -223,8 +629,9 @@ def fit_modes_frf(
         The sensors (responses).
     frf : path-like
         FRF CSV or UFF (as :func:`identify_massline`).
-    references : ReferencesFile or path-like
-        The force points and directions.
+    references : ReferencesFile, path-like or None
+        The force points and directions (or from the layout or UFF headers, as
+        :func:`load_frf_test`).
     band : (float, float), optional
         Band of the fit (Hz); default from the FRF peaks
         (:func:`rigidid.core.frfmodes.rigid_band`).

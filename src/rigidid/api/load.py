@@ -17,7 +17,7 @@ from rigidid.errors import InputError
 from rigidid.io import files
 from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile, MountsFile, ReferencesFile
-from rigidid.results import Arrays, PathLike, TestData
+from rigidid.results import Arrays, FrfData, PathLike, TestData
 from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
@@ -154,7 +154,9 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
     -------
     TestData
         Layout (sensors from the records' nodes and signed directions, or from
-        the mode shapes), the modes of dataset 55 if any, and the time records.
+        the mode shapes), the modes of dataset 55 if any, and the time records;
+        for a file of FRFs (58, function type 4), the FRFs as accelerance and
+        the layout's ``references`` from their reference nodes and directions.
 
     Raises
     ------
@@ -167,6 +169,8 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
 
     src = str(path)
     contents = read_uff(path, units=units, geometry=geometry)
+    if contents.references:
+        contents.layout["references"] = contents.references
     try:
         layout = LayoutFile.model_validate(contents.layout)
     except ValidationError as exc:
@@ -189,7 +193,15 @@ def load_uff(path: PathLike, *, units: dict[str, str] | None = None, geometry: P
         if order != list(range(data.shape[1])):  # no copy when the file has the layout's order
             data = data[:, order]
         records.append((data, float(time[1] - time[0])))
-    return TestData(layout, modes, records, list(contents.record_labels))
+    frf = None
+    if contents.frf_sets:
+        from rigidid.io.frf import frf_from_datasets
+
+        ids = tuple(s.id for s in layout.sensors)
+        rids = tuple(r.id for r in layout.references or [])
+        freqs, h = frf_from_datasets(contents.frf_sets, ids, rids, src)
+        frf = FrfData(freqs, h, ids, rids)
+    return TestData(layout, modes, records, list(contents.record_labels), frf)
 
 
 UFF_SUFFIXES = (".uff", ".unv")
@@ -241,7 +253,19 @@ def load_test(
             raise InputError("with a UFF file, give no other input files", source=str(inputs[0]))
         data = load_uff(layout, units=units, geometry=geometry)
         if records and not data.records:
+            if data.frf is not None:
+                raise InputError(
+                    "the file holds FRFs (datasets 58, function type 4), not time records: without --records, "
+                    "`rigidid identify FILE` identifies the body from them",
+                    source=str(layout),
+                )
             raise InputError("no time records (dataset 58) in the file", source=str(layout))
+        if not records and data.modes is None and data.frf is not None:
+            raise InputError(
+                "the file holds FRFs (datasets 58, function type 4), not modes: `rigidid identify FILE` identifies "
+                "the body from them; `rigidid modes FILE --frf FILE` fits their modes",
+                source=str(layout),
+            )
         if not records and data.modes is None:
             raise InputError("no modes (dataset 55) in the file; with time records pass --records", source=str(layout))
         return data

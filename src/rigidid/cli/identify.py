@@ -15,6 +15,7 @@ from rigidid.cli.common import (
     identify_files,
     noise_overrides,
     parse_modes,
+    parse_units,
     reported,
     stage_tables,
     write_csv,
@@ -65,7 +66,7 @@ def identify(
     records: RecordsFlag = False,
     mass: Mass = None,
     modes_used: ModesUsed = None,
-    method: IdMethod = "structured",
+    method: IdMethod = None,
     json_path: JsonPath = None,
     uff: Annotated[
         Path | None,
@@ -96,16 +97,17 @@ def identify(
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with reported():
-        if method in ("massline", "residues") or frf is not None:
+        if method in FRF_METHODS or frf is not None or _uff_of_frfs(layout, inputs, records, units, geometry):
             if records:
                 raise InputError("give --records or --frf, not both", source="--frf")
             check_options(mass=mass, band=band)
             check_outputs({"--json": json_path})
             _identify_massline(
-                layout, frf, references, mass=mass, band=band, method=method, json_path=json_path,
-                modes=inputs, modes_used=modes_used,
+                layout, frf, references, mass=mass, band=band, method=method or "auto", json_path=json_path,
+                modes=inputs, modes_used=modes_used, units=units, geometry=geometry,
             )  # fmt: skip
             return
+        method = method or "structured"
         force_unit = check_force_unit(force_unit)
 
         check_outputs({"--json": json_path, "--uff": uff}, {"--csv": csv})
@@ -157,6 +159,21 @@ def _publish(
             stage_tables(*tables, result_tables(result, force_unit))
 
 
+FRF_METHODS = ("auto", "massline", "residues")
+"""``--method`` values of the FRF routes (``auto`` is the default when FRFs are given)."""
+
+
+def _uff_of_frfs(
+    layout: Path, inputs: list[Path] | None, records: bool, units: str | None, geometry: Path | None
+) -> bool:
+    """Whether LAYOUT is a UFF file of FRFs given alone (``rigidid identify test.uff``)."""
+    from rigidid.api.load import UFF_SUFFIXES, load_uff
+
+    if records or inputs or layout.suffix.lower() not in UFF_SUFFIXES:
+        return False
+    return load_uff(layout, units=parse_units(units, layout), geometry=geometry).frf is not None
+
+
 def _identify_massline(
     layout: Path,
     frf: Path | None,
@@ -168,17 +185,17 @@ def _identify_massline(
     json_path: str | None,
     modes: list[Path] | None = None,
     modes_used: str | None = None,
+    units: str | None = None,
+    geometry: Path | None = None,
 ) -> None:
-    """``identify --method massline|residues``: mass, CG and inertia from FRFs (rigidid.api.frf)."""
+    """``identify --frf`` (``--method auto|massline|residues``): mass, CG and inertia from FRFs (rigidid.api.frf)."""
     from rigidid.api import frf as api_frf
     from rigidid.jsonout import massline_to_dict
 
-    if method not in ("massline", "residues"):
-        raise InputError(f"FRFs are identified with --method massline or residues, not {method!r}", source="--method")
-    if frf is None:
-        raise InputError(f"--method {method} needs --frf FRF.csv", source="--frf")
-    if references is None:
-        raise InputError("--frf needs --references REFS.json", source="--references")
+    if method not in FRF_METHODS:
+        raise InputError(
+            f"FRFs are identified with --method {', '.join(FRF_METHODS)}, not {method!r}", source="--method"
+        )
     modes_file = None
     if method == "residues" and modes:
         if len(modes) != 1:
@@ -186,9 +203,12 @@ def _identify_massline(
         modes_file = modes[0]
     parsed = parse_modes(modes_used) if method == "residues" else None
     labels = tuple(parsed) if parsed is not None else None
+    if modes and method != "residues":
+        raise InputError("a modes file goes with --method residues (its rigid-body poles)", source="MODES")
     result = api_frf.identify_massline(
-        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels, method=method
-    )
+        layout, frf, references, mass=mass, band=band, modes=modes_file, modes_used=labels, method=method,
+        units=parse_units(units, layout), geometry=geometry,
+    )  # fmt: skip
     from rigidid.io.atomic import OutputSet
 
     with OutputSet():  # standard output first, then the file: every output or none

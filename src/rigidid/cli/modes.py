@@ -115,8 +115,6 @@ def _modes_frf(
 
     if records:
         raise InputError("give records or --frf, not both", source="--frf")
-    if references is None:
-        raise InputError("--frf needs --references REFS.json", source="--references")
     if output == "-" and json_path == "-":
         raise InputError("standard output cannot take both modes.csv and JSON", source="--json")
     check_options(n_modes=n_modes, band=band, max_order=max_order)

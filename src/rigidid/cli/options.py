@@ -31,11 +31,11 @@ ModesUsed = Annotated[
 
 
 IdMethod = Annotated[
-    str,
+    str | None,
     typer.Option(
         help="structured (default, robust), paper (the paper's eqs. 25-26 and 36-40), mounts (CG, inertia and "
-        "per-mount rates fitted together; needs --mounts); from --frf: massline, or residues (scaled modes, with "
-        "MODES).",
+        "per-mount rates fitted together; needs --mounts); from FRFs: auto (default: every route the data allow, "
+        "one chosen, cross-checked), massline, or residues (scaled modes, poles fitted or from MODES).",
         metavar="METHOD",
     ),
 ]
@@ -45,7 +45,8 @@ FrfPath = Annotated[
     Path | None,
     typer.Option(
         "--frf",
-        help="FRFs (accelerance, CSV or UFF) for --method massline or residues.",
+        help="FRFs (accelerance, CSV or UFF); references from --references, the layout's `references` or the "
+        "UFF headers.",
         metavar="FILE",
         show_default=False,
     ),

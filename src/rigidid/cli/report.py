@@ -96,8 +96,9 @@ def report(
         )  # fmt: skip
         modal = {"method": modal_method, "n_modes": n_modes, "band": band, "max_order": max_order, "decimate": decimate}
         run = identify_files(
-            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
-            noise=noise, seed=seed, resample=resample, geometry=geometry, spectrum=True, refine=refine, mounts=mounts,
+            layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method or "structured",
+            draws=uncertainty, noise=noise, seed=seed, resample=resample, geometry=geometry, spectrum=True,
+            refine=refine, mounts=mounts,
         )  # fmt: skip
         result = add_mounts(run.result, mounts, torque_axis)
         spec = None

@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.frfstats import local_noise, misfit_units, sandwich_variance
 from rigidid.core.geometry import sensor_matrix, transfer_matrix
 from rigidid.core.linalg import pseudo_inverse
-from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
+from rigidid.core.timedomain.stabilisation import Cluster, Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
 from rigidid.progress import ProgressCallback
 
@@ -1242,6 +1242,45 @@ def _body_from_modes(lam: CArray, u: CArray, origin: Array, span: float) -> Scal
     return ScaledBody(mass, cg, inertia, 0.5 * (k_g + k_g.T), 0.5 * (c_g + c_g.T), 0.5 * (m_g + m_g.T))
 
 
+ORDER_RAISE = 4
+"""Without ``max_order``, the pLSCF order is doubled from its default until ``n_modes`` stable modes
+are found, up to this many times the default."""
+
+
+def _stable_modes(
+    freq: Array,
+    h: CArray,
+    band: tuple[float, float],
+    top: int,
+    cap: int,
+    n_modes: int | None,
+    weighting: str,
+    criteria: Criteria | None,
+    progress: ProgressCallback | None,
+) -> tuple[list[OrderPoles], list[Cluster], int]:
+    """Stabilisation diagram and stable clusters over orders 1..top, the order doubled up to `cap` until
+    `n_modes` are stable (the models of the lower orders are kept: each order is fitted once).
+
+    Returns
+    -------
+    diagram, clusters, top
+        The diagram over every order fitted, its clusters (a mode stable at a
+        third of the orders at least), and the highest order.
+    """
+    models = plscf_poles(freq, h, list(range(1, top + 1)), band=band, weighting=weighting)
+    crit = criteria if criteria is not None else Criteria()
+    while True:
+        if progress is not None:
+            progress("pLSCF orders", top, top)
+        diagram = stabilise(models, band, crit)
+        clusters = cluster_stable(diagram, min_count=max(3, top // 3))
+        if n_modes is None or len(clusters) >= n_modes or top >= cap:
+            return diagram, clusters, top
+        new_top = min(cap, 2 * top)
+        models += plscf_poles(freq, h, list(range(top + 1, new_top + 1)), band=band, weighting=weighting)
+        top = new_top
+
+
 def fit_frf_modes(
     frequencies: ArrayLike,
     frf: ArrayLike,
@@ -1284,8 +1323,12 @@ def fit_frf_modes(
         Keep the `n_modes` modes stable at the most orders; default every mode
         stable at a third of the orders or more.
     max_order : int, optional
-        Highest polynomial order of the sweep (``n q`` poles); default
-        ``max(8, ceil(48 / q))``.
+        Highest polynomial order of the sweep (``n q`` poles). The sweep
+        starts at ``max(8, ceil(48 / q))`` (or `max_order`, if lower) and, with
+        `n_modes` given, the order is doubled until `n_modes` stable modes are
+        found, up to `max_order` (default: :data:`ORDER_RAISE` times the
+        start); the orders already fitted are kept, so raising costs only the
+        new ones. Without `n_modes`, every order up to `max_order` is fitted.
     lower, upper : bool
         Residual terms of the LSFD (:func:`residues_lsfd`).
     weighting : {"relative", "none"}
@@ -1333,17 +1376,18 @@ def fit_frf_modes(
     auto_poles = rigid_band(freq, h)[0]
     (lo, hi), _ = _band_lines(freq, band if band is not None else auto_poles)
     res_band = residue_band if residue_band is not None else (lo, hi)
-    orders = list(range(1, top + 1))
-    models = plscf_poles(freq, h, orders, band=(lo, hi), weighting=weighting)
-    if progress is not None:
-        progress("pLSCF orders", len(orders), len(orders))
-    diagram = stabilise(models, (lo, hi), criteria if criteria is not None else Criteria())
-    clusters = cluster_stable(diagram, min_count=max(3, len(orders) // 3))
+    if max_order is not None and n_modes is not None:  # raised up to the order given, stopped once stable
+        top, cap = min(top, max(8, -(-48 // q))), top
+    else:
+        cap = top if n_modes is None else ORDER_RAISE * top
+    first = top
+    diagram, clusters, top = _stable_modes(freq, h, (lo, hi), top, cap, n_modes, weighting, criteria, progress)
     if n_modes is not None:
         if len(clusters) < n_modes:
+            raised = f" at orders up to {top} (raised from {first})" if top > first else ""
             raise IdentificationError(
-                f"{len(clusters)} stable mode(s) in {lo:.4g}-{hi:.4g} Hz, {n_modes} asked: widen the band or "
-                "raise the order"
+                f"{len(clusters)} stable mode(s) in {lo:.4g}-{hi:.4g} Hz{raised}, {n_modes} asked: widen the band "
+                "or raise the order"
             )
         clusters = clusters[:n_modes]
     if not clusters:

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from rigidid.errors import InputError
 from rigidid.io.dialect import plain_number
 from rigidid.io.uff_codes import FUNCTION_TYPES
-from rigidid.models import ReferencesFile
+from rigidid.models import LayoutFile, ReferencesFile
 from rigidid.units import check_same_units
 
 __all__ = [
@@ -35,11 +35,13 @@ __all__ = [
     "FRF_FORMATS",
     "frf_csv_text",
     "frf_format_from",
+    "frf_from_datasets",
     "frf_uff_bytes",
     "load_frf_csv",
     "load_frf_uff",
     "load_references",
     "reference_arrays",
+    "references_from_headers",
 ]
 
 FRF_COLUMNS = ("frequency_hz", "response", "reference", "real", "imag")
@@ -343,8 +345,41 @@ def load_frf_uff(
     """
     from rigidid.io.uff import read_all
 
-    src = str(path)
-    sets = read_all(Path(path))
+    return frf_from_datasets(read_all(Path(path)), sensor_ids, reference_ids, str(path), units=units)
+
+
+def frf_from_datasets(
+    sets: Sequence[dict[str, Any]],
+    sensor_ids: Sequence[str],
+    reference_ids: Sequence[str],
+    src: str,
+    *,
+    units: dict[str, str] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
+    """FRFs (p, q, f) as accelerance from the datasets of a universal file (:func:`load_frf_uff`).
+
+    Parameters
+    ----------
+    sets : sequence of dict
+        Datasets as pyuff reads them: every 58 is an FRF; a 164 gives the units.
+    sensor_ids, reference_ids : sequence of str
+        Ids the records' nodes and directions are matched to (as :func:`load_frf_uff`).
+    src : str
+        The file, for messages.
+    units : dict, optional
+        The layout's units: a dataset 164 must name the same.
+
+    Returns
+    -------
+    frequencies : ndarray, shape (f,)
+    frf : ndarray of complex, shape (p, q, f)
+
+    Raises
+    ------
+    InputError
+        As :func:`load_frf_uff`.
+    """
+    sets = list(sets)
     s_index = {s: i for i, s in enumerate(sensor_ids)}
     r_index = {r: j for j, r in enumerate(reference_ids)}
     found: dict[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.complex128]]] = {}
@@ -380,6 +415,63 @@ def load_frf_uff(
     if not np.any(frf):
         raise InputError("every FRF value is zero: no response to fit", source=src)
     return freqs, frf
+
+
+def references_from_headers(
+    path: str | os.PathLike[str], layout: LayoutFile, *, units: dict[str, str] | None = None
+) -> ReferencesFile | None:
+    """The reference points a UFF file's FRF headers name (reference node and direction of each dataset 58).
+
+    Parameters
+    ----------
+    path : path-like
+        A UFF file of FRFs (datasets 58, function type 4).
+    layout : LayoutFile
+        The sensors: a reference node the file gives no coordinates for is
+        placed at the layout's sensor of that node number (ids ``"12"`` or
+        ``"12+x"``), the driving point of a test.
+    units : dict, optional
+        The layout's units, for a file without dataset 164.
+
+    Returns
+    -------
+    ReferencesFile or None
+        Ids ``"<node>"`` (one direction at the node) or ``"<node><axis>"``;
+        with the file's nodes (15/2411) and coordinate systems (18/2420) the
+        positions and directions are read as for sensors
+        (:func:`rigidid.io.uff.read_uff`). None when the headers name no
+        reference node, or one whose position neither the file nor the layout
+        gives.
+    """
+    from rigidid.io.uff import read_all, read_uff
+    from rigidid.io.uff_codes import ID_PATTERN
+
+    sets = read_all(Path(path))
+    if any(d.get("type") in (15, 2411) for d in sets):
+        refs = read_uff(path, units=units).references
+        return ReferencesFile.model_validate({"references": refs}) if refs else None
+    points: list[tuple[int, int]] = []
+    for d in sets:
+        if d.get("type") == 58 and int(d.get("func_type", 0)) == 4:
+            key = (int(d.get("ref_node", 0)), int(d.get("ref_dir", 0)))
+            if key[0] <= 0 or not 1 <= abs(key[1]) <= 3:
+                return None
+            if key not in points:
+                points.append(key)
+    at_node: dict[int, list[float]] = {}
+    for sensor in layout.sensors:
+        match = ID_PATTERN.match(sensor.id)
+        if match is not None:
+            at_node.setdefault(int(match.group(1)), list(sensor.position))
+    if not points or any(node not in at_node for node, _ in points):
+        return None
+    count = {node: sum(n == node for n, _ in points) for node, _ in points}
+    entries = []
+    for node, code in points:
+        axis = ("+" if code > 0 else "-") + "xyz"[abs(code) - 1]
+        rid = str(node) if count[node] == 1 else f"{node}{axis}"
+        entries.append({"id": rid, "position": at_node[node], "direction": axis})
+    return ReferencesFile.model_validate({"references": entries})
 
 
 # --------------------------------------------------------------------------- UFF 58 (function type 4) writer

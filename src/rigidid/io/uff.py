@@ -14,7 +14,8 @@ Datasets used
 2411   nodes, coordinates in the part (global) system (double precision)
 18     coordinate systems (origin, +x point, +xz point; 6 digits)
 2420   coordinate systems (axes and origin; double precision)
-58     one time record per sensor and impact (``func_type`` 1 only)
+58     one time record per sensor and impact (``func_type`` 1), or one FRF per
+       response and reference (``func_type`` 4; not both in one file)
 55     mode shapes at nodes (normal, 2, or complex, 3 and 7)
 82     trace lines (written only, for animation)
 151    header: the model name becomes the layout's ``name``
@@ -163,6 +164,13 @@ class UffContents:
         Per impact: ``"load case 1"`` or ``"load case 1, reference 3+z"``.
     nodes : dict of int to tuple of float
         Every node's coordinates (length unit).
+    references : list of dict
+        FRF files: the reference (force) points named by the FRFs' headers,
+        ``{"id", "position", "direction"}`` as ``references.json`` has them
+        (ids as for sensors), in order of first appearance; empty otherwise.
+    frf_sets : list of dict
+        FRF files: the datasets 58 of function type 4 and the datasets 164, as
+        read (:func:`rigidid.io.frf.frf_from_datasets` turns them into an array).
     """
 
     layout: dict[str, Any]
@@ -170,6 +178,8 @@ class UffContents:
     records: list[UffRecord] = field(default_factory=list)
     record_labels: list[str] = field(default_factory=list)
     nodes: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    references: list[dict[str, Any]] = field(default_factory=list)
+    frf_sets: list[dict[str, Any]] = field(default_factory=list)
 
 
 # --------------------------------------------------------------------------- helpers
@@ -375,6 +385,7 @@ class _Reader:
     modes: list[tuple[dict[str, Any], str]] = field(default_factory=list)
     not_read: dict[int, int] = field(default_factory=dict)
     units_where: str = ""
+    units_dataset: dict[str, Any] | None = None
 
     def error(self, message: str, where: str | None = None) -> InputError:
         return InputError(message, source=self.source, location=where)
@@ -423,7 +434,7 @@ class _Reader:
                 f"of {self.units_where}",
                 where,
             )
-        self.units, self.units_where = units, where
+        self.units, self.units_where, self.units_dataset = units, where, dset
 
     def nodes(self) -> tuple[dict[int, tuple[float, float, float]], dict[int, str]]:
         """Global coordinates of every node, and why a node has none (an unusable definition system)."""
@@ -595,20 +606,12 @@ _GEOMETRY_TYPES = (15, 18, 151, 164, 2411, 2420)
 
 
 def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) -> InputError | None:
-    """Why a dataset 58 is not read as a time record (None when it is one: function type 1)."""
+    """Why a dataset 58 is not read as a time record or an FRF (None when it is one: function type 1 or 4)."""
     func = int(dset.get("func_type", 0))
-    if func == 1:
+    if func in (1, 4):
         return None
     node = int(dset.get("rsp_node", 0))
     here = f"{where}, node {node}"
-    if func == 4:
-        # --- hook for FRFs (function type 4) -----------------------------------------------
-        # FRFs are not time records; rigidid.io.frf.load_frf_uff reads them for the mass line.
-        return reader.error(
-            "function type 4 is a frequency response function (FRF), not a time record: "
-            "FRFs are read by `rigidid identify LAYOUT --frf FILE --references REFS.json --method massline`",
-            here,
-        )
     name = FUNCTION_TYPES.get(func, "unknown")
     return reader.error(
         f"function type {func} ({name}) is not a time record; rigidid reads time responses (function type 1) "
@@ -707,6 +710,7 @@ def read_uff(
     # sensors from the 58s
     sensors: list[tuple[int, int]] = []
     time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]] = []
+    frf_sets: list[tuple[dict[str, Any], str]] = []
     for dset, where in reader.records:
         refusal = _function_type_refusal(reader, dset, where)
         if refusal is not None:
@@ -727,7 +731,11 @@ def read_uff(
         _require_node(reader, node, nodes, no_position, here, "response node")
         if (node, code) not in sensors:
             sensors.append((node, code))
-        time_sets.append((dset, where, (node, code)))
+        if int(dset.get("func_type", 0)) == 4:
+            frf_sets.append((dset, where))
+        else:
+            time_sets.append((dset, where, (node, code)))
+    references = _frf_references(reader, frf_sets, time_sets, nodes, no_position)
     if not reader.records:
         sensors = _sensors_from_modes(reader, nodes, no_position)
     if not sensors:
@@ -759,7 +767,55 @@ def read_uff(
     }
     records, labels = _group_records(reader, time_sets, id_of)
     rows = _mode_rows(reader, sensors, ids)
-    return UffContents(layout, rows, records, labels, nodes)
+    raw = [d for d, _ in frf_sets] + ([reader.units_dataset] if frf_sets and reader.units_dataset else [])
+    return UffContents(layout, rows, records, labels, nodes, references, raw)
+
+
+def _frf_references(
+    reader: _Reader,
+    frf_sets: list[tuple[dict[str, Any], str]],
+    time_sets: list[tuple[dict[str, Any], str, tuple[int, int]]],
+    nodes: dict[int, tuple[float, float, float]],
+    no_position: dict[int, str],
+) -> list[dict[str, Any]]:
+    """The reference points the FRFs' headers name (``references.json`` entries), checked.
+
+    Raises
+    ------
+    InputError
+        Time records and FRFs in one file; a reference node that is 0, has no
+        coordinates or a direction that is no translation (naming the dataset).
+    """
+    if frf_sets and time_sets:
+        first = int(reader.records[0][0].get("func_type", 0))
+        where = next(w for d, w in reader.records if int(d.get("func_type", 0)) != first)
+        raise reader.error(
+            "time records (function type 1) and FRFs (function type 4) in one file: give them as two files", where
+        )
+    points: list[tuple[int, int]] = []
+    for dset, where in frf_sets:
+        node, code = int(dset.get("ref_node", 0)), int(dset.get("ref_dir", 0))
+        here = f"{where}, reference node {node}"
+        if node <= 0:
+            raise reader.error(
+                f"the FRF names no reference node (node {node}): it carries no geometry; name the force points "
+                "in the exporting tool",
+                here,
+            )
+        if not 1 <= abs(code) <= 3:
+            what = "a rotation" if 4 <= abs(code) <= 6 else "not a direction"
+            raise reader.error(f"reference direction {code} is {what}; forces act along +-x, +-y, +-z", here)
+        _require_node(reader, node, nodes, no_position, here, "reference node")
+        if (node, code) not in points:
+            points.append((node, code))
+    return [
+        {
+            "id": rid,
+            "position": list(nodes[node]),
+            "direction": reader.direction(node, code, f"{reader.node_cs.get(node, (0, 0, ''))[2]}"),
+        }
+        for (node, code), rid in zip(points, _sensor_ids(points), strict=True)
+    ]
 
 
 def _require_node(
