@@ -11,7 +11,8 @@ force linear between samples (scipy.linalg.expm of the system augmented with the
 slope) at 16 x 2048 Hz, then both the force and the accelerations averaged over blocks of 16
 samples (the same anti-alias filter on every channel, as a recorder's) to 2048 Hz; 6 s per hit,
 0.25 s before it. Noise: white, 1 % of each accelerometer's RMS, and 1 % of the force's peak on
-the force channel.
+the force channel (``--force-noise-of rms``: of its RMS over the record, the accelerometers'
+convention and ``rigidid simulate``'s).
 
 Printed: per seed, the mass measured (``identify --records`` with the layout's ``force`` block)
 and its reported standard error; the spread over seeds; the RMS errors of CG and inertia with the
@@ -106,13 +107,17 @@ def clean_records() -> tuple[list[np.ndarray], list[np.ndarray]]:
     return responses, forces
 
 
+FORCE_NOISE_OF = "peak"
+
+
 def noisy(clean: tuple[list[np.ndarray], list[np.ndarray]], rng: np.random.Generator, noise: float = 0.01):
-    """The records with white noise: `noise` of each accelerometer's RMS, and of the force's peak."""
+    """The records with white noise: `noise` of each accelerometer's RMS, and of the force's peak (or RMS)."""
     out = []
     for acc, f in zip(*clean, strict=True):
         rms = np.sqrt(np.mean(acc**2, axis=0))
         y = acc + noise * rms * rng.standard_normal(acc.shape)
-        g = f + noise * np.max(np.abs(f)) * rng.standard_normal(f.shape)
+        level = np.max(np.abs(f)) if FORCE_NOISE_OF == "peak" else np.sqrt(np.mean(f**2))
+        g = f + noise * level * rng.standard_normal(f.shape)
         out.append((y, g))
     return out
 
@@ -162,7 +167,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--draws", type=int, default=100, help="noise draws for the interval coverage (0: none)")
+    parser.add_argument("--force-noise-of", choices=("peak", "rms"), default="peak",
+                        help="the force's noise: 1 %% of its peak (default) or of its RMS")  # fmt: skip
     args = parser.parse_args()
+    global FORCE_NOISE_OF
+    FORCE_NOISE_OF = args.force_noise_of
+    print(f"force noise: 1 % of the force's {FORCE_NOISE_OF}; accelerometers: 1 % of their RMS")
     clean = clean_records()
     out = run([(y, f) for y, f in zip(*clean, strict=True)], force=True)
     fm = out["force_mass"]
@@ -179,8 +189,10 @@ def main() -> None:
         cg_f.append(a), j_f.append(b), cg_n.append(c), j_n.append(d)
         jpm_f.append(np.diag(np.asarray(with_force["inertia_per_mass"])) - np.diag(INERTIA) / MASS)
         jpm_n.append(np.diag(np.asarray(without["inertia_per_mass"])) - np.diag(INERTIA) / MASS)
-        print(f"seed {seed}: mass {m:.4f} kg, error {100 * (m / MASS - 1):+.3f} %, std {100 * std / MASS:.3f} %",
-              flush=True)  # fmt: skip
+        budget = with_force["force_mass"]["budget"]  # type: ignore[index]
+        parts = f"responses {100 * budget['noise'] / MASS:.3f} %, force {100 * budget['force_noise'] / MASS:.3f} %"
+        print(f"seed {seed}: mass {m:.4f} kg, error {100 * (m / MASS - 1):+.3f} %, std {100 * std / MASS:.3f} % "
+              f"({parts})", flush=True)  # fmt: skip
     rel = 100 * (np.array(masses) / MASS - 1)
     print(f"mass over {args.seeds} seeds: max |error| {np.max(np.abs(rel)):.3f} %, spread (std) {np.std(rel):.3f} %")
 

@@ -219,6 +219,7 @@ def force_mass_to_dict(measured: ForceMass, mass_given: float | None) -> dict[st
             "band_hz": [float(measured.band_hz[0]), float(measured.band_hz[1])],
             "lines": int(measured.lines),
             "relative_residual": float(measured.relative_residual),
+            "misfit_noise_units": float(measured.misfit),
             "coherence": float(measured.coherence),
         },
     }

@@ -483,6 +483,10 @@ class ForceMassResult(_Strict):
     band_hz: tuple[float, float] = Field(description="the FFT lines fitted (Hz)")
     lines: int = Field(description="how many lines")
     relative_residual: float = Field(description="RMS misfit of the fit relative to the FRFs (weighted)")
+    misfit_noise_units: float = Field(
+        description="RMS misfit over the FRFs' noise (from third differences along frequency); about 1 at a good "
+        "fit; the responses' part of std is multiplied by max(1, misfit)"
+    )
     coherence: float = Field(description="mean H1 coherence over the band and the sensors")
 
 

@@ -8,20 +8,26 @@ averaged over blocks of fine samples (one anti-alias filter for force and respon
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
 from rigidid.core.timedomain.force import Windows, fit_band, fit_mass, h1_frf, per_mass_accelerance
 
-MASS = 40.0
-CG = np.array([0.02, -0.01, 0.05])
-INERTIA = np.array([[1.2, 0.05, 0.0], [0.05, 1.6, -0.04], [0.0, -0.04, 1.9]])
-RATE, FINE, SECONDS, PRE = 1024.0, 8, 2.5, 0.1
-SENSORS = np.array([[0.3, 0.2, 0.1], [-0.3, 0.2, 0.1], [-0.3, -0.2, 0.1], [0.3, -0.2, -0.1], [0.0, 0.2, -0.1],
-                    [0.3, 0.0, 0.1], [-0.3, 0.0, -0.1]])  # fmt: skip
-AXES = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-DRIVE = np.array([0.3, -0.1, 0.1])
-DRIVE_DIR = np.array([-0.5, 0.4, -0.77]) / np.linalg.norm([-0.5, 0.4, -0.77])
+MASS = 150.0
+CG = np.array([0.04, -0.03, 0.11])
+INERTIA = np.array([[9.0, 0.4, -0.3], [0.4, 12.0, 0.5], [-0.3, 0.5, 14.0]])
+RATE, FINE, SECONDS, PRE = 1024.0, 8, 3.0, 0.1
+SENSORS = np.array([
+    [0.5, 0.4, 0.25], [-0.5, 0.4, 0.25], [-0.5, -0.4, 0.25], [0.5, -0.4, 0.25], [0.5, 0.4, -0.15],
+    [-0.5, 0.4, -0.15], [-0.5, -0.4, -0.15], [0.5, -0.4, -0.15], [0.0, 0.4, 0.05], [0.0, -0.4, 0.25],
+])  # fmt: skip
+AXES = np.array([
+    [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 1, 0], [1, 0, 0], [1, 0, 0],
+], dtype=float)  # fmt: skip
+DRIVE = np.array([0.5, -0.1, 0.25])
+DRIVE_DIR = np.array([-0.45, 0.35, -0.82]) / np.linalg.norm([-0.45, 0.35, -0.82])
 
 
 def _at(r: np.ndarray) -> np.ndarray:
@@ -33,13 +39,17 @@ def _body() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     m = np.zeros((6, 6))
     m[:3, :3], m[3:, 3:] = MASS * np.eye(3), INERTIA
     k = np.zeros((6, 6))
-    for x, y, s in ((0.25, 0.15, 1.0), (-0.25, 0.15, 0.7), (-0.25, -0.15, 1.2), (0.25, -0.15, 0.8)):
-        t = _at(np.array([x, y, -0.15]) - CG)
-        k += t.T @ np.diag([3e4 * s, 4e4 * s, 1.5e5 * s]) @ t
-    return m, k, 3.0 * m + 5e-4 * k
+    for x, y, s in ((0.5, 0.3, 1.6), (-0.35, 0.4, 0.5), (-0.45, -0.25, 1.3), (0.3, -0.4, 0.6)):
+        axis = np.array([-x, -y, 0.0]) * 0.7 / np.hypot(x, y) + [0.0, 0.0, 1.0]  # inclined 35 degrees inwards
+        axis /= np.linalg.norm(axis)
+        t = _at(np.array([x, y, -0.25]) - CG)
+        k += t.T @ (s * (8e4 * np.eye(3) + 5.2e5 * np.outer(axis, axis))) @ t
+    return m, k, 2.5 * m + 6e-4 * k
 
 
+@functools.cache
 def _records() -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Noise-free accelerations (n x 10) and forces (n,) of two hits at the drive point (do not modify)."""
     from scipy.linalg import expm
 
     m, k, c = _body()
@@ -53,7 +63,7 @@ def _records() -> tuple[list[np.ndarray], list[np.ndarray]]:
     n = int(SECONDS * RATE)
     t = np.arange(n * FINE + 1) * h - PRE
     ys, fs = [], []
-    for amp, width in ((300.0, 0.005), (200.0, 0.006)):
+    for amp, width in ((500.0, 0.004), (350.0, 0.005)):
         f = np.where((t >= 0) & (t <= width), amp * np.sin(np.pi * np.clip(t, 0, width) / width), 0.0)
         state, acc = np.zeros(14), np.empty((t.size, len(AXES)))
         for i in range(t.size):

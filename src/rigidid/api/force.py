@@ -9,7 +9,8 @@ mass's standard error enters the inertia's and the stiffness's.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -26,6 +27,11 @@ if TYPE_CHECKING:
     from rigidid.core.timedomain.refine import RecordBound
 
 Array = NDArray[np.float64]
+
+MISFIT_WARN = 3.0
+"""Above this misfit (RMS residual over the FRFs' noise) ..."""
+RESIDUAL_WARN = 0.02
+"""... and this relative residual, a warning says the per-mass body explains the force's FRFs poorly."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,36 @@ def force_channel(layout: LayoutFile, options: ForceOptions) -> ForceChannel:
     return layout.force
 
 
+def check_force(layout: LayoutFile, options: ForceOptions, paths: Sequence[PathLike]) -> None:
+    """Before any work: the drive point is known and every record file has the force column.
+
+    Raises
+    ------
+    InputError
+        No ``force`` block (:func:`force_channel`); a file without the force column, naming it.
+    """
+    from pathlib import Path
+
+    from rigidid.io.records import open_source
+
+    column = force_channel(layout, options).column
+    ids = [s.id for s in layout.sensors]
+    for path in paths:
+        with _named_column(column, str(path)):
+            open_source(Path(path), [*ids, column], None)
+
+
+@contextmanager
+def _named_column(column: str, src: str) -> Iterator[None]:
+    """The reader's "sensor 'X' of the layout has no column" said of the force column."""
+    try:
+        yield
+    except InputError as exc:
+        if f"sensor {column!r} of the layout has no column" in str(exc):
+            raise InputError(f"the force column {column!r} is not in the record", source=src) from None
+        raise
+
+
 def read_force_records(
     paths: Sequence[PathLike], sensor_ids: Sequence[str], column: str
 ) -> tuple[list[Array], list[Array], float]:
@@ -84,7 +120,8 @@ def read_force_records(
         raise InputError(f"the force column {column!r} is a sensor of the layout", source="force")
     responses, forces, steps = [], [], []
     for path in paths:
-        data, dt = read_record(path, [*sensor_ids, column])
+        with _named_column(column, str(path)):
+            data, dt = read_record(path, [*sensor_ids, column])
         responses.append(data[:, :-1])
         forces.append(data[:, -1])
         steps.append(dt)
@@ -140,6 +177,18 @@ def measure_mass(
         fitted = fit_mass(frf, model, band, sensitivity=bounds.sensitivity, force_sensitivity=force_bound)
     except ValueError as exc:
         raise InputError(str(exc), source="force") from None
+    if fitted.misfit > MISFIT_WARN and fitted.relative_residual > RESIDUAL_WARN:
+        import warnings
+
+        from rigidid.errors import ModelMisfitWarning
+
+        warnings.warn(
+            f"the identified body explains the force's FRFs poorly (misfit {fitted.misfit:.3g} times their noise, "
+            f"{100 * fitted.relative_residual:.3g} % of their size): the mass {fitted.mass:.6g} is doubtful "
+            "(its standard error is widened by the misfit); check the drive point and direction",
+            ModelMisfitWarning,
+            stacklevel=2,
+        )
     if not (np.isfinite(fitted.mass) and fitted.mass > 0):
         raise InputError(
             f"the force and the responses give a mass of {fitted.mass:.4g}: is the force's direction "
@@ -265,5 +314,7 @@ def _frf_csv(
     for i, sid in enumerate(sensor_ids):
         for k, f in enumerate(frequencies):
             v = frf[i, 0, k]
-            lines.append(f"{f!r},{sid},{reference},{float(v.real)!r},{float(v.imag)!r},{float(coherence[i, k])!r}")
+            lines.append(
+                f"{float(f)!r},{sid},{reference},{float(v.real)!r},{float(v.imag)!r},{float(coherence[i, k])!r}"
+            )
     return "\n".join(lines) + "\n"

@@ -905,7 +905,7 @@ def _identify_test(
         else load_test(layout, inputs or [], records=records, units=units, geometry=geometry)
     )
     _check_segments(data, resample)  # before any estimation: blame the option, not the records
-    force, data, mass_given = _force_setup(force, data, records, streamed, identify_options)
+    force, data, mass_given = _force_setup(force, data, records, streamed, identify_options, inputs or [])
     paths = list(inputs or []) if streamed else None
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     estimate = None
@@ -967,21 +967,27 @@ def _resampled(
 
 
 def _force_setup(
-    force: ForceOptions | None, data: TestData, records: bool, streamed: bool, options: dict[str, Any]
+    force: ForceOptions | None,
+    data: TestData,
+    records: bool,
+    streamed: bool,
+    options: dict[str, Any],
+    paths: Sequence[PathLike],
 ) -> tuple[ForceOptions | None, TestData, float | None]:
     """Whether the force is used (`force`, or the layout's ``force`` block) and, if so, the test without its mass.
 
     The records are then identified per unit mass (the ``mass`` option taken out of `options`);
     the given mass is returned to be reported beside the measured one.
     """
-    if force is None and data.layout.force is None:
+    if force is None and (data.layout.force is None or not records):  # the layout's block applies to records
         return None, data, None
-    if force is None:
-        from rigidid.api.force import ForceOptions as Options
+    from rigidid.api.force import ForceOptions as Options
+    from rigidid.api.force import check_force
 
-        force = Options()
+    force = force or Options()
     if not (records and streamed):
         raise InputError("a measured force needs record files (--records, not UFF or --resample)", source="force")
+    check_force(data.layout, force, paths)
     given = options.pop("mass", None)
     given = given if given is not None else data.layout.mass
     return force, replace(data, layout=data.layout.model_copy(update={"mass": None})), given

@@ -282,6 +282,11 @@ class ForceMass:
         RMS misfit of the fit over the band relative to the measured FRFs (weighted as the fit).
     coherence : float
         Mean coherence over the band and the sensors.
+    misfit : float
+        RMS residual over the noise seen in its third differences along frequency (white noise
+        stays there, a smooth lack of fit vanishes): about 1 when the per-mass body explains the
+        FRFs to their noise. The responses' part of the standard error is multiplied by
+        ``max(1, misfit)``.
     """
 
     mass: float
@@ -292,6 +297,7 @@ class ForceMass:
     lines: int
     relative_residual: float
     coherence: float
+    misfit: float = 1.0
 
 
 def tip_limit(frf: ForceFrf) -> float:
@@ -315,6 +321,17 @@ def fit_band(frf: ForceFrf, frequencies_hz: Array, band: tuple[float, float] | N
         return float(band[0]), float(band[1])
     low, high = 0.5 * float(np.min(frequencies_hz)), 2.5 * float(np.max(frequencies_hz))
     return low, min(high, tip_limit(frf))
+
+
+def _misfit(resid: CArray, sff: Array, sigma2: Array) -> float:
+    """RMS of the whitened residual over its noise level from third differences along frequency."""
+    z = resid * np.sqrt(sff)[:, None]
+    if z.shape[0] < 8:
+        return 1.0
+    third = np.diff(z, n=3, axis=0)
+    noise = float(np.mean(np.abs(third) ** 2)) / 20.0  # var of a third difference of white noise: 20 sigma^2
+    total = float(np.mean(np.abs(z) ** 2))
+    return float(np.sqrt(total / noise)) if noise > 0 else 1.0
 
 
 def fit_mass(
@@ -366,7 +383,8 @@ def fit_mass(
         sigma2 = np.maximum(np.mean(np.abs(resid) ** 2 * sff[:, None], axis=0), 1e-300)
     w = sff[:, None] / sigma2[None, :]
     info = float(np.sum(w * np.abs(g) ** 2))
-    noise_x = float(np.sqrt(frf.noise_factor / (2.0 * info)))
+    misfit = _misfit(resid, sff, sigma2)
+    noise_x = max(1.0, misfit) * float(np.sqrt(frf.noise_factor / (2.0 * info)))
     share = np.sum(w * np.real(np.conj(g) * y), axis=0) / (x * info)  # d x / x per unit gain of each sensor
     sens_rel = float(np.sqrt(np.sum(share**2))) * sensitivity / np.sqrt(3.0)
     force_rel = force_sensitivity / np.sqrt(3.0)
@@ -377,7 +395,7 @@ def fit_mass(
         "sensitivity": sens_rel * mass,
         "force_sensitivity": force_rel * mass,
     }
-    misfit = float(np.sqrt(np.sum(np.abs(y - x * g) ** 2 * w) / np.sum(np.abs(y) ** 2 * w)))
+    relative = float(np.sqrt(np.sum(np.abs(y - x * g) ** 2 * w) / np.sum(np.abs(y) ** 2 * w)))
     used = f[keep]
     return ForceMass(
         mass=mass,
@@ -386,6 +404,7 @@ def fit_mass(
         budget=budget,
         band_hz=(float(used[0]), float(used[-1])),
         lines=lines,
-        relative_residual=misfit,
+        relative_residual=relative,
+        misfit=misfit,
         coherence=float(np.mean(frf.coherence[keep])),
     )
