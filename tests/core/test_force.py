@@ -149,3 +149,30 @@ def test_force_noise_is_in_the_interval(records) -> None:
         frf = h1_frf(ys, noisy_f, 1.0 / RATE)
         fitted = fit_mass(frf, _model(frf), fit_band(frf, _frequencies()))
         assert abs(fitted.mass - MASS) < 3 * fitted.noise_std
+
+
+def test_a_per_mass_bound_made_absolute_carries_the_mass_error() -> None:
+    """var(m q) = m^2 var(q) + q^2 var(m) for the inertia, moments and stiffness; the CG untouched."""
+    from rigidid.api.force import absolute_bound
+    from rigidid.core.timedomain.refine import RecordBound
+    from rigidid.core.uncertainty import IntervalEstimate
+
+    def iv(est, std):
+        est, std = np.asarray(est, float), np.asarray(std, float)
+        return IntervalEstimate(est, std, est - 1.96 * std, est + 1.96 * std)
+
+    jpm, sj = INERTIA / MASS, np.full((3, 3), 1e-4)
+    bound = RecordBound(
+        center_of_gravity=iv(CG, [1e-3] * 3), inertia=iv(jpm, sj), principal_moments=iv([0.06, 0.08, 0.09], [1e-4] * 3),
+        stiffness_diagonal=iv([1e3] * 6, [10.0] * 6), per_mass=True, normalised_cost=1.0, noise_from="residual",
+        residuals=100, sensor_budget={"noise": {"center_of_gravity": np.full(3, 1e-3), "inertia_per_mass": sj}},
+    )  # fmt: skip
+    out = absolute_bound(bound, MASS, 1.5)
+    assert not out.per_mass
+    assert np.allclose(out.inertia.estimate, INERTIA)
+    assert np.allclose(out.inertia.std, np.sqrt((MASS * sj) ** 2 + (jpm * 1.5) ** 2))
+    assert np.allclose(out.inertia.high - out.inertia.estimate, 1.959964 * out.inertia.std, rtol=1e-5)
+    assert np.allclose(out.stiffness_diagonal.std, np.hypot(MASS * 10.0, 1e3 * 1.5))
+    assert np.allclose(out.center_of_gravity.std, 1e-3)
+    assert np.allclose(out.sensor_budget["mass"]["inertia_per_mass"], np.abs(jpm) * 1.5)
+    assert np.allclose(out.sensor_budget["noise"]["inertia_per_mass"], MASS * sj)

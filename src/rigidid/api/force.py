@@ -223,7 +223,7 @@ def with_measured_mass(result: IdentifyResult, measured: ForceMass, mass_given: 
     ident = replace(result.identification, mass=m)
     bound = result.record_bound
     if bound is not None and bound.per_mass:
-        bound = _absolute_bound(bound, m, sm)
+        bound = absolute_bound(bound, m, sm)
     errors = result.standard_errors
     if errors is not None and result.poles is not None and result.shapes is not None:
         errors = checks.standard_errors_of(
@@ -236,8 +236,23 @@ def with_measured_mass(result: IdentifyResult, measured: ForceMass, mass_given: 
     )  # fmt: skip
 
 
-def _absolute_bound(bound: RecordBound, m: float, sm: float) -> RecordBound:
-    """A per-mass records' bound in absolute units, the mass's standard error added."""
+def absolute_bound(bound: RecordBound, m: float, sm: float) -> RecordBound:
+    """A per-mass records' bound in absolute units, the mass's standard error added.
+
+    Parameters
+    ----------
+    bound : RecordBound
+        Per unit mass (``per_mass`` true).
+    m, sm : float
+        The mass and its standard error.
+
+    Returns
+    -------
+    RecordBound
+        Inertia, principal moments and stiffness diagonal times `m`, each std
+        ``sqrt(m^2 std^2 + q^2 sm^2)``, intervals ``-/+ 1.96 std``; ``sensor_budget``'s inertia
+        entries times `m`, and a source ``mass`` (``|J / m| sm``).
+    """
     from rigidid.core.uncertainty import IntervalEstimate
 
     z95 = 1.959963984540054
