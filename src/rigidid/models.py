@@ -478,7 +478,8 @@ class ForceMassResult(_Strict):
     std: float = Field(description="its standard error: noise and the gains' tolerances in quadrature")
     ci95: tuple[float, float] = Field(description="estimate -/+ 1.96 std")
     budget: dict[str, float] = Field(
-        description="std per source: noise, sensitivity (the sensors' gains), force_sensitivity"
+        description="std per source: noise (the responses'), force_noise, sensitivity (the sensors' gains), "
+        "force_sensitivity, body (the per-mass body's standard errors)"
     )
     band_hz: tuple[float, float] = Field(description="the FFT lines fitted (Hz)")
     lines: int = Field(description="how many lines")

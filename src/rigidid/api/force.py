@@ -177,6 +177,7 @@ def measure_mass(
         fitted = fit_mass(frf, model, band, sensitivity=bounds.sensitivity, force_sensitivity=force_bound)
     except ValueError as exc:
         raise InputError(str(exc), source="force") from None
+    fitted = _with_body_error(fitted, result, frf, band, channel)
     if fitted.misfit > MISFIT_WARN and fitted.relative_residual > RESIDUAL_WARN:
         import warnings
 
@@ -196,6 +197,63 @@ def measure_mass(
             source="force",
         )
     return fitted, frf
+
+
+def _body_std(result: IdentifyResult) -> dict[str, Array] | None:
+    """Standard errors of the per-mass body (CG, J / m, diagonal of K / m) from the records' bound or the
+    linearised errors, None when neither is there."""
+    bound, errors = result.record_bound, result.standard_errors
+    if bound is not None:
+        return {"cg": np.asarray(bound.center_of_gravity.std), "j": np.asarray(bound.inertia.std),
+                "k": np.asarray(bound.stiffness_diagonal.std)}  # fmt: skip
+    if errors is not None:
+        return {"cg": np.asarray(errors.center_of_gravity), "j": np.asarray(errors.inertia),
+                "k": np.diag(np.asarray(errors.stiffness))}  # fmt: skip
+    return None
+
+
+def _with_body_error(
+    fitted: ForceMass, result: IdentifyResult, frf: ForceFrf, band: tuple[float, float], channel: ForceChannel
+) -> ForceMass:
+    """`fitted` with the per-mass body's standard errors propagated into the mass (budget ``body``).
+
+    Each of the CG's coordinates, the entries of ``J / m`` (symmetric pairs together) and the diagonal
+    of ``K / m`` is moved by its standard error, the mass fitted again; the changes add in quadrature
+    (the entries taken independent, as the records' bound reports them).
+    """
+    from rigidid.core.timedomain.force import fit_mass, per_mass_accelerance
+
+    std = _body_std(result)
+    if std is None:
+        return fitted
+    ident = result.identification
+    s = np.asarray(2j * np.pi * frf.frequency_hz + frf.decay_rate, dtype=complex)
+    base = {
+        "cg": np.asarray(ident.center_of_gravity, dtype=float),
+        "j": np.asarray(ident.inertia_per_mass, dtype=float),
+        "k": np.asarray(ident.stiffness_per_mass, dtype=float),
+    }
+    moves: list[tuple[str, tuple[int, ...], float]] = [("cg", (i,), float(std["cg"][i])) for i in range(3)]
+    moves += [("j", (a, b), float(std["j"][a, b])) for a in range(3) for b in range(a, 3)]
+    moves += [("k", (i, i), float(std["k"][i])) for i in range(6)]
+    changes = []
+    for name, where, sd in moves:
+        if not (np.isfinite(sd) and sd > 0):
+            continue
+        body = {k: v.copy() for k, v in base.items()}
+        body[name][where] += sd
+        if name == "j" and where[0] != where[1]:
+            body[name][where[::-1]] += sd
+        model = per_mass_accelerance(
+            s, result.positions, result.directions, np.asarray(channel.position),
+            np.asarray(channel.unit_direction()), center_of_gravity=body["cg"], inertia_per_mass=body["j"],
+            stiffness_per_mass=body["k"], damping_per_mass=np.asarray(ident.damping_per_mass, dtype=float),
+        )  # fmt: skip
+        changes.append(fit_mass(frf, model, band).mass - fitted.mass)
+    body_sd = float(np.sqrt(np.sum(np.square(changes))))
+    budget = {**fitted.budget, "body": body_sd}
+    total = float(np.sqrt(sum(v**2 for v in budget.values())))
+    return replace(fitted, budget=budget, std=total, noise_std=float(np.hypot(fitted.noise_std, body_sd)))
 
 
 def with_measured_mass(result: IdentifyResult, measured: ForceMass, mass_given: float | None) -> IdentifyResult:
