@@ -69,7 +69,9 @@ def test_the_force_measures_the_mass(ran: tuple[Path, str]) -> None:
     assert data["mass"] == pytest.approx(MASS, rel=1e-3)
     assert data["mass_measured"] == data["mass"]
     assert data["mass_given"] == 140.0
-    assert data["force_mass"]["std"] > 0
+    budget = data["force_mass"]["budget"]
+    assert budget["body"] > 0  # the per-mass body's standard errors reach the mass's
+    assert data["force_mass"]["std"] == pytest.approx(np.sqrt(sum(v**2 for v in budget.values())))
     assert np.allclose(data["center_of_gravity"], CG, atol=1e-6)
     assert np.allclose(data["inertia_tensor"], INERTIA, rtol=2e-3, atol=2e-3)
     assert np.allclose(data["inertia_tensor"], data["mass"] * np.asarray(data["inertia_per_mass"]))
