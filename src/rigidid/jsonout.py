@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from rigidid.core.plan import PredictedFigures, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.timedomain.force import ForceMass
     from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.timedomain.stabilisation import OrderPoles
     from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
@@ -150,6 +151,8 @@ def result_to_dict(result: IdentifyResult, force_unit: str | None = None) -> dic
         }
     if result.scaled is not None:
         out.update(scaled_modes_to_dict(result.scaled, ident.mass))
+    if result.force_mass is not None:
+        out.update(force_mass_to_dict(result.force_mass, result.mass_given))
     if result.uncertainty is not None:
         out["uncertainty"] = uncertainty_to_dict(result.uncertainty)
     if result.standard_errors is not None:
@@ -190,6 +193,36 @@ def _energy_distribution(result: IdentifyResult) -> dict[str, Any]:
         "modes": list(result.modes_used),
         "cg_axes": _rows(kinetic_energy_distribution(ident.inertia_per_mass, ident.mode_shapes_cg)),
         "principal_axes": _rows(kinetic_energy_distribution_principal(ident.inertia_per_mass, ident.mode_shapes_cg)),
+    }
+
+
+_Z95 = 1.959963984540054
+"""The normal distribution's 97.5 % quantile: 95 % intervals are ``estimate -/+ _Z95 std``."""
+
+
+def force_mass_to_dict(measured: ForceMass, mass_given: float | None) -> dict[str, Any]:
+    """``mass_source``, ``mass_measured``, ``mass_given``, ``mass_difference(_relative)`` and ``force_mass``.
+
+    The keys added when the records' force channel measured the mass (FORMATS.md, "The measured force").
+    """
+    m = float(measured.mass)
+    return {
+        "mass_source": "force",
+        "mass_measured": m,
+        "mass_given": None if mass_given is None else float(mass_given),
+        "mass_difference": None if mass_given is None else m - float(mass_given),
+        "mass_difference_relative": None if mass_given is None else m / float(mass_given) - 1.0,
+        "force_mass": {
+            "estimate": m,
+            "std": float(measured.std),
+            "ci95": [m - _Z95 * measured.std, m + _Z95 * measured.std],
+            "budget": {k: float(v) for k, v in measured.budget.items()},
+            "band_hz": [float(measured.band_hz[0]), float(measured.band_hz[1])],
+            "lines": int(measured.lines),
+            "relative_residual": float(measured.relative_residual),
+            "misfit_noise_units": float(measured.misfit),
+            "coherence": float(measured.coherence),
+        },
     }
 
 

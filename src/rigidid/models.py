@@ -131,6 +131,34 @@ class SensorTolerances(_Strict):
     position: Annotated[float, Field(ge=0.0, description="position error per axis (length unit)")] | None = None
 
 
+class ForceChannel(_Strict):
+    """``layout.json``'s optional ``force``: the hammer's channel in the records and where it hits.
+
+    With it (or ``--force COLUMN``), ``identify --records`` measures the mass (FORMATS.md,
+    "The measured force").
+    """
+
+    column: Annotated[str, Field(min_length=1, description="the force channel's column name in the records")]
+    position: Vector3 = Field(description="the drive point (length unit)")
+    direction: Annotated[
+        str | Vector3,
+        BeforeValidator(_axis_name),
+        AfterValidator(_nonzero),
+        Field(description="the force's direction on the body: +x ... -z or a vector, normalised by the reader"),
+    ]
+    force_window: Annotated[float, Field(gt=0.0, description="force window: s after the pulse's start")] | None = None
+    exponential_end: Annotated[
+        float, Field(gt=0.0, le=1.0, description="exponential window's value at the record's end (1: none)")
+    ] | None = None
+    sensitivity: Annotated[
+        float, Field(ge=0.0, le=0.5, description="force sensor's relative sensitivity bound (type B)")
+    ] | None = None
+
+    def unit_direction(self) -> tuple[float, float, float]:
+        """The force's direction as a unit vector."""
+        return SensorSpec(id="force", position=self.position, direction=self.direction).unit_direction()
+
+
 class LayoutFile(_Strict):
     """``layout.json``: the sensors of a test and, optionally, the body's mass."""
 
@@ -147,6 +175,9 @@ class LayoutFile(_Strict):
         min_length=1,
         description="FRF tests: the reference (force, hammer) points: id, position, force direction "
         "(as references.json has them)",
+    )
+    force: ForceChannel | None = Field(
+        default=None, description="the hammer's force channel and drive point: identify --records measures the mass"
     )
 
     @field_validator("mass")
@@ -451,6 +482,26 @@ class RecordBoundResult(BaseModel):
     )
 
 
+class ForceMassResult(_Strict):
+    """The mass measured by the records' force channel: the per-mass body fitted to the H1 FRFs."""
+
+    estimate: float = Field(description="the mass (mass unit)")
+    std: float = Field(description="its standard error: noise and the gains' tolerances in quadrature")
+    ci95: tuple[float, float] = Field(description="estimate -/+ 1.96 std")
+    budget: dict[str, float] = Field(
+        description="std per source: noise (the responses'), force_noise, sensitivity (the sensors' gains), "
+        "force_sensitivity, body (the per-mass body's standard errors)"
+    )
+    band_hz: tuple[float, float] = Field(description="the FFT lines fitted (Hz)")
+    lines: int = Field(description="how many lines")
+    relative_residual: float = Field(description="RMS misfit of the fit relative to the FRFs (weighted)")
+    misfit_noise_units: float = Field(
+        description="RMS misfit over the FRFs' noise (from third differences along frequency); about 1 at a good "
+        "fit; the responses' part of std is multiplied by max(1, misfit)"
+    )
+    coherence: float = Field(description="mean H1 coherence over the band and the sensors")
+
+
 class ScaledModesResult(_Strict):
     """The body from six rigid-body modes scaled by the force (unity modal A): absolute units, at the CG."""
 
@@ -515,7 +566,15 @@ class ResultFile(_Strict):
         default=None, description="with --torque-axis: the rotation under a pure torque"
     )
     mass_measured: float | None = Field(
-        default=None, description="with six modal_a scaled modes (modes --frf): the mass from the scaled modes"
+        default=None,
+        description="with six modal_a scaled modes (modes --frf): the mass from the scaled modes; with a force "
+        "channel (identify --records): the mass the force measured",
+    )
+    mass_source: Literal["force"] | None = Field(
+        default=None, description="with a force channel: 'force', the mass used is the measured one"
+    )
+    force_mass: ForceMassResult | None = Field(
+        default=None, description="with a force channel (identify --records): the mass measured and how"
     )
     mass_given: float | None = Field(default=None, description="with mass_measured: the mass given, else null")
     mass_difference: float | None = Field(default=None, description="mass_measured - mass_given, else null")

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from rigidid.core.plan import LayoutReport, Prediction, ReferenceReport, SensorPlan
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.timedomain.force import ForceMass
     from rigidid.core.timedomain.refine import RecordBound
     from rigidid.core.uncertainty import Uncertainty
     from rigidid.io.files import ModeTable
@@ -83,6 +84,11 @@ class IdentifyResult:
         by default (:func:`rigidid.core.linearised.standard_errors`).
     torque_roll_axis_std_deg : float or None
         Angular standard error of the torque roll axis (:func:`rigidid.api.with_mounts`).
+    force_mass : ForceMass or None
+        The mass measured by the records' force channel (:func:`rigidid.api.force.measure_mass`);
+        then ``identification.mass`` is it.
+    mass_given : float or None
+        With `force_mass`: the layout's or the ``mass`` option's mass, reported beside it.
     """
 
     identification: Identification
@@ -106,6 +112,8 @@ class IdentifyResult:
     standard_errors: StandardErrors | None = None
     torque_roll_axis_std_deg: float | None = None
     test: TestInfo | None = None
+    force_mass: ForceMass | None = None
+    mass_given: float | None = None
 
 
 @dataclass(frozen=True)

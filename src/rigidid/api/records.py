@@ -5,7 +5,8 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -24,6 +25,7 @@ from rigidid.models import LayoutFile
 from rigidid.results import IdentifyResult, PathLike, TestData, TestRun
 
 if TYPE_CHECKING:
+    from rigidid.api.force import ForceOptions
     from rigidid.core.sensor_budget import SensorBounds
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.io.files import ModeTable
@@ -804,6 +806,7 @@ def identify_test(
     resample: int = 0,
     spectrum: bool = False,
     progress: ProgressCallback | None = None,
+    force: ForceOptions | None = None,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -828,6 +831,9 @@ def identify_test(
         Also return the records' summed spectrum.
     progress : callable, optional
         Progress callback (:mod:`rigidid.progress`).
+    force : ForceOptions, optional
+        Measure the mass with the records' force channel (:mod:`rigidid.api.force`); also when
+        the layout has a ``force`` block. The body is identified per unit mass, then scaled by it.
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -836,6 +842,53 @@ def identify_test(
     -------
     TestRun
     """
+    with _force_column_expected(layout, force):
+        return _identify_test(
+            layout, inputs, records=records, modal=modal, units=units, geometry=geometry, refine=refine,
+            resample=resample, spectrum=spectrum, progress=progress, force=force, **identify_options,
+        )  # fmt: skip
+
+
+@contextmanager
+def _force_column_expected(layout: PathLike, force: ForceOptions | None) -> Iterator[None]:
+    """A context in which the force column used is not warned about as a column left out."""
+    import re
+
+    from rigidid.errors import NonSensorColumnWarning
+
+    column = force.column if force is not None else None
+    if column is None and Path(layout).suffix.lower() == ".json":
+        try:
+            block = load_layout(layout).force
+        except InputError:  # the workflow raises it, in its place
+            block = None
+        column = block.column if block is not None else None
+    if column is None:
+        yield
+        return
+    with warnings.catch_warnings():
+        warnings.filterwarnings(
+            "ignore", message=rf".*columns {re.escape(repr(column))} are not sensors", category=NonSensorColumnWarning
+        )
+        yield
+
+
+def _identify_test(
+    layout: PathLike,
+    inputs: Sequence[PathLike] | None,
+    *,
+    records: bool,
+    modal: ModalOptions | None,
+    units: dict[str, str] | None,
+    geometry: PathLike | None,
+    refine: bool,
+    resample: int,
+    spectrum: bool,
+    progress: ProgressCallback | None,
+    force: ForceOptions | None,
+    **identify_options: Any,
+) -> TestRun:
+    """:func:`identify_test`'s work."""
     from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, RefinementWarning, named_source, noted
 
     modal = modal or ModalOptions()
@@ -852,6 +905,7 @@ def identify_test(
         else load_test(layout, inputs or [], records=records, units=units, geometry=geometry)
     )
     _check_segments(data, resample)  # before any estimation: blame the option, not the records
+    force, data, mass_given = _force_setup(force, data, records, streamed, identify_options, inputs or [])
     paths = list(inputs or []) if streamed else None
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
     estimate = None
@@ -891,16 +945,68 @@ def identify_test(
             checks.pass_on(held)
             raise
         result = checks.about_the_answer(result, held, replaced=result.record_bound is not None)
+    if force is not None and paths is not None:
+        result = _with_force(result, paths, data.layout.model_copy(update={"mass": mass_given}), force, src)
     result = with_warnings(result, notes)
     if resample:
-        if not records:
-            raise InputError("data-driven intervals need impact records (--records)", source="segments")
-        options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order}
-        result = with_record_spread(
-            result, data.records, segments=resample, n_modes=len(modes.labels),
-            estimate_options={k: v for k, v in options.items() if v is not None},
-        )  # fmt: skip
+        result = _resampled(result, data, records, modal, resample, len(modes.labels))
     return TestRun(result, estimate, None if streamed else data.records, summed)
+
+
+def _resampled(
+    result: IdentifyResult, data: TestData, records: bool, modal: ModalOptions, resample: int, n_modes: int
+) -> IdentifyResult:
+    """`result` with the record-spread intervals of :func:`with_record_spread`."""
+    if not records:
+        raise InputError("data-driven intervals need impact records (--records)", source="segments")
+    options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order}
+    return with_record_spread(
+        result, data.records, segments=resample, n_modes=n_modes,
+        estimate_options={k: v for k, v in options.items() if v is not None},
+    )  # fmt: skip
+
+
+def _force_setup(
+    force: ForceOptions | None,
+    data: TestData,
+    records: bool,
+    streamed: bool,
+    options: dict[str, Any],
+    paths: Sequence[PathLike],
+) -> tuple[ForceOptions | None, TestData, float | None]:
+    """Whether the force is used (`force`, or the layout's ``force`` block) and, if so, the test without its mass.
+
+    The records are then identified per unit mass (the ``mass`` option taken out of `options`);
+    the given mass is returned to be reported beside the measured one.
+    """
+    if force is None and (data.layout.force is None or not records):  # the layout's block applies to records
+        return None, data, None
+    from rigidid.api.force import ForceOptions as Options
+    from rigidid.api.force import check_force
+
+    force = force or Options()
+    if not (records and streamed):
+        raise InputError("a measured force needs record files (--records, not UFF or --resample)", source="force")
+    check_force(data.layout, force, paths)
+    given = options.pop("mass", None)
+    given = given if given is not None else data.layout.mass
+    return force, replace(data, layout=data.layout.model_copy(update={"mass": None})), given
+
+
+def _with_force(
+    result: IdentifyResult, paths: Sequence[PathLike], layout: LayoutFile, force: ForceOptions, src: str
+) -> IdentifyResult:
+    """`result` scaled by the mass the force measures; the H1 FRFs written when asked."""
+    from rigidid.api.force import measure_mass, with_measured_mass
+    from rigidid.errors import named_source
+
+    with named_source(src):
+        measured, frf = measure_mass(result, paths, layout, force, sensor_bounds(layout))
+    if force.frf_out is not None:
+        from rigidid.api.force import write_frf
+
+        write_frf(force.frf_out, frf, result, layout, force)
+    return with_measured_mass(result, measured, layout.mass)
 
 
 def _check_segments(data: TestData, resample: int) -> None:

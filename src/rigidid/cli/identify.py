@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -28,8 +28,10 @@ from rigidid.cli.options import (
     DampingNoise,
     Decimate,
     Draws,
+    ForceColumn,
     ForceUnit,
     FrequencyNoise,
+    FrfOut,
     FrfPath,
     Geometry,
     IdMethod,
@@ -94,6 +96,8 @@ def identify(
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
     refine: Refine = True,
+    force: ForceColumn = None,
+    frf_out: FrfOut = None,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with reported():
@@ -110,7 +114,9 @@ def identify(
         method = method or "structured"
         force_unit = check_force_unit(force_unit)
 
-        check_outputs({"--json": json_path, "--uff": uff}, {"--csv": csv})
+        check_outputs({"--json": json_path, "--uff": uff, "--frf-out": frf_out}, {"--csv": csv})
+        if frf_out is not None and not records:
+            raise InputError("--frf-out needs impact records with a force channel (--records)", source="--frf-out")
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -119,10 +125,20 @@ def identify(
         run = identify_files(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
+            **_force_options(force, frf_out),
         )  # fmt: skip
         result, estimate = run.result, run.estimate
         result = add_mounts(result, mounts, torque_axis)
         _publish(result, estimate, json_path=json_path, uff=uff, csv=csv, force_unit=force_unit)
+
+
+def _force_options(column: str | None, frf_out: Path | None) -> dict[str, Any]:
+    """``force=ForceOptions(...)`` for the API when ``--force`` or ``--frf-out`` is given, else nothing."""
+    if column is None and frf_out is None:
+        return {}
+    from rigidid.api.force import ForceOptions
+
+    return {"force": ForceOptions(column=column, frf_out=frf_out)}
 
 
 def _publish(

@@ -248,6 +248,25 @@ Geometry = Annotated[
 ]
 
 
+ForceColumn = Annotated[
+    str | None,
+    typer.Option(
+        "--force",
+        help="The records' force (hammer) column: measure the mass with it (the drive point from layout.json's "
+        "'force' block; the layout's block alone also does).",
+        metavar="COLUMN",
+    ),
+]
+FrfOut = Annotated[
+    Path | None,
+    typer.Option(
+        help="With a force channel: write the H1 FRFs (with coherence) here, .csv or .uff/.unv, and "
+        "<stem>.references.json beside them, for identify --frf / modes --frf.",
+        metavar="FILE",
+    ),
+]
+
+
 FLAGS = {
     "modes_used": "--modes",
     "uncertainty": "--uncertainty",
@@ -272,6 +291,7 @@ FLAGS = {
     "damping_noise": "--add-damping-noise",
     "mass": "--mass",
     "pretrigger": "--pretrigger",
+    "force": "--force",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
