@@ -68,7 +68,9 @@ def test_identify_test_uff_alone_gives_the_expected_answer() -> None:
     assert out.returncode == 0, out.stderr
     got, want = json.loads(out.stdout), json.loads((CASE / "expected.json").read_text())
     for key in ("mass_measured", "center_of_gravity", "inertia_tensor"):
-        np.testing.assert_allclose(got[key], want[key], rtol=1e-10, atol=0.0)
+        # iterative fits (pole refinement, output error) stop within their tolerances: a regression
+        # check far below the answer's own standard error (about 1e-4 here), not a CPU's rounding
+        np.testing.assert_allclose(got[key], want[key], rtol=1e-7, atol=0.0)
     assert got["route"] == want["route"]
     assert [r["route"] for r in got["routes"]] == ["residues", "massline"]
     assert sum(r["chosen"] for r in got["routes"]) == 1
