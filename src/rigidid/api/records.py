@@ -93,6 +93,7 @@ def estimate_modes(
             paths.append(item)
     if paths and not arrays:
         return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress)
+    records_given = bool(arrays)
     arrays += load_records(paths, lay)
     dts = [dt for _, dt in arrays]
     if max(dts) - min(dts) > 1e-9 * max(dts):
@@ -116,8 +117,29 @@ def estimate_modes(
     )
     if kept is not None:
         result = replace(result, channels=kept)
+    _warn_hits(result.impacts, [str(p) for p in paths] if not records_given else
+               [f"record {k + 1}" for k in range(len(arrays))], dts[0])  # fmt: skip
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
+
+
+def _warn_hits(impacts: Sequence[Any], names: Sequence[str], dt: float) -> None:
+    """A DoubleHitWarning naming the records where more than one hit was found (none when each has one)."""
+    several = [(name, i) for name, i in zip(names, impacts, strict=False) if getattr(i, "hits", 1) > 1]
+    if not several:
+        return
+    import warnings
+
+    from rigidid.errors import DoubleHitWarning
+
+    named = "; ".join(
+        f"{name}: {i.hits} hits, the last {(i.start - i.onset) * dt:.3g} s after the first" for name, i in several
+    )
+    warnings.warn(
+        f"double hit: {named}; the free decay is taken after the last hit (the pre-trigger before the first)",
+        DoubleHitWarning,
+        stacklevel=3,
+    )
 
 
 def _unclipped(ids: Sequence[str], clipped: Sequence[NDArray[np.bool_]]) -> tuple[int, ...] | None:
@@ -233,7 +255,13 @@ def estimate_rigid_modes(
 
     from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import elastic_suspect, separate_elastic
-    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, IdentificationError
+    from rigidid.errors import (
+        ClippedChannelWarning,
+        DoubleHitWarning,
+        ElasticModeWarning,
+        IdentificationError,
+        OffsetDriftWarning,
+    )
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
@@ -254,7 +282,8 @@ def estimate_rigid_modes(
     )
     try:
         with warnings.catch_warnings():  # the clipped channels were named by the first estimation
-            warnings.simplefilter("ignore", ClippedChannelWarning)
+            for repeated in (ClippedChannelWarning, OffsetDriftWarning, DoubleHitWarning):
+                warnings.simplefilter("ignore", repeated)
             table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
     except IdentificationError:
         warnings.warn(
@@ -342,12 +371,15 @@ def _estimate_streamed(
         return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False)
     if factor > 1:
         impacts = tuple(
-            Impact(*(r.offset + k * factor for k in (i.onset, i.peak, i.start)))
+            Impact(r.offset + i.onset * factor, r.offset + i.peak * factor, r.offset + i.start * factor, i.hits)
             for r, i in zip(streamed, result.impacts, strict=False)
         )
         result = replace(result, decimation=result.decimation * factor, impacts=impacts)
     if kept is not None:
         result = replace(result, channels=kept)
+    _warn_hits(result.impacts, [str(p) for p in paths], dts[0] / factor)
+    if any(r.trend is not None for r in streamed):
+        result = replace(result, trends=tuple(r.trend for r in streamed))
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
 
@@ -466,6 +498,7 @@ def with_refinement(
             inertia_per_mass=ident.inertia_per_mass,
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
+            drift=estimate.trends is not None,
         ),
         progress,
         tolerances,
@@ -628,7 +661,10 @@ def refine_records(
     differ from a whole-record estimation's when that budget binds.
     """
 
+    import warnings
+
     from rigidid.core.timedomain.refine import columns_of, refine_prepared
+    from rigidid.errors import OffsetDriftWarning
     from rigidid.io.records import layout_ids, open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
@@ -644,11 +680,13 @@ def refine_records(
         from rigidid.io.records.refit import locate_impacts
 
         reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
-        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress)
+        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress, trends=estimate.trends)
     if impacts is None:  # read whole; the impacts where the raw records put them (as their estimation would)
         from rigidid.core.timedomain.preprocess import find_impact
 
-        raw = load_records(paths, lay)
+        with warnings.catch_warnings():  # named when the records were read for the estimation
+            warnings.simplefilter("ignore", OffsetDriftWarning)
+            raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(
             result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
@@ -663,14 +701,14 @@ def refine_records(
     def fit() -> Any:
         data = read_prepared_decays(
             paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
-            factor=estimate.decimation, progress=progress,
+            factor=estimate.decimation, progress=progress, trends=estimate.trends,
         )  # fmt: skip
         if estimate.channels is not None:  # clipped channels left out
             data = columns_of(data, estimate.channels)
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
-            damping_per_mass=ident.damping_per_mass,
+            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None,
         )  # fmt: skip
 
     return _refit(result, fit, progress, sensor_bounds(lay))

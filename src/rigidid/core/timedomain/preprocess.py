@@ -41,6 +41,7 @@ __all__ = [
     "find_impact",
     "fir_taps",
     "free_decay",
+    "last_hit",
     "segment_power",
 ]
 
@@ -61,12 +62,16 @@ class Impact:
     peak : int
         Sample of largest energy within the pulse window after `onset`.
     start : int
-        First sample of the free decay (a little after `peak`).
+        First sample of the free decay (a little after `peak`, or after the last
+        hit's peak when the record holds several: :func:`last_hit`).
+    hits : int
+        Hits found (1: a clean impact; more: a double hit, the decay taken after the last).
     """
 
     onset: int
     peak: int
     start: int
+    hits: int = 1
 
 
 _ENERGY_BLOCK = 1 << 16
@@ -250,15 +255,82 @@ def impact_from_blocks(
         if hits.size:
             onset = b * rows + int(hits[0])
             break
-    return _after_onset(onset, lambda window: energy(onset, onset + window), dt, pulse_width, n)
+    return _after_onset(onset, lambda window: energy(onset, onset + window), dt, pulse_width, n,
+                        lambda lo, hi: record[lo:hi])  # fmt: skip
 
 
-def _after_onset(onset: int, pulse: Callable[[int], Array], dt: float, pulse_width: float, n: int) -> Impact:
+def _after_onset(
+    onset: int, pulse: Callable[[int], Array], dt: float, pulse_width: float, n: int, rows: Callable[[int, int], Array]
+) -> Impact:
     """The impact whose onset is `onset`: the energy peak in the pulse window after it (``pulse(window)``
-    gives the energy of those rows), the decay half a window after the peak (:func:`find_impact`'s rule)."""
+    gives the energy of those rows), the decay half a window after the peak (:func:`find_impact`'s rule),
+    or half a window after the last hit's peak when :func:`last_hit` finds more (``rows(lo, hi)``: the
+    record's rows)."""
     window = max(2, round(pulse_width / dt))
     peak = onset + int(np.argmax(pulse(window)))
-    return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
+    span = rows(onset, min(n, onset + window + min(round(HIT_SPAN / dt), _HIT_ROWS)))
+    later = last_hit(span, peak - onset, window)
+    if later is None:
+        return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
+    hits, last = later
+    return Impact(onset, peak, min(onset + last + max(1, window // 2), n - 1), hits)
+
+
+HIT_SPAN = 1.0
+"""Time after an impact searched for further hits (s): a hammer's bounce comes within it."""
+
+_HIT_ROWS = 1 << 16  # at most these rows searched (memory: their second difference)
+_HIT_LEVEL = 0.01  # a hit's second-difference energy is at least this fraction of the first's
+_HIT_RISE = 4.0  # ... and this many times the largest since the previous hit
+
+
+def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
+    """Hits after the first in the rows of an impact: their number and the last one's peak.
+
+    Parameters
+    ----------
+    rows : ndarray, shape (m, p)
+        The record from the first hit's onset on (over :data:`HIT_SPAN`).
+    peak : int
+        The first hit's energy peak (row of `rows`).
+    window : int
+        The pulse window (samples).
+
+    Returns
+    -------
+    (int, int) or None
+        The number of hits and the row of `rows` where the last one peaks; None for one hit.
+
+    Notes
+    -----
+    An accelerometer reads the force directly (the body's mass line, eq. (19) of [1]:
+    the acceleration jumps with the force), so a hit is a burst of the second difference
+    ``x[k+1] - 2 x[k] + x[k-1]`` that a free decay of rigid-body modes, slow beside the
+    pulse, does not have (its second difference is ``(omega dt)^2`` of its amplitude). A
+    later hit is a row whose second-difference energy (channels scaled by their largest
+    second difference, squared and summed) exceeds :data:`_HIT_LEVEL` times the first hit's
+    and :data:`_HIT_RISE` times the largest since the previous hit's pulse (so a decaying
+    record, or its noise, does not raise one).
+    """
+    if rows.shape[0] < 2 * window + 4:
+        return None
+    d2 = rows[2:] - 2.0 * rows[1:-1] + rows[:-2]
+    scale = np.max(np.abs(d2), axis=0)
+    d2 = np.divide(d2, scale, out=np.zeros_like(d2), where=scale > 0.0)
+    e = np.einsum("ij,ij->i", d2, d2)
+    first = float(e[: peak + window].max())
+    lag = max(2, window // 2)
+    hits, last, pos = 1, None, peak + window
+    while e.shape[0] - pos > lag:
+        seg = e[pos:]
+        before = np.maximum.accumulate(seg)[:-lag]
+        found = np.flatnonzero((seg[lag:] > _HIT_RISE * before) & (seg[lag:] > _HIT_LEVEL * first))
+        if not found.size:
+            break
+        onset = pos + lag + int(found[0])
+        top = onset + int(np.argmax(e[onset : onset + window])) + 1  # rows of d2 are rows + 1
+        hits, last, pos = hits + 1, top, top + window
+    return None if last is None else (hits, last)
 
 
 def find_impact(
@@ -310,7 +382,8 @@ def find_impact(
         raise InputError("the record is empty or all zero")
     top = float(energy.max())
     onset = int(np.argmax(energy > threshold * top))
-    return _after_onset(onset, lambda window: energy[onset : onset + window], dt, pulse_width, record.shape[0])
+    return _after_onset(onset, lambda window: energy[onset : onset + window], dt, pulse_width, record.shape[0],
+                        lambda lo, hi: record[lo:hi])  # fmt: skip
 
 
 def free_decay(record: Array, dt: float, *, pulse_width: float = 0.005) -> tuple[Array, Impact]:

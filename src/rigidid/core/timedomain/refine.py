@@ -276,12 +276,17 @@ class PreparedDecays:
         Sample interval of `decays` (s).
     noise_from : {"pretrigger", "residual"}
         Where `sigma` comes from ("residual": the refit measures it).
+    drift : bool
+        Whether the model has a linear drift per channel and impact beside the
+        offset (records whose DC offset and drift were taken out,
+        :mod:`rigidid.core.timedomain.trend`).
     """
 
     decays: list[Array]  # (n_i, p)
     sigma: Array  # (p,) noise level of each channel in the decays fitted
     dt: float
     noise_from: str
+    drift: bool = False
 
 
 _Data = PreparedDecays
@@ -301,7 +306,7 @@ def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
     PreparedDecays
     """
     cols = list(channels)
-    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from)
+    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from, data.drift)
 
 
 def pretrigger_sigma(counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int) -> tuple[Array, str]:
@@ -421,14 +426,17 @@ _fit_factor = fit_factor
 # --- variable projection ----------------------------------------------------------------
 
 
-def _design(lam: CArray, phi: CArray, t: Array) -> tuple[Array, CArray]:
-    """Real design matrix (n p, 12 + p) of one impact, and exp(lam t) (n, 6)."""
+def _design(lam: CArray, phi: CArray, t: Array, drift: bool = False) -> tuple[Array, CArray]:
+    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6)."""
     n, p = t.shape[0], phi.shape[0]
     ex = np.exp(np.outer(t, lam))  # (n, 6)
     u = ex[:, None, :] * phi[None, :, :]  # (n, p, 6)
     cols = np.concatenate([u.real, -u.imag], axis=2).reshape(n * p, 12)
     offs = np.tile(np.eye(p), (n, 1))
-    return np.hstack([cols, offs]), ex
+    if not drift:
+        return np.hstack([cols, offs]), ex
+    ramp = offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None]
+    return np.hstack([cols, offs, ramp]), ex
 
 
 def _projector(design: Array) -> Any:
@@ -543,7 +551,7 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        design, ex = _design(lam, phi * w[:, None], t)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift)
         yw = (y * w).reshape(-1)
         project = _projector(design)
         beta, r = project(yw)
@@ -580,6 +588,7 @@ def refine_body(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
+    drift: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -605,6 +614,9 @@ def refine_body(
         Largest number of residual evaluations (three per iteration of the
         optimiser, plus one Jacobian per accepted step); 0 evaluates the start only
         (its Cramér-Rao bound, e.g. at the truth of a simulation).
+    drift : bool
+        Fit a linear drift per channel and impact beside the offset
+        (:attr:`PreparedDecays.drift`).
 
     Returns
     -------
@@ -645,6 +657,8 @@ def refine_body(
     recs = [np.asarray(r, dtype=float) for r in records]
     data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
     del recs
+    if drift:
+        data = PreparedDecays(data.decays, data.sigma, data.dt, data.noise_from, True)
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
@@ -662,6 +676,7 @@ def refine_prepared(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
+    drift: bool | None = None,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -674,6 +689,8 @@ def refine_prepared(
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
         As for :func:`refine_body`.
+    drift : bool, optional
+        Overrides ``data.drift``.
 
     Returns
     -------
@@ -688,6 +705,8 @@ def refine_prepared(
     -----
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
+    if drift is not None and drift != data.drift:
+        data = PreparedDecays(data.decays, data.sigma, data.dt, data.noise_from, drift)
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -708,7 +727,7 @@ def refine_prepared(
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
-        data = _Data(data.decays, np.where(sigma > 0, sigma, 1.0), data.dt, data.noise_from)
+        data = _Data(data.decays, np.where(sigma > 0, sigma, 1.0), data.dt, data.noise_from, data.drift)
 
     def both(theta: Array) -> tuple[Array, Array]:
         return _evaluate(theta, data, pos_l, dirs, omega, True)
@@ -723,13 +742,13 @@ def refine_prepared(
         theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)
     n_res = r.size
-    dof = max(n_res - N_PARAMETERS - len(data.decays) * (12 + pos.shape[0]), 1)
+    dof = max(n_res - N_PARAMETERS - len(data.decays) * _linear_per_impact(pos.shape[0], data.drift), 1)
     cost = float(r @ r) / dof if data.noise_from == "pretrigger" else 1.0
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -743,6 +762,11 @@ def refine_prepared(
         evaluations=nfev,
         converged=converged,
     )
+
+
+def _linear_per_impact(p: int, drift: bool) -> int:
+    """Linear unknowns per impact: 12 modal amplitudes, an offset per channel (and a drift)."""
+    return 12 + (2 if drift else 1) * p
 
 
 def _outputs(theta: Array, frame: _Frame, pos_l: Array, dirs: Array) -> Array:
@@ -762,6 +786,7 @@ def _bound(
     residual: Array | None = None,
     lengths: Sequence[int] | None = None,
     factor: int = 1,
+    drift: bool = False,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -774,7 +799,7 @@ def _bound(
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
 
-        n_linear = len(lengths) * (12 + pos_l.shape[0])
+        n_linear = len(lengths) * _linear_per_impact(pos_l.shape[0], drift)
         cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
     else:
         info = jm.T @ jm

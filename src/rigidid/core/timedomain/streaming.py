@@ -520,7 +520,7 @@ def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) ->
     pulse = max(2, round(PULSE_WIDTH / dt))
     if found.onset + pulse > window.shape[0] or found.start >= window.shape[0] - 1:
         return None  # the pulse window or the decay start run past the rows held
-    return Impact(lo + found.onset, lo + found.peak, lo + found.start)
+    return Impact(lo + found.onset, lo + found.peak, lo + found.start, found.hits)
 
 
 def locate_impacts(
