@@ -268,20 +268,49 @@ def _after_onset(
     record's rows)."""
     window = max(2, round(pulse_width / dt))
     peak = onset + int(np.argmax(pulse(window)))
-    span = rows(onset, min(n, onset + window + min(round(HIT_SPAN / dt), _HIT_ROWS)))
-    later = last_hit(span, peak - onset, window)
+    base = max(0, onset - _HIT_BEFORE)  # the predictor of last_hit needs rows before the first hit
+    span = rows(base, min(n, onset + window + min(round(HIT_SPAN / dt), _HIT_ROWS)))
+    later = last_hit(span, peak - base, window)
     if later is None:
         return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
     hits, last = later
-    return Impact(onset, peak, min(onset + last + max(1, window // 2), n - 1), hits)
+    return Impact(onset, peak, min(base + last + max(1, window // 2), n - 1), hits)
 
 
 HIT_SPAN = 1.0
 """Time after an impact searched for further hits (s): a hammer's bounce comes within it."""
 
+_HIT_BEFORE = 16  # rows before the onset given to last_hit
 _HIT_ROWS = 1 << 16  # at most these rows searched (memory: their second difference)
-_HIT_LEVEL = 0.01  # a hit's second-difference energy is at least this fraction of the first's
-_HIT_RISE = 4.0  # ... and this many times the largest since the previous hit
+_HIT_LEVEL = 0.01  # a later hit's innovation energy is at least this fraction of the first's
+_HIT_NOISE = 30.0  # ... and this many times the median innovation energy of the decay (about p / 2)
+
+
+def _innovations(rows: Array, start: int) -> Array:
+    """Per row, the energy of the one-step prediction error of a free decay fitted to ``rows[start:]``.
+
+    Each channel is predicted from the previous ``L`` rows of every channel and a constant (a
+    free decay of eq. (19) of [1]: 12 states seen through p channels, ``L p >= 12``), by least
+    squares on the rows from `start`; the errors are scaled by each channel's median absolute
+    error over those rows, squared and summed.
+    """
+    n, p = rows.shape
+    lags = max(2, -(-13 // max(p, 1)))
+    if n - start < 4 * (lags * p + 1) or start < lags:
+        return np.zeros(0)
+    design = np.hstack([rows[lags - k - 1 : n - k - 1] for k in range(lags)] + [np.ones((n - lags, 1))])
+    target = rows[lags:]
+    fit = slice(start - lags, None)
+    scale = np.sqrt(np.sum(design[fit] ** 2, axis=0))
+    scale = np.where(scale > 0.0, scale, 1.0)
+    coef = np.linalg.lstsq(design[fit] / scale, target[fit], rcond=None)[0] / scale[:, None]
+    err = target - design @ coef
+    mad = np.median(np.abs(err[fit]), axis=0)
+    floor = 1e-12 * np.max(np.abs(rows), axis=0)
+    err = err / np.maximum(mad, np.where(floor > 0.0, floor, 1.0))
+    out = np.zeros(n)
+    out[lags:] = np.einsum("ij,ij->i", err, err)
+    return out
 
 
 def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
@@ -290,7 +319,7 @@ def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
     Parameters
     ----------
     rows : ndarray, shape (m, p)
-        The record from the first hit's onset on (over :data:`HIT_SPAN`).
+        The record from a little before the first hit's onset on (over :data:`HIT_SPAN`).
     peak : int
         The first hit's energy peak (row of `rows`).
     window : int
@@ -303,34 +332,31 @@ def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
 
     Notes
     -----
-    An accelerometer reads the force directly (the body's mass line, eq. (19) of [1]:
-    the acceleration jumps with the force), so a hit is a burst of the second difference
-    ``x[k+1] - 2 x[k] + x[k-1]`` that a free decay of rigid-body modes, slow beside the
-    pulse, does not have (its second difference is ``(omega dt)^2`` of its amplitude). A
-    later hit is a row whose second-difference energy (channels scaled by their largest
-    second difference, squared and summed) exceeds :data:`_HIT_LEVEL` times the first hit's
-    and :data:`_HIT_RISE` times the largest since the previous hit's pulse (so a decaying
-    record, or its noise, does not raise one).
+    Between hits a record is a free decay of the rigid-body modes (eq. (19) of [1]): each
+    sample follows linearly from the previous few. A hit is a force the decay does not
+    predict, so it stands out in the one-step prediction error of a linear predictor
+    fitted to the decay after the first hit (:func:`_innovations`; the few rows of a later
+    hit hardly move the least-squares fit). A later hit is a row whose prediction-error
+    energy exceeds :data:`_HIT_LEVEL` times the first hit's and :data:`_HIT_NOISE` times the
+    decay's median (the noise: about p / 2 there); one pulse window after each hit found,
+    the search goes on.
     """
-    if rows.shape[0] < 2 * window + 4:
+    start = min(peak + window, rows.shape[0])
+    e = _innovations(rows, start)
+    if e.size == 0:
         return None
-    d2 = rows[2:] - 2.0 * rows[1:-1] + rows[:-2]
-    scale = np.max(np.abs(d2), axis=0)
-    d2 = np.divide(d2, scale, out=np.zeros_like(d2), where=scale > 0.0)
-    e = np.einsum("ij,ij->i", d2, d2)
-    first = float(e[: peak + window].max())
-    lag = max(2, window // 2)
-    hits, last, pos = 1, None, peak + window
-    while e.shape[0] - pos > lag:
-        seg = e[pos:]
-        before = np.maximum.accumulate(seg)[:-lag]
-        found = np.flatnonzero((seg[lag:] > _HIT_RISE * before) & (seg[lag:] > _HIT_LEVEL * first))
-        if not found.size:
-            break
-        onset = pos + lag + int(found[0])
-        top = onset + int(np.argmax(e[onset : onset + window])) + 1  # rows of d2 are rows + 1
+    first = float(e[: start].max())
+    level = max(_HIT_LEVEL * first, _HIT_NOISE * float(np.median(e[start:])))
+    found = np.flatnonzero(e[start:] > level)
+    if not found.size:
+        return None
+    hits, last, pos = 1, start, start
+    for row in (start + found).tolist():
+        if row < pos:
+            continue
+        top = row + int(np.argmax(e[row : row + window]))
         hits, last, pos = hits + 1, top, top + window
-    return None if last is None else (hits, last)
+    return hits, last
 
 
 def find_impact(
