@@ -4,6 +4,7 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -578,22 +579,20 @@ def _sensor_std(result: IdentifyResult, bounds: SensorBounds) -> dict[str, dict[
 def _accept_refinement(
     result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None
 ) -> IdentifyResult:
-    """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
+    """`result` with the refinement's body and bound when its misfit test accepts it (:func:`refit_verdict`)."""
     import warnings
 
-    from rigidid.core.timedomain.refine import good_fit, record_bound
+    from rigidid.core.timedomain.refine import record_bound
     from rigidid.errors import RefinementWarning
 
     ident = result.identification
-    if not good_fit(refinement):
-        warnings.warn(
-            f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
-            "(about 1 at a good fit): a local minimum or a model that does not fit the records; "
-            "kept the answer from the modes" + suspect_mode(ident),
-            RefinementWarning,
-            stacklevel=2,
-        )
+    keep, widen, reason = refit_verdict(refinement)
+    if reason:
+        warnings.warn(reason + ("" if keep else suspect_mode(ident)), RefinementWarning, stacklevel=2)
+    if not keep:
         return result
+    if widen > 1.0:
+        refinement = replace(refinement, std={key: widen * value for key, value in refinement.std.items()})
     refined = replace(
         ident,
         center_of_gravity=refinement.center_of_gravity,
@@ -605,6 +604,63 @@ def _accept_refinement(
     sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
+
+
+def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
+    """Whether to keep a refit, by how much to widen its noise intervals, and why (empty: accepted as it is).
+
+    Parameters
+    ----------
+    refinement : Refinement
+        The refit (:func:`rigidid.core.timedomain.refine.refine_prepared`).
+
+    Returns
+    -------
+    keep : bool
+        Use the refit's answer (False: the answer from the modes).
+    widen : float
+        Factor on the refit's noise standard errors (1: none).
+    reason : str
+        The warning to give; empty when the refit is accepted.
+
+    Notes
+    -----
+    With a pre-trigger, the refit's residual is tested against it
+    (:func:`rigidid.core.timedomain.acceptance.misfit_test`, false-alarm rate
+    :data:`~rigidid.core.timedomain.acceptance.FALSE_ALARM`). Accepted: kept as it is.
+    Not accepted but within twice the noise's variance (normalised cost below 2): the
+    model misses something systematic (the chain, the sensors), yet the refit still uses
+    the whole records; its answer is kept with its noise standard errors scaled by the
+    square root of the misfit ratio (the Birge ratio, as the Particle Data Group scales
+    inconsistent data), named. Beyond: the answer from the modes, with the reason. Without
+    a pre-trigger (no test possible) the normalised cost must be below 2.
+    """
+    from rigidid.core.timedomain.refine import good_fit
+
+    test = refinement.misfit
+    cost = refinement.normalised_cost
+    if test is not None and test.accepted:
+        return True, 1.0, ""
+    if test is None:
+        if good_fit(refinement):
+            return True, 1.0, ""
+        return (
+            False,
+            1.0,
+            (
+                f"refinement on the records ended at a normalised cost of {cost:.3g} (about 1 at a good fit): "
+                "a local minimum or a model that does not fit the records; kept the answer from the modes"
+            ),
+        )
+    why = (
+        f"the refit's residual is {test.ratio:.3g} times the pre-trigger's noise variance (misfit test p = "
+        f"{test.p_value:.2g}, false-alarm rate {test.false_alarm:g}): the rigid-body model misses part of the "
+        "records (the acquisition chain, sensor errors, an unmodelled mode, or a local minimum)"
+    )
+    if good_fit(refinement):
+        widen = math.sqrt(max(test.ratio, cost, 1.0))
+        return True, widen, f"{why}; kept the refit, its noise standard errors widened {widen:.3g} times"
+    return False, 1.0, f"{why}; normalised cost {cost:.3g}: kept the answer from the modes"
 
 
 STREAM_REFIT_VALUES = 16 * 150_000

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
+from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -118,6 +119,7 @@ class Refinement:
     residuals: int
     evaluations: int
     converged: bool = False
+    misfit: MisfitTest | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -280,6 +282,11 @@ class PreparedDecays:
         Whether the model has a linear drift per channel and impact beside the
         offset (records whose DC offset and drift were taken out,
         :mod:`rigidid.core.timedomain.trend`).
+    pre_counts : tuple of int
+        Pre-trigger samples of each record (raw rate; empty when unknown).
+    pre_m2 : ndarray, shape (records, p), or None
+        Their squared deviations from the record's pre-trigger mean, per channel
+        (for the acceptance test, :mod:`rigidid.core.timedomain.acceptance`).
     """
 
     decays: list[Array]  # (n_i, p)
@@ -287,6 +294,8 @@ class PreparedDecays:
     dt: float
     noise_from: str
     drift: bool = False
+    pre_counts: tuple[int, ...] = ()
+    pre_m2: Array | None = None
 
 
 _Data = PreparedDecays
@@ -306,7 +315,8 @@ def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
     PreparedDecays
     """
     cols = list(channels)
-    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from, data.drift)
+    m2 = None if data.pre_m2 is None else data.pre_m2[:, cols]
+    return replace(data, decays=[d[:, cols] for d in data.decays], sigma=data.sigma[cols], pre_m2=m2)
 
 
 def pretrigger_sigma(counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int) -> tuple[Array, str]:
@@ -399,8 +409,9 @@ def prepare_decays(
         decays.append(np.asarray(d, dtype=float))
     decays = cut_decays(decays, p)
     squares = [((x - x.mean(axis=0)) ** 2).sum(axis=0) if x.shape[0] > 1 else np.zeros(p) for x in pre]
-    sigma, noise_from = pretrigger_sigma([x.shape[0] for x in pre], squares, len(records), factor)
-    return PreparedDecays(decays, sigma, dt * factor, noise_from)
+    counts = [x.shape[0] for x in pre]
+    sigma, noise_from = pretrigger_sigma(counts, squares, len(records), factor)
+    return PreparedDecays(decays, sigma, dt * factor, noise_from, pre_counts=tuple(counts), pre_m2=np.array(squares))
 
 
 _prepare = prepare_decays
@@ -658,7 +669,7 @@ def refine_body(
     data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
     del recs
     if drift:
-        data = PreparedDecays(data.decays, data.sigma, data.dt, data.noise_from, True)
+        data = replace(data, drift=True)
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
@@ -706,7 +717,7 @@ def refine_prepared(
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
     if drift is not None and drift != data.drift:
-        data = PreparedDecays(data.decays, data.sigma, data.dt, data.noise_from, drift)
+        data = replace(data, drift=drift)
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -727,7 +738,7 @@ def refine_prepared(
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
-        data = _Data(data.decays, np.where(sigma > 0, sigma, 1.0), data.dt, data.noise_from, data.drift)
+        data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
     def both(theta: Array) -> tuple[Array, Array]:
         return _evaluate(theta, data, pos_l, dirs, omega, True)
@@ -749,6 +760,7 @@ def refine_prepared(
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
+    misfit = _misfit(r, data, dof / n_res, q_fit)
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -761,7 +773,21 @@ def refine_prepared(
         residuals=n_res,
         evaluations=nfev,
         converged=converged,
+        misfit=misfit,
     )
+
+
+def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
+    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger."""
+    if data.noise_from != "pretrigger" or data.pre_m2 is None or len(data.pre_counts) != len(data.decays):
+        return None
+    from rigidid.core.timedomain.intervals import noise_correlation
+
+    gain = float(np.sum(fir_taps(factor) ** 2)) if factor > 1 else 1.0
+    counts = np.asarray(data.pre_counts, dtype=float)
+    variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
+    lengths = [d.shape[0] for d in data.decays]
+    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
 
 
 def _linear_per_impact(p: int, drift: bool) -> int:
@@ -860,6 +886,10 @@ class RecordBound:
     converged : bool or None
         Whether the optimiser met its convergence test (:class:`Refinement`);
         when False the intervals include the remaining Gauss-Newton step.
+    sensor_budget, tolerances
+        See :func:`record_bound`.
+    misfit : MisfitTest or None
+        The refit's acceptance test (:class:`Refinement`).
     """
 
     center_of_gravity: Any
@@ -875,6 +905,7 @@ class RecordBound:
     converged: bool | None = None
     sensor_budget: dict[str, dict[str, Array]] | None = None
     tolerances: dict[str, float] | None = None
+    misfit: MisfitTest | None = None
 
 
 def record_bound(
@@ -954,4 +985,5 @@ def record_bound(
         converged=refinement.converged,
         sensor_budget=budget,
         tolerances=tolerances,
+        misfit=refinement.misfit,
     )

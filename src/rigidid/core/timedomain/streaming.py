@@ -684,7 +684,8 @@ def prepared_decays(
         known = counted
     decays = cut_decays([r.decay for r in read], channels)
     sigma, noise_from = pretrigger_sigma([r.pre_count for r in read], [r.pre_m2 for r in read], len(read), q)
-    return PreparedDecays(decays, sigma, dt * q, noise_from)
+    return PreparedDecays(decays, sigma, dt * q, noise_from, pre_counts=tuple(r.pre_count for r in read),
+                          pre_m2=np.array([r.pre_m2 for r in read]))  # fmt: skip
 
 
 def record_power(blocks: Blocks, channels: int, window: Array) -> Array:
