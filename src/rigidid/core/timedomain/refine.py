@@ -555,6 +555,21 @@ def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray,
     return out
 
 
+def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
+    """``Re sum_k e^{lambda_k t_n} (g1_jck + t_n g2_jck)`` as one real matrix product, shape (n, p, 51).
+
+    The complex product ``[E, t E] [G1; G2]`` has real part ``[Re, Im] [Re G; -Im G]``: one BLAS
+    call on (n, 24) by (24, 51 p), and no (n, 51, p) complex temporaries.
+    """
+    n, p = t.shape[0], g1.shape[1]
+    e = np.hstack([ex, ex * t[:, None]])  # (n, 12)
+    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * N_PARAMETERS)  # (12, p 51)
+    left = np.hstack([e.real, e.imag])
+    right = np.vstack([g.real, -g.imag])
+    out: Array = (left @ right).reshape(n, p, N_PARAMETERS)
+    return out
+
+
 def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
     w = 1.0 / data.sigma
@@ -571,11 +586,9 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             amp = beta[:6] + 1j * beta[6:12]  # columns Re u and -Im u: model Re(u (a_re + i a_im))
             # d model = Re( sum_k a_k (dphi_k + phi_k t dlam_k) e^{lam_k t} )
             wd = dphi * w[None, :, None]  # (51, p, 6)
-            g1 = np.einsum("jck,k->jck", wd, amp)  # (51, p, 6)
-            g2 = np.einsum("ck,jk,k->jck", phi * w[:, None], dlam, amp)
-            m1 = np.einsum("nk,jck->njc", ex, g1)
-            m2 = np.einsum("nk,jck->njc", ex * t[:, None], g2)
-            dm = (m1 + m2).real.transpose(0, 2, 1).reshape(n * p, N_PARAMETERS)  # d model / d theta
+            g1 = wd * amp  # (51, p, 6)
+            g2 = (phi * w[:, None])[None, :, :] * (dlam * amp)[:, None, :]
+            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, N_PARAMETERS)  # d model / d theta
             jp = -project(dm)[1]
             if _GOLUB_PEREYRA:
                 jp = jp - _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
