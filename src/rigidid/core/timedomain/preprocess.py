@@ -345,7 +345,7 @@ def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
     e = _innovations(rows, start)
     if e.size == 0:
         return None
-    first = float(e[: start].max())
+    first = float(e[:start].max())
     level = max(_HIT_LEVEL * first, _HIT_NOISE * float(np.median(e[start:])))
     found = np.flatnonzero(e[start:] > level)
     if not found.size:
