@@ -453,6 +453,9 @@ def _design(lam: CArray, phi: CArray, t: Array, drift: bool = False) -> tuple[Ar
 def _projector(design: Array) -> Any:
     """``x -> (coefficients, x - design coefficients)``: least squares on `design`'s columns.
 
+    ``project(x, out)`` writes the negated residual ``design coefficients - x`` into `out`
+    (the refit's projected Jacobian, filled in place).
+
     From the Gram matrix of the column-normalised design (``(n, 12 + p)``: cost
     ``n (12 + p)^2``, a small fraction of a QR), by Cholesky; a QR where the Gram
     matrix is too ill-conditioned for that (condition above 1e10).
@@ -468,17 +471,27 @@ def _projector(design: Array) -> Any:
     except np.linalg.LinAlgError:
         q, rr = np.linalg.qr(scaled)
 
-        def by_qr(x: Array) -> tuple[Array, Array]:
+        def by_qr(x: Array, out: Array | None = None) -> tuple[Array, Array]:
             qx = q.T @ x
-            return np.linalg.solve(rr, qx) / (norms if x.ndim == 1 else norms[:, None]), x - q @ qx
+            return np.linalg.solve(rr, qx) / (norms if x.ndim == 1 else norms[:, None]), _minus(x, q, qx, out)
 
         return by_qr
 
-    def by_gram(x: Array) -> tuple[Array, Array]:
+    def by_gram(x: Array, out: Array | None = None) -> tuple[Array, Array]:
         c = np.linalg.solve(chol.T, np.linalg.solve(chol, scaled.T @ x))
-        return c / (norms if x.ndim == 1 else norms[:, None]), x - scaled @ c
+        return c / (norms if x.ndim == 1 else norms[:, None]), _minus(x, scaled, c, out)
 
     return by_gram
+
+
+def _minus(x: Array, basis: Array, coef: Array, out: Array | None) -> Array:
+    """``x - basis coef``; with `out`, its negative ``basis coef - x`` written there (no temporary)."""
+    if out is None:
+        result: Array = x - basis @ coef
+        return result
+    np.matmul(basis, coef, out=out)
+    out -= x
+    return out
 
 
 def _levenberg_marquardt(
@@ -573,7 +586,9 @@ def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
 def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
     w = 1.0 / data.sigma
-    res_parts, jac_parts = [], []
+    res_parts = []
+    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, N_PARAMETERS))
+    row = 0
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
@@ -589,12 +604,12 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             g1 = wd * amp  # (51, p, 6)
             g2 = (phi * w[:, None])[None, :, :] * (dlam * amp)[:, None, :]
             dm = _model_derivative(ex, t, g1, g2).reshape(n * p, N_PARAMETERS)  # d model / d theta
-            jp = -project(dm)[1]
+            jp = project(dm, j_all[row : row + n * p])[1]  # minus the projected derivative, in place
+            del dm
             if _GOLUB_PEREYRA:
-                jp = jp - _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
-            jac_parts.append(jp)
+                jp -= _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
+        row += n * p
     r_all = np.concatenate(res_parts)
-    j_all = np.vstack(jac_parts) if jac else np.zeros((0, N_PARAMETERS))
     return r_all, j_all
 
 
