@@ -16,6 +16,7 @@ from dataclasses import dataclass
 __all__ = [
     "ClippedChannelWarning",
     "DampingUnitWarning",
+    "DoubleHitWarning",
     "ElasticModeWarning",
     "FrfMisfitWarning",
     "IdentificationError",
@@ -24,6 +25,7 @@ __all__ = [
     "ModelMisfitWarning",
     "NonSensorColumnWarning",
     "Notice",
+    "OffsetDriftWarning",
     "PhysicalPlausibilityWarning",
     "RefinementWarning",
     "RigididError",
@@ -120,6 +122,14 @@ class ElasticModeWarning(RigididWarning):
 
 class ClippedChannelWarning(RigididWarning):
     """A record's channel is clipped (flat tops at its peak): it is left out of the fit, named."""
+
+
+class OffsetDriftWarning(RigididWarning):
+    """A record's channels carry a DC offset or a drift larger than their noise: taken out, named."""
+
+
+class DoubleHitWarning(RigididWarning):
+    """A record holds more than one hit: the free decay is taken after the last one, named."""
 
 
 class FrfMisfitWarning(RigididWarning):

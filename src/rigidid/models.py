@@ -471,6 +471,19 @@ class RecordBoundResult(BaseModel):
         "variances, or stalled at the J, K, C > 0 boundary) rather than stopping at its evaluation budget",
     )
     center_of_gravity: Interval
+    misfit_ratio: float | None = Field(
+        default=None,
+        description="the refit's residual variance over the pre-trigger's noise variance (about 1 at a good fit; "
+        "inverse-variance weighted geometric mean over impacts and channels)",
+    )
+    misfit_p_value: float | None = Field(
+        default=None,
+        description="one-sided p-value of the misfit test (F-test of each impact's and channel's residual against "
+        "its pre-trigger, pooled): the refit is accepted when it is at least false_alarm_rate",
+    )
+    false_alarm_rate: float | None = Field(
+        default=None, description="the acceptance test's false-alarm rate (fraction of right models rejected)"
+    )
     sensor_budget: dict[str, dict[str, list[float] | list[list[float]]]] | None = Field(
         default=None,
         description="standard deviation of center_of_gravity and inertia_tensor from each source: noise (the "

@@ -4,6 +4,7 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -95,6 +96,7 @@ def estimate_modes(
             paths.append(item)
     if paths and not arrays:
         return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress)
+    records_given = bool(arrays)
     arrays += load_records(paths, lay)
     dts = [dt for _, dt in arrays]
     if max(dts) - min(dts) > 1e-9 * max(dts):
@@ -118,8 +120,29 @@ def estimate_modes(
     )
     if kept is not None:
         result = replace(result, channels=kept)
+    _warn_hits(result.impacts, [str(p) for p in paths] if not records_given else
+               [f"record {k + 1}" for k in range(len(arrays))], dts[0])  # fmt: skip
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
+
+
+def _warn_hits(impacts: Sequence[Any], names: Sequence[str], dt: float) -> None:
+    """A DoubleHitWarning naming the records where more than one hit was found (none when each has one)."""
+    several = [(name, i) for name, i in zip(names, impacts, strict=False) if getattr(i, "hits", 1) > 1]
+    if not several:
+        return
+    import warnings
+
+    from rigidid.errors import DoubleHitWarning
+
+    named = "; ".join(
+        f"{name}: {i.hits} hits, the last {(i.start - i.onset) * dt:.3g} s after the first" for name, i in several
+    )
+    warnings.warn(
+        f"double hit: {named}; the free decay is taken after the last hit (the pre-trigger before the first)",
+        DoubleHitWarning,
+        stacklevel=3,
+    )
 
 
 def _unclipped(ids: Sequence[str], clipped: Sequence[NDArray[np.bool_]]) -> tuple[int, ...] | None:
@@ -235,7 +258,13 @@ def estimate_rigid_modes(
 
     from rigidid.core.geometry import local_sensor_matrix
     from rigidid.core.selection import elastic_suspect, separate_elastic
-    from rigidid.errors import ClippedChannelWarning, ElasticModeWarning, IdentificationError
+    from rigidid.errors import (
+        ClippedChannelWarning,
+        DoubleHitWarning,
+        ElasticModeWarning,
+        IdentificationError,
+        OffsetDriftWarning,
+    )
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
@@ -256,7 +285,8 @@ def estimate_rigid_modes(
     )
     try:
         with warnings.catch_warnings():  # the clipped channels were named by the first estimation
-            warnings.simplefilter("ignore", ClippedChannelWarning)
+            for repeated in (ClippedChannelWarning, OffsetDriftWarning, DoubleHitWarning):
+                warnings.simplefilter("ignore", repeated)
             table7, estimate7 = estimate_modes(lay, records, n_modes=7, **options)
     except IdentificationError:
         warnings.warn(
@@ -344,12 +374,15 @@ def _estimate_streamed(
         return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False)
     if factor > 1:
         impacts = tuple(
-            Impact(*(r.offset + k * factor for k in (i.onset, i.peak, i.start)))
+            Impact(r.offset + i.onset * factor, r.offset + i.peak * factor, r.offset + i.start * factor, i.hits)
             for r, i in zip(streamed, result.impacts, strict=False)
         )
         result = replace(result, decimation=result.decimation * factor, impacts=impacts)
     if kept is not None:
         result = replace(result, channels=kept)
+    _warn_hits(result.impacts, [str(p) for p in paths], dts[0] / factor)
+    if any(r.trend is not None for r in streamed):
+        result = replace(result, trends=tuple(r.trend for r in streamed))
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return table, result
 
@@ -468,6 +501,7 @@ def with_refinement(
             inertia_per_mass=ident.inertia_per_mass,
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
+            drift=estimate.trends is not None,
         ),
         progress,
         tolerances,
@@ -547,22 +581,20 @@ def _sensor_std(result: IdentifyResult, bounds: SensorBounds) -> dict[str, dict[
 def _accept_refinement(
     result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None
 ) -> IdentifyResult:
-    """`result` with the refinement's body and bound, or unchanged with a warning when the fit is bad."""
+    """`result` with the refinement's body and bound when its misfit test accepts it (:func:`refit_verdict`)."""
     import warnings
 
-    from rigidid.core.timedomain.refine import good_fit, record_bound
+    from rigidid.core.timedomain.refine import record_bound
     from rigidid.errors import RefinementWarning
 
     ident = result.identification
-    if not good_fit(refinement):
-        warnings.warn(
-            f"refinement on the records ended at a normalised cost of {refinement.normalised_cost:.3g} "
-            "(about 1 at a good fit): a local minimum or a model that does not fit the records; "
-            "kept the answer from the modes" + suspect_mode(ident),
-            RefinementWarning,
-            stacklevel=2,
-        )
+    keep, widen, reason = refit_verdict(refinement)
+    if reason:
+        warnings.warn(reason + ("" if keep else suspect_mode(ident)), RefinementWarning, stacklevel=2)
+    if not keep:
         return result
+    if widen > 1.0:
+        refinement = replace(refinement, std={key: widen * value for key, value in refinement.std.items()})
     refined = replace(
         ident,
         center_of_gravity=refinement.center_of_gravity,
@@ -574,6 +606,63 @@ def _accept_refinement(
     sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
+
+
+def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
+    """Whether to keep a refit, by how much to widen its noise intervals, and why (empty: accepted as it is).
+
+    Parameters
+    ----------
+    refinement : Refinement
+        The refit (:func:`rigidid.core.timedomain.refine.refine_prepared`).
+
+    Returns
+    -------
+    keep : bool
+        Use the refit's answer (False: the answer from the modes).
+    widen : float
+        Factor on the refit's noise standard errors (1: none).
+    reason : str
+        The warning to give; empty when the refit is accepted.
+
+    Notes
+    -----
+    With a pre-trigger, the refit's residual is tested against it
+    (:func:`rigidid.core.timedomain.acceptance.misfit_test`, false-alarm rate
+    :data:`~rigidid.core.timedomain.acceptance.FALSE_ALARM`). Accepted: kept as it is.
+    Not accepted but within twice the noise's variance (normalised cost below 2): the
+    model misses something systematic (the chain, the sensors), yet the refit still uses
+    the whole records; its answer is kept with its noise standard errors scaled by the
+    square root of the misfit ratio (the Birge ratio, as the Particle Data Group scales
+    inconsistent data), named. Beyond: the answer from the modes, with the reason. Without
+    a pre-trigger (no test possible) the normalised cost must be below 2.
+    """
+    from rigidid.core.timedomain.refine import good_fit
+
+    test = refinement.misfit
+    cost = refinement.normalised_cost
+    if test is not None and test.accepted:
+        return True, 1.0, ""
+    if test is None:
+        if good_fit(refinement):
+            return True, 1.0, ""
+        return (
+            False,
+            1.0,
+            (
+                f"refinement on the records ended at a normalised cost of {cost:.3g} (about 1 at a good fit): "
+                "a local minimum or a model that does not fit the records; kept the answer from the modes"
+            ),
+        )
+    why = (
+        f"the refit's residual is {test.ratio:.3g} times the pre-trigger's noise variance (misfit test p = "
+        f"{test.p_value:.2g}, false-alarm rate {test.false_alarm:g}): the rigid-body model misses part of the "
+        "records (the acquisition chain, sensor errors, an unmodelled mode, or a local minimum)"
+    )
+    if good_fit(refinement):
+        widen = math.sqrt(max(test.ratio, cost, 1.0))
+        return True, widen, f"{why}; kept the refit, its noise standard errors widened {widen:.3g} times"
+    return False, 1.0, f"{why}; normalised cost {cost:.3g}: kept the answer from the modes"
 
 
 STREAM_REFIT_VALUES = 16 * 150_000
@@ -630,7 +719,10 @@ def refine_records(
     differ from a whole-record estimation's when that budget binds.
     """
 
+    import warnings
+
     from rigidid.core.timedomain.refine import columns_of, refine_prepared
+    from rigidid.errors import OffsetDriftWarning
     from rigidid.io.records import layout_ids, open_source
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
@@ -646,11 +738,13 @@ def refine_records(
         from rigidid.io.records.refit import locate_impacts
 
         reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
-        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress)
+        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress, trends=estimate.trends)
     if impacts is None:  # read whole; the impacts where the raw records put them (as their estimation would)
         from rigidid.core.timedomain.preprocess import find_impact
 
-        raw = load_records(paths, lay)
+        with warnings.catch_warnings():  # named when the records were read for the estimation
+            warnings.simplefilter("ignore", OffsetDriftWarning)
+            raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(
             result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
@@ -665,14 +759,14 @@ def refine_records(
     def fit() -> Any:
         data = read_prepared_decays(
             paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
-            factor=estimate.decimation, progress=progress,
+            factor=estimate.decimation, progress=progress, trends=estimate.trends,
         )  # fmt: skip
         if estimate.channels is not None:  # clipped channels left out
             data = columns_of(data, estimate.channels)
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
-            damping_per_mass=ident.damping_per_mass,
+            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None,
         )  # fmt: skip
 
     return _refit(result, fit, progress, sensor_bounds(lay))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -102,6 +102,10 @@ class ModalEstimate:
     channels : tuple of int or None
         The record columns the estimate was made from (the rows of `shapes`),
         when some were left out (clipped channels); None: all of them.
+    trends : tuple of Trend or None
+        Per record, the DC offset and drift taken out of it before the estimation
+        (:class:`~rigidid.core.timedomain.trend.Trend`, in the records' rows; None for a
+        record where none mattered); None when none was taken out of any record.
     """
 
     poles: CArray
@@ -119,6 +123,7 @@ class ModalEstimate:
     adequate_order: int | None
     impacts: tuple[Impact, ...]
     channels: tuple[int, ...] | None = None
+    trends: tuple[Any, ...] | None = None
 
 
 def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[tuple[Array, Array, int]]]:
@@ -353,7 +358,7 @@ def estimate_modes(
         else:  # the energy of the few rows that can hold the impact, not of every row
             impact = impact_from_blocks(rec, dt, *peaks[k], pulse_width=pulse_width)
         if trim and settle > 0:
-            impact = Impact(impact.onset, impact.peak, min(impact.start + int(settle), rec.shape[0] - 1))
+            impact = replace(impact, start=min(impact.start + int(settle), rec.shape[0] - 1))
         impacts.append(impact)
         decays.append(rec[impact.start :])
 

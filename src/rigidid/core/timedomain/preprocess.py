@@ -41,6 +41,7 @@ __all__ = [
     "find_impact",
     "fir_taps",
     "free_decay",
+    "last_hit",
     "segment_power",
 ]
 
@@ -61,12 +62,16 @@ class Impact:
     peak : int
         Sample of largest energy within the pulse window after `onset`.
     start : int
-        First sample of the free decay (a little after `peak`).
+        First sample of the free decay (a little after `peak`, or after the last
+        hit's peak when the record holds several: :func:`last_hit`).
+    hits : int
+        Hits found (1: a clean impact; more: a double hit, the decay taken after the last).
     """
 
     onset: int
     peak: int
     start: int
+    hits: int = 1
 
 
 _ENERGY_BLOCK = 1 << 16
@@ -250,15 +255,108 @@ def impact_from_blocks(
         if hits.size:
             onset = b * rows + int(hits[0])
             break
-    return _after_onset(onset, lambda window: energy(onset, onset + window), dt, pulse_width, n)
+    return _after_onset(onset, lambda window: energy(onset, onset + window), dt, pulse_width, n,
+                        lambda lo, hi: record[lo:hi])  # fmt: skip
 
 
-def _after_onset(onset: int, pulse: Callable[[int], Array], dt: float, pulse_width: float, n: int) -> Impact:
+def _after_onset(
+    onset: int, pulse: Callable[[int], Array], dt: float, pulse_width: float, n: int, rows: Callable[[int, int], Array]
+) -> Impact:
     """The impact whose onset is `onset`: the energy peak in the pulse window after it (``pulse(window)``
-    gives the energy of those rows), the decay half a window after the peak (:func:`find_impact`'s rule)."""
+    gives the energy of those rows), the decay half a window after the peak (:func:`find_impact`'s rule),
+    or half a window after the last hit's peak when :func:`last_hit` finds more (``rows(lo, hi)``: the
+    record's rows)."""
     window = max(2, round(pulse_width / dt))
     peak = onset + int(np.argmax(pulse(window)))
-    return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
+    base = max(0, onset - _HIT_BEFORE)  # the predictor of last_hit needs rows before the first hit
+    span = rows(base, min(n, onset + window + min(round(HIT_SPAN / dt), _HIT_ROWS)))
+    later = last_hit(span, peak - base, window)
+    if later is None:
+        return Impact(onset, peak, min(peak + max(1, window // 2), n - 1))
+    hits, last = later
+    return Impact(onset, peak, min(base + last + max(1, window // 2), n - 1), hits)
+
+
+HIT_SPAN = 1.0
+"""Time after an impact searched for further hits (s): a hammer's bounce comes within it."""
+
+_HIT_BEFORE = 16  # rows before the onset given to last_hit
+_HIT_ROWS = 1 << 16  # at most these rows searched (memory: their second difference)
+_HIT_LEVEL = 0.01  # a later hit's innovation energy is at least this fraction of the first's
+_HIT_NOISE = 30.0  # ... and this many times the median innovation energy of the decay (about p / 2)
+
+
+def _innovations(rows: Array, start: int) -> Array:
+    """Per row, the energy of the one-step prediction error of a free decay fitted to ``rows[start:]``.
+
+    Each channel is predicted from the previous ``L`` rows of every channel and a constant (a
+    free decay of eq. (19) of [1]: 12 states seen through p channels, ``L p >= 12``), by least
+    squares on the rows from `start`; the errors are scaled by each channel's median absolute
+    error over those rows, squared and summed.
+    """
+    n, p = rows.shape
+    lags = max(2, -(-13 // max(p, 1)))
+    if n - start < 4 * (lags * p + 1) or start < lags:
+        return np.zeros(0)
+    design = np.hstack([rows[lags - k - 1 : n - k - 1] for k in range(lags)] + [np.ones((n - lags, 1))])
+    target = rows[lags:]
+    fit = slice(start - lags, None)
+    scale = np.sqrt(np.sum(design[fit] ** 2, axis=0))
+    scale = np.where(scale > 0.0, scale, 1.0)
+    coef = np.linalg.lstsq(design[fit] / scale, target[fit], rcond=None)[0] / scale[:, None]
+    err = target - design @ coef
+    mad = np.median(np.abs(err[fit]), axis=0)
+    floor = 1e-12 * np.max(np.abs(rows), axis=0)
+    err = err / np.maximum(mad, np.where(floor > 0.0, floor, 1.0))
+    out = np.zeros(n)
+    out[lags:] = np.einsum("ij,ij->i", err, err)
+    return out
+
+
+def last_hit(rows: Array, peak: int, window: int) -> tuple[int, int] | None:
+    """Hits after the first in the rows of an impact: their number and the last one's peak.
+
+    Parameters
+    ----------
+    rows : ndarray, shape (m, p)
+        The record from a little before the first hit's onset on (over :data:`HIT_SPAN`).
+    peak : int
+        The first hit's energy peak (row of `rows`).
+    window : int
+        The pulse window (samples).
+
+    Returns
+    -------
+    (int, int) or None
+        The number of hits and the row of `rows` where the last one peaks; None for one hit.
+
+    Notes
+    -----
+    Between hits a record is a free decay of the rigid-body modes (eq. (19) of [1]): each
+    sample follows linearly from the previous few. A hit is a force the decay does not
+    predict, so it stands out in the one-step prediction error of a linear predictor
+    fitted to the decay after the first hit (:func:`_innovations`; the few rows of a later
+    hit hardly move the least-squares fit). A later hit is a row whose prediction-error
+    energy exceeds :data:`_HIT_LEVEL` times the first hit's and :data:`_HIT_NOISE` times the
+    decay's median (the noise: about p / 2 there); one pulse window after each hit found,
+    the search goes on.
+    """
+    start = min(peak + window, rows.shape[0])
+    e = _innovations(rows, start)
+    if e.size == 0:
+        return None
+    first = float(e[:start].max())
+    level = max(_HIT_LEVEL * first, _HIT_NOISE * float(np.median(e[start:])))
+    found = np.flatnonzero(e[start:] > level)
+    if not found.size:
+        return None
+    hits, last, pos = 1, start, start
+    for row in (start + found).tolist():
+        if row < pos:
+            continue
+        top = row + int(np.argmax(e[row : row + window]))
+        hits, last, pos = hits + 1, top, top + window
+    return hits, last
 
 
 def find_impact(
@@ -310,7 +408,8 @@ def find_impact(
         raise InputError("the record is empty or all zero")
     top = float(energy.max())
     onset = int(np.argmax(energy > threshold * top))
-    return _after_onset(onset, lambda window: energy[onset : onset + window], dt, pulse_width, record.shape[0])
+    return _after_onset(onset, lambda window: energy[onset : onset + window], dt, pulse_width, record.shape[0],
+                        lambda lo, hi: record[lo:hi])  # fmt: skip
 
 
 def free_decay(record: Array, dt: float, *, pulse_width: float = 0.005) -> tuple[Array, Impact]:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -28,6 +28,7 @@ from rigidid.core.geometry import layout_frame, normalise_directions, sensor_mat
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
+from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -119,6 +120,7 @@ class Refinement:
     residuals: int
     evaluations: int
     converged: bool = False
+    misfit: MisfitTest | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -277,12 +279,24 @@ class PreparedDecays:
         Sample interval of `decays` (s).
     noise_from : {"pretrigger", "residual"}
         Where `sigma` comes from ("residual": the refit measures it).
+    drift : bool
+        Whether the model has a linear drift per channel and impact beside the
+        offset (records whose DC offset and drift were taken out,
+        :mod:`rigidid.core.timedomain.trend`).
+    pre_counts : tuple of int
+        Pre-trigger samples of each record (raw rate; empty when unknown).
+    pre_m2 : ndarray, shape (records, p), or None
+        Their squared deviations from the record's pre-trigger mean, per channel
+        (for the acceptance test, :mod:`rigidid.core.timedomain.acceptance`).
     """
 
     decays: list[Array]  # (n_i, p)
     sigma: Array  # (p,) noise level of each channel in the decays fitted
     dt: float
     noise_from: str
+    drift: bool = False
+    pre_counts: tuple[int, ...] = ()
+    pre_m2: Array | None = None
 
 
 _Data = PreparedDecays
@@ -302,7 +316,8 @@ def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
     PreparedDecays
     """
     cols = list(channels)
-    return PreparedDecays([d[:, cols] for d in data.decays], data.sigma[cols], data.dt, data.noise_from)
+    m2 = None if data.pre_m2 is None else data.pre_m2[:, cols]
+    return replace(data, decays=[d[:, cols] for d in data.decays], sigma=data.sigma[cols], pre_m2=m2)
 
 
 def pretrigger_sigma(counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int) -> tuple[Array, str]:
@@ -395,8 +410,9 @@ def prepare_decays(
         decays.append(np.asarray(d, dtype=float))
     decays = cut_decays(decays, p)
     squares = [((x - x.mean(axis=0)) ** 2).sum(axis=0) if x.shape[0] > 1 else np.zeros(p) for x in pre]
-    sigma, noise_from = pretrigger_sigma([x.shape[0] for x in pre], squares, len(records), factor)
-    return PreparedDecays(decays, sigma, dt * factor, noise_from)
+    counts = [x.shape[0] for x in pre]
+    sigma, noise_from = pretrigger_sigma(counts, squares, len(records), factor)
+    return PreparedDecays(decays, sigma, dt * factor, noise_from, pre_counts=tuple(counts), pre_m2=np.array(squares))
 
 
 _prepare = prepare_decays
@@ -422,18 +438,24 @@ _fit_factor = fit_factor
 # --- variable projection ----------------------------------------------------------------
 
 
-def _design(lam: CArray, phi: CArray, t: Array) -> tuple[Array, CArray]:
-    """Real design matrix (n p, 12 + p) of one impact, and exp(lam t) (n, 6)."""
+def _design(lam: CArray, phi: CArray, t: Array, drift: bool = False) -> tuple[Array, CArray]:
+    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6)."""
     n, p = t.shape[0], phi.shape[0]
     ex = np.exp(np.outer(t, lam))  # (n, 6)
     u = ex[:, None, :] * phi[None, :, :]  # (n, p, 6)
     cols = np.concatenate([u.real, -u.imag], axis=2).reshape(n * p, 12)
     offs = np.tile(np.eye(p), (n, 1))
-    return np.hstack([cols, offs]), ex
+    if not drift:
+        return np.hstack([cols, offs]), ex
+    ramp = offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None]
+    return np.hstack([cols, offs, ramp]), ex
 
 
 def _projector(design: Array) -> Any:
     """``x -> (coefficients, x - design coefficients)``: least squares on `design`'s columns.
+
+    ``project(x, out)`` writes the negated residual ``design coefficients - x`` into `out`
+    (the refit's projected Jacobian, filled in place).
 
     From the Gram matrix of the column-normalised design (``(n, 12 + p)``: cost
     ``n (12 + p)^2``, a small fraction of a QR), by Cholesky; a QR where the Gram
@@ -450,17 +472,27 @@ def _projector(design: Array) -> Any:
     except np.linalg.LinAlgError:
         q, rr = np.linalg.qr(scaled)
 
-        def by_qr(x: Array) -> tuple[Array, Array]:
+        def by_qr(x: Array, out: Array | None = None) -> tuple[Array, Array]:
             qx = q.T @ x
-            return np.linalg.solve(rr, qx) / (norms if x.ndim == 1 else norms[:, None]), x - q @ qx
+            return np.linalg.solve(rr, qx) / (norms if x.ndim == 1 else norms[:, None]), _minus(x, q, qx, out)
 
         return by_qr
 
-    def by_gram(x: Array) -> tuple[Array, Array]:
+    def by_gram(x: Array, out: Array | None = None) -> tuple[Array, Array]:
         c = np.linalg.solve(chol.T, np.linalg.solve(chol, scaled.T @ x))
-        return c / (norms if x.ndim == 1 else norms[:, None]), x - scaled @ c
+        return c / (norms if x.ndim == 1 else norms[:, None]), _minus(x, scaled, c, out)
 
     return by_gram
+
+
+def _minus(x: Array, basis: Array, coef: Array, out: Array | None) -> Array:
+    """``x - basis coef``; with `out`, its negative ``basis coef - x`` written there (no temporary)."""
+    if out is None:
+        result: Array = x - basis @ coef
+        return result
+    np.matmul(basis, coef, out=out)
+    out -= x
+    return out
 
 
 def _levenberg_marquardt(
@@ -537,14 +569,31 @@ def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray,
     return out
 
 
+def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
+    """``Re sum_k e^{lambda_k t_n} (g1_jck + t_n g2_jck)`` as one real matrix product, shape (n, p, 51).
+
+    The complex product ``[E, t E] [G1; G2]`` has real part ``[Re, Im] [Re G; -Im G]``: one BLAS
+    call on (n, 24) by (24, 51 p), and no (n, 51, p) complex temporaries.
+    """
+    n, p = t.shape[0], g1.shape[1]
+    e = np.hstack([ex, ex * t[:, None]])  # (n, 12)
+    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * N_PARAMETERS)  # (12, p 51)
+    left = np.hstack([e.real, e.imag])
+    right = np.vstack([g.real, -g.imag])
+    out: Array = (left @ right).reshape(n, p, N_PARAMETERS)
+    return out
+
+
 def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
     w = 1.0 / data.sigma
-    res_parts, jac_parts = [], []
+    res_parts = []
+    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, N_PARAMETERS))
+    row = 0
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        design, ex = _design(lam, phi * w[:, None], t)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift)
         yw = (y * w).reshape(-1)
         project = _projector(design)
         beta, r = project(yw)
@@ -553,17 +602,15 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             amp = beta[:6] + 1j * beta[6:12]  # columns Re u and -Im u: model Re(u (a_re + i a_im))
             # d model = Re( sum_k a_k (dphi_k + phi_k t dlam_k) e^{lam_k t} )
             wd = dphi * w[None, :, None]  # (51, p, 6)
-            g1 = np.einsum("jck,k->jck", wd, amp)  # (51, p, 6)
-            g2 = np.einsum("ck,jk,k->jck", phi * w[:, None], dlam, amp)
-            m1 = np.einsum("nk,jck->njc", ex, g1)
-            m2 = np.einsum("nk,jck->njc", ex * t[:, None], g2)
-            dm = (m1 + m2).real.transpose(0, 2, 1).reshape(n * p, N_PARAMETERS)  # d model / d theta
-            jp = -project(dm)[1]
+            g1 = wd * amp  # (51, p, 6)
+            g2 = (phi * w[:, None])[None, :, :] * (dlam * amp)[:, None, :]
+            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, N_PARAMETERS)  # d model / d theta
+            jp = project(dm, j_all[row : row + n * p])[1]  # minus the projected derivative, in place
+            del dm
             if _GOLUB_PEREYRA:
-                jp = jp - _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
-            jac_parts.append(jp)
+                jp -= _dropped_term(design, r.reshape(n, p), ex, t, phi * w[:, None], wd, dlam)
+        row += n * p
     r_all = np.concatenate(res_parts)
-    j_all = np.vstack(jac_parts) if jac else np.zeros((0, N_PARAMETERS))
     return r_all, j_all
 
 
@@ -581,6 +628,7 @@ def refine_body(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
+    drift: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -606,6 +654,9 @@ def refine_body(
         Largest number of residual evaluations (three per iteration of the
         optimiser, plus one Jacobian per accepted step); 0 evaluates the start only
         (its Cramér-Rao bound, e.g. at the truth of a simulation).
+    drift : bool
+        Fit a linear drift per channel and impact beside the offset
+        (:attr:`PreparedDecays.drift`).
 
     Returns
     -------
@@ -646,6 +697,8 @@ def refine_body(
     recs = [np.asarray(r, dtype=float) for r in records]
     data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
     del recs
+    if drift:
+        data = replace(data, drift=True)
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
@@ -663,6 +716,7 @@ def refine_prepared(
     stiffness_per_mass: ArrayLike,
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
+    drift: bool | None = None,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -675,6 +729,8 @@ def refine_prepared(
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
         As for :func:`refine_body`.
+    drift : bool, optional
+        Overrides ``data.drift``.
 
     Returns
     -------
@@ -689,6 +745,8 @@ def refine_prepared(
     -----
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
+    if drift is not None and drift != data.drift:
+        data = replace(data, drift=drift)
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -709,7 +767,7 @@ def refine_prepared(
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
-        data = _Data(data.decays, np.where(sigma > 0, sigma, 1.0), data.dt, data.noise_from)
+        data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
     def both(theta: Array) -> tuple[Array, Array]:
         return _evaluate(theta, data, pos_l, dirs, omega, True)
@@ -724,13 +782,14 @@ def refine_prepared(
         theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)
     n_res = r.size
-    dof = max(n_res - N_PARAMETERS - len(data.decays) * (12 + pos.shape[0]), 1)
+    dof = max(n_res - N_PARAMETERS - len(data.decays) * _linear_per_impact(pos.shape[0], data.drift), 1)
     cost = float(r @ r) / dof if data.noise_from == "pretrigger" else 1.0
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
+    misfit = _misfit(r, data, dof / n_res, q_fit)
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -743,7 +802,26 @@ def refine_prepared(
         residuals=n_res,
         evaluations=nfev,
         converged=converged,
+        misfit=misfit,
     )
+
+
+def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
+    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger."""
+    if data.noise_from != "pretrigger" or data.pre_m2 is None or len(data.pre_counts) != len(data.decays):
+        return None
+    from rigidid.core.timedomain.intervals import noise_correlation
+
+    gain = float(np.sum(fir_taps(factor) ** 2)) if factor > 1 else 1.0
+    counts = np.asarray(data.pre_counts, dtype=float)
+    variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
+    lengths = [d.shape[0] for d in data.decays]
+    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
+
+
+def _linear_per_impact(p: int, drift: bool) -> int:
+    """Linear unknowns per impact: 12 modal amplitudes, an offset per channel (and a drift)."""
+    return 12 + (2 if drift else 1) * p
 
 
 def _outputs(theta: Array, frame: _Frame, pos_l: Array, dirs: Array) -> Array:
@@ -763,6 +841,7 @@ def _bound(
     residual: Array | None = None,
     lengths: Sequence[int] | None = None,
     factor: int = 1,
+    drift: bool = False,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -775,7 +854,7 @@ def _bound(
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
 
-        n_linear = len(lengths) * (12 + pos_l.shape[0])
+        n_linear = len(lengths) * _linear_per_impact(pos_l.shape[0], drift)
         cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
@@ -832,6 +911,10 @@ class RecordBound:
     converged : bool or None
         Whether the optimiser met its convergence test (:class:`Refinement`);
         when False the intervals include the remaining Gauss-Newton step.
+    sensor_budget, tolerances
+        See :func:`record_bound`.
+    misfit : MisfitTest or None
+        The refit's acceptance test (:class:`Refinement`).
     """
 
     center_of_gravity: Any
@@ -847,6 +930,7 @@ class RecordBound:
     converged: bool | None = None
     sensor_budget: dict[str, dict[str, Array]] | None = None
     tolerances: dict[str, float] | None = None
+    misfit: MisfitTest | None = None
 
 
 def record_bound(
@@ -926,4 +1010,5 @@ def record_bound(
         converged=refinement.converged,
         sensor_budget=budget,
         tolerances=tolerances,
+        misfit=refinement.misfit,
     )

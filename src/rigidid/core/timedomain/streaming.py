@@ -520,7 +520,7 @@ def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) ->
     pulse = max(2, round(PULSE_WIDTH / dt))
     if found.onset + pulse > window.shape[0] or found.start >= window.shape[0] - 1:
         return None  # the pulse window or the decay start run past the rows held
-    return Impact(lo + found.onset, lo + found.peak, lo + found.start)
+    return Impact(lo + found.onset, lo + found.peak, lo + found.start, found.hits)
 
 
 def locate_impacts(
@@ -684,7 +684,8 @@ def prepared_decays(
         known = counted
     decays = cut_decays([r.decay for r in read], channels)
     sigma, noise_from = pretrigger_sigma([r.pre_count for r in read], [r.pre_m2 for r in read], len(read), q)
-    return PreparedDecays(decays, sigma, dt * q, noise_from)
+    return PreparedDecays(decays, sigma, dt * q, noise_from, pre_counts=tuple(r.pre_count for r in read),
+                          pre_m2=np.array([r.pre_m2 for r in read]))  # fmt: skip
 
 
 def record_power(blocks: Blocks, channels: int, window: Array) -> Array:

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.timedomain.stamps import token_resolution
+from rigidid.core.timedomain.trend import Trend
 from rigidid.errors import InputError
 from rigidid.io.records.columns import column as _column
 from rigidid.io.records.columns import row as _where
@@ -28,6 +29,7 @@ __all__ = [
     "check_record",
     "check_time",
     "layout_ids",
+    "take_out_trend",
 ]
 
 Array = NDArray[np.float64]
@@ -108,6 +110,52 @@ def check_decay(data: Array, line_of: Callable[[int], int], src: str, energy: Ar
     return energy
 
 
+def take_out_trend(data: Array, src: str, names: Sequence[str]) -> tuple[Array, Trend | None]:
+    """`data` less each channel's DC offset and linear drift when they matter (named in a warning).
+
+    Parameters
+    ----------
+    data : ndarray, shape (n, p)
+        A record (or the record decimated), columns in `names`' order.
+    src : str
+        The file, for the warning.
+    names : sequence of str
+        The channels' sensor ids.
+
+    Returns
+    -------
+    data : ndarray, shape (n, p)
+        `data` itself when no channel's trend matters
+        (:func:`~rigidid.core.timedomain.trend.trend_matters`), else a copy less every
+        channel's least-squares line.
+    trend : Trend or None
+        The line taken out (rows of `data`), None when nothing was.
+    """
+    import warnings
+
+    from rigidid.core.timedomain.trend import fit_trend, remove_trend, trend_matters
+    from rigidid.errors import OffsetDriftWarning
+
+    trend = fit_trend(data)
+    detrended = remove_trend(data, trend)
+    matters = trend_matters(data, detrended, trend)
+    if not matters.any():
+        return data, None
+    n = data.shape[0]
+    peak = np.max(np.abs(detrended), axis=0)
+    largest = np.maximum(np.abs(trend.offset), np.abs(trend.offset + trend.slope * (n - 1)))
+    share = np.divide(largest, peak, out=np.zeros_like(peak), where=peak > 0.0)
+    named = ", ".join(f"{names[c]!r}" for c in np.flatnonzero(matters).tolist())
+    warnings.warn(
+        f"{src}: DC offset or drift above the noise in {named} (largest {100 * float(share.max()):.2g} % of a "
+        "channel's peak): each channel's least-squares line taken out, and an offset and a drift per channel "
+        "and impact fitted in the refit",
+        OffsetDriftWarning,
+        stacklevel=3,
+    )
+    return detrended, trend
+
+
 def layout_ids(sensor_ids: Sequence[str], src: str) -> list[str]:
     """The layout's sensor ids as strings, the column names a record must have; refused when one repeats."""
     wanted = [str(s) for s in sensor_ids]
@@ -139,6 +187,7 @@ def check_record(
     for i, name in enumerate(wanted):
         if not peaks[i] > 0.0:
             raise InputError(f"sensor {name!r} reads zero in every row", source=src, location=_column(name))
+    data, _ = take_out_trend(data, src, wanted)
     check_decay(data, line_of, src)
     return data, dt
 

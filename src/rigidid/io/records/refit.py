@@ -14,7 +14,7 @@ records were checked by the first pass; this one does not check them again.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +24,7 @@ from rigidid.core.timedomain.preprocess import Impact
 from rigidid.core.timedomain.refine import PreparedDecays
 from rigidid.core.timedomain.streaming import locate_impacts as _locate
 from rigidid.core.timedomain.streaming import prepared_decays
+from rigidid.core.timedomain.trend import Trend
 from rigidid.io.records.checks import layout_ids
 from rigidid.io.records.sources import open_source, values_of
 from rigidid.progress import ProgressCallback
@@ -34,15 +35,27 @@ Array = NDArray[np.float64]
 
 
 def _opener(
-    paths: Sequence[str | os.PathLike[str]], sensor_ids: Sequence[str], progress: ProgressCallback | None
+    paths: Sequence[str | os.PathLike[str]],
+    sensor_ids: Sequence[str],
+    progress: ProgressCallback | None,
+    trends: Sequence[Trend | None] | None = None,
 ) -> Callable[[int], Iterable[Array]]:
-    """``records(i)``: the row blocks of file ``i`` (opened when called)."""
+    """``records(i)``: the row blocks of file ``i`` (opened when called), less its trend when it has one."""
 
     def records(i: int) -> Iterable[Array]:
         path = Path(paths[i])
-        return values_of(open_source(path, layout_ids(sensor_ids, str(path)), progress))
+        blocks = values_of(open_source(path, layout_ids(sensor_ids, str(path)), progress))
+        trend = None if trends is None else trends[i]
+        return blocks if trend is None else _detrended(blocks, trend)
 
     return records
+
+
+def _detrended(blocks: Iterable[Array], trend: Trend) -> Iterator[Array]:
+    row = 0
+    for values in blocks:
+        yield values - trend.values(row, values.shape[0])
+        row += values.shape[0]
 
 
 def locate_impacts(
@@ -53,6 +66,7 @@ def locate_impacts(
     reach: int,
     *,
     progress: ProgressCallback | None = None,
+    trends: Sequence[Trend | None] | None = None,
 ) -> list[Impact] | None:
     """The impacts :func:`~rigidid.core.timedomain.preprocess.find_impact` finds on the raw records, read in row blocks.
 
@@ -71,6 +85,9 @@ def locate_impacts(
         decay start after ``near.start`` (the decimation filters' reach).
     progress : ProgressCallback, optional
         Reading progress.
+    trends : sequence of Trend or None, optional
+        Per file, the DC offset and drift to take out of its rows
+        (:attr:`~rigidid.io.records.streamed.StreamedRecord.trend`).
 
     Returns
     -------
@@ -81,7 +98,7 @@ def locate_impacts(
     """
     if len(paths) != len(near):
         raise ValueError(f"{len(paths)} record files for {len(near)} impacts")
-    return _locate(_opener(paths, sensor_ids, progress), len(sensor_ids), dt, near, reach)
+    return _locate(_opener(paths, sensor_ids, progress, trends), len(sensor_ids), dt, near, reach)
 
 
 def read_prepared_decays(
@@ -93,6 +110,7 @@ def read_prepared_decays(
     onsets: Sequence[int],
     factor: int,
     progress: ProgressCallback | None = None,
+    trends: Sequence[Trend | None] | None = None,
 ) -> PreparedDecays:
     """:func:`~rigidid.core.timedomain.refine.prepare_decays` of record files, read in row blocks.
 
@@ -110,6 +128,8 @@ def read_prepared_decays(
         The modal estimate's total decimation factor.
     progress : ProgressCallback, optional
         Reading progress.
+    trends : sequence of Trend or None, optional
+        As for :func:`locate_impacts`.
 
     Returns
     -------
@@ -127,5 +147,5 @@ def read_prepared_decays(
     for p in paths:
         path = Path(p)
         rows.append(open_source(path, layout_ids(sensor_ids, str(path)), None).rows)  # a CSV's: from its size
-    records = _opener(paths, sensor_ids, progress)
+    records = _opener(paths, sensor_ids, progress, trends)
     return prepared_decays(records, rows, len(sensor_ids), dt, starts=starts, onsets=onsets, factor=factor)

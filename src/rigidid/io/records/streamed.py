@@ -31,8 +31,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.timedomain.streaming import Decimated, StreamingDecimation, second_factor, spectra_content
+from rigidid.core.timedomain.trend import Trend
 from rigidid.errors import InputError
-from rigidid.io.records.checks import MIN_ROWS, TimeCheck, check_decay, layout_ids
+from rigidid.io.records.checks import MIN_ROWS, TimeCheck, check_decay, layout_ids, take_out_trend
 from rigidid.io.records.columns import column as _column
 from rigidid.io.records.columns import row as _where
 from rigidid.io.records.sources import BlockSource, open_source
@@ -80,6 +81,9 @@ class StreamedRecord:
     clipped : ndarray of bool or None
         Per channel, whether its peak is a flat top at the raw rate
         (:class:`~rigidid.core.timedomain.clipping.PeakCount`).
+    trend : Trend or None
+        The DC offset and drift taken out of `data`, in the file's rows
+        (:func:`~rigidid.io.records.checks.take_out_trend`); None: none mattered.
     """
 
     data: Array
@@ -92,6 +96,7 @@ class StreamedRecord:
     stages: tuple[int, int] = (1, 1)
     dt_uncertainty: float = 0.0
     clipped: NDArray[np.bool_] | None = None
+    trend: Trend | None = None
 
 
 def read_record_streamed(
@@ -167,11 +172,17 @@ def read_record_streamed(
         done = stream.finish()
     except InputError as exc:
         raise InputError(exc.message, source=src) from None
+    data, trend = take_out_trend(done.data, src, wanted)
+    if trend is not None:
+        from rigidid.core.timedomain.preprocess import channel_energy
+
+        done = replace(done, data=data, energy=channel_energy(data))
+        trend = trend.rescaled(done.offset, done.factor)
     _check_streamed_decay(done, source.line_of(times.rows), src)
     dt_error = _stamp_uncertainty(source, times) if source.dt is None else 0.0
     return StreamedRecord(
         done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages,
-        dt_error * done.factor, tops.clipped(),
+        dt_error * done.factor, tops.clipped(), trend,
     )  # fmt: skip
 
 
