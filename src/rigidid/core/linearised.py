@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.estimator import DAMPING_WEIGHT, Estimates, estimate
+from rigidid.core.estimator import DAMPING_WEIGHT, Estimates, estimate, estimate_near
 from rigidid.core.noise import NoiseLevels, tilt_directions
 from rigidid.core.statespace import modal_from_poles
 
@@ -292,8 +292,11 @@ def spread(
     step : float
         Relative central-difference step (:data:`STEP`).
     start : ndarray, shape (3,), optional
-        The estimate's CG (length): every moved test starts there (faster, and
-        the same local solution).
+        The estimate's CG (length), the minimum of its cost with these
+        weights: each moved test is then one Newton step from it
+        (:func:`rigidid.core.estimator.estimate_near`, exact to first order);
+        without it, or when that step cannot be taken, each moved test is
+        identified again (:func:`rigidid.core.estimator.estimate`).
 
     Returns
     -------
@@ -309,15 +312,14 @@ def spread(
     """
     moved = noise_directions(positions, directions, poles, shapes, noise, step=step)
     batch = np.concatenate
-    all_est = estimate(
+    data = (
         batch([positions[None], moved.positions]),
         batch([directions[None], moved.directions]),
         batch([poles[None], moved.poles]),
         batch([shapes[None], moved.shapes]),
-        damping_weight=damping_weight,
-        weights=weights,
-        start=start,
     )
+    near = None if start is None else estimate_near(*data, start=start, damping_weight=damping_weight, weights=weights)
+    all_est = near or estimate(*data, damping_weight=damping_weight, weights=weights, start=start)
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     base = Estimates(*(getattr(all_est, n)[:1] for n in names))
     rest = Estimates(*(getattr(all_est, n)[1:] for n in names))
