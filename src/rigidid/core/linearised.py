@@ -48,6 +48,7 @@ __all__ = [
     "STEP",
     "Linearised",
     "StandardErrors",
+    "assembled",
     "misfit_parts",
     "noise_directions",
     "principal_axis_deviation",
@@ -641,6 +642,44 @@ def standard_errors(
         positions, directions, poles, shapes, noise, damping_weight=damping_weight, weights=weights,
         start=center_of_gravity,
     )  # fmt: skip
+    return assembled(
+        lin, inertia_per_mass=inertia_per_mass, mass=mass, misfit=misfit, misfit_dof=misfit_dof,
+        weighted=weights is not None,
+    )  # fmt: skip
+
+
+def assembled(
+    lin: Linearised,
+    *,
+    inertia_per_mass: Array,
+    mass: float | None,
+    misfit: float | None,
+    misfit_dof: int,
+    weighted: bool,
+) -> StandardErrors:
+    """The standard errors of every reported figure from an estimator's responses.
+
+    Parameters
+    ----------
+    lin : Linearised
+        Responses of the estimator to one standard deviation of each noise
+        source (:func:`spread`, or any estimator's, e.g. the mount model's).
+    inertia_per_mass : ndarray, shape (3, 3)
+        The estimate's ``J / m`` (for the principal axes).
+    mass : float or None
+        Mass; None for per-mass standard errors.
+    misfit : float or None
+        Chi-square misfit of the fit, for the inflation.
+    misfit_dof : int
+        Its degrees of freedom.
+    weighted : bool
+        Whether the estimate is noise-weighted.
+
+    Returns
+    -------
+    StandardErrors
+    """
+    noise = lin.noise
     inflation = 1.0 if misfit is None or misfit_dof <= 0 else float(np.sqrt(max(1.0, misfit / misfit_dof)))
     axes = np.linalg.eigh(0.5 * (inertia_per_mass + inertia_per_mass.T))[1]
     turn = lin.std(principal_axis_deviation(axes))  # (3 axes, 3 components)
@@ -657,7 +696,7 @@ def standard_errors(
         misfit=misfit,
         misfit_dof=misfit_dof if misfit is not None else 0,
         inflation=inflation,
-        weighted=weights is not None,
+        weighted=weighted,
         failed=lin.failed,
         linearised=lin,
         mass=mass,
