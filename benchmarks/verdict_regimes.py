@@ -24,7 +24,10 @@ state-space form, no rigidid code), identified by ``rigidid.api.identify`` as a 
   noise-weighted refit too), the median of ``--draws`` (20) alternating rounds;
   ``instructions``: the same counted by valgrind's callgrind (repeatable; about 30 s a run).
 
-Run: ``python benchmarks/verdict_regimes.py [matrix|coverage|efficiency|crash|time|instructions|all]
+- ``plan``: ``plan``'s predicted standard deviations (noise-weighted, and fixed weights as before)
+  against the RMS error ``identify`` achieves on 200 draws of one regime.
+
+Run: ``python benchmarks/verdict_regimes.py [matrix|coverage|efficiency|crash|time|instructions|plan|all]
 [--draws N] [--baseline SRC]``
 """
 
@@ -335,6 +338,53 @@ def crash(draws: int, seed: int) -> None:
         print("  ", text[:200])
 
 
+# --------------------------------------------------------------------------- plan against identify
+
+
+def plan_check(draws: int, seed: int) -> None:
+    """``plan``'s predicted standard deviations against what ``identify`` then achieves, one regime."""
+    from rigidid.core.noise import NoiseLevels
+    from rigidid.core.plan import predict_uncertainty
+    from rigidid.core.simulate import Body, Mount, body_modes
+    from rigidid.core.uncertainty import propagate
+
+    rig = engine(observe=0.3)
+    pos, dirs = layout(12)
+    shape = 0.01
+    levels = NoiseLevels(frequency=F_NOISE, damping=Z_NOISE, shape=shape)
+    mounts = [Mount(p, k, c) for p, k, c in zip(rig.mount_pos, rig.mount_k, rig.mount_c, strict=True)]
+    body = Body(rig.mass, rig.cg, rig.inertia, mounts)
+    planned = predict_uncertainty(body, pos, dirs, noise=levels, draws=400, seed=seed)
+    exact = body_modes(body, pos, dirs)
+    fixed = propagate(pos, dirs, exact.poles, exact.shapes, mass=rig.mass, noise=levels, draws=400, seed=seed)
+    lam0, psi0 = rig.modes(pos, dirs)
+    rng = np.random.default_rng(seed)
+    cg_err, mom_err, cg_se, mom_se = [], [], [], []
+    truth_moments = np.linalg.eigvalsh(rig.inertia)
+    for _ in range(draws):
+        lam, psi = add_noise(lam0, psi0, rng, F_NOISE, Z_NOISE, shape)
+        out = run_modes(rig, pos, dirs, lam, psi)
+        if out["error"] is not None:
+            continue
+        cg_err.append(out["value"]["cg"] - rig.cg)
+        mom_err.append(out["value"]["moments"] - truth_moments)
+        cg_se.append(out["se"]["cg"])
+        mom_se.append(out["se"]["moments"])
+    rms = lambda e: np.sqrt(np.mean(np.square(e), axis=0))  # noqa: E731
+    mm = 1000.0
+    print(f"plan vs identify: engine, observability scale 0.3, 12 sensors, shape noise {100 * shape:g} %; "
+          f"{len(cg_err)} identify draws (verdict_sim), plan 400 draws")  # fmt: skip
+    rows = (
+        ("plan (noise-weighted kernel)", planned.figures.center_of_gravity_std, planned.figures.principal_moments_std),
+        ("plan as before (fixed weights)", fixed.center_of_gravity.std, fixed.principal_moments.std),
+        ("identify: RMS error achieved", rms(cg_err), rms(mom_err)),
+        ("identify: mean default SE", np.mean(cg_se, axis=0), np.mean(mom_se, axis=0)),
+    )
+    for label, cg, mom in rows:
+        print(f"  {label:>31}: CG std (mm) {np.array2string(mm * np.asarray(cg), precision=2)}, "
+              f"principal moments std (kg m^2) {np.array2string(np.asarray(mom), precision=3)}")  # fmt: skip
+
+
 SAMPLES = ("paper-1994", "four-mounts", "engine-on-mounts", "uff-local-systems", "engine-test")
 
 _DRIVER = """
@@ -440,6 +490,8 @@ def main() -> None:
         crash(args.draws or 200, args.seed)
     if what in ("time", "all"):
         timing(args.draws or 20, args.baseline)
+    if what in ("plan", "all"):
+        plan_check(args.draws or 200, args.seed)
     if what == "instructions":
         instructions(args.baseline)
 
