@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import transfer_matrix
+from rigidid.core.linalg import numerical_rank, rank_tolerance
 from rigidid.errors import InputError
 
 if TYPE_CHECKING:
@@ -187,7 +188,7 @@ def _uniqueness(design: Array) -> tuple[int, int, str]:
     """Unknowns, rank and the statement of a design matrix (21 rows, one column per shared rate)."""
     unknowns = design.shape[1]
     s = np.linalg.svd(design, compute_uv=False)
-    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
+    rank = int(numerical_rank(s, design.shape[0])) if s.size and s[0] > 0 else 0
     if rank == unknowns:
         statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
     else:
@@ -787,10 +788,11 @@ def _model_spread(
     deviation each. Each is taken by a small step (:data:`~rigidid.core.linearised.STEP`
     of the largest parameter) and the figures are moved by it.
     """
+    from rigidid.core.linalg import rank_tolerance
     from rigidid.core.linearised import STEP, Linearised
 
     _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    keep = s > 1e-12 * s[0]
+    keep = s > rank_tolerance(s[0], jac.shape[0])
     moves = vt[keep] / s[keep, None]
     step = STEP * max(1.0, float(np.max(np.abs(z)))) / np.max(np.abs(moves), axis=1)
     base = _model_estimates(z[None], frame, mounts)
@@ -909,11 +911,11 @@ def split_misfit(
     design = np.stack(cols, axis=1)
     cov = np.asarray(covariance, dtype=float)
     w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    keep = w > 1e-12 * max(float(w[-1]), 1e-300)
+    keep = w > rank_tolerance(max(float(w[-1]), 1e-300), w.size)
     white = (v[:, keep] / np.sqrt(w[keep])).T
     a_w, k_w = white @ design, white @ k[iu]
     rates, *_ = np.linalg.lstsq(a_w, k_w, rcond=None)
-    rank = int(np.linalg.matrix_rank(a_w))
+    rank = int(numerical_rank(np.linalg.svd(a_w, compute_uv=False), a_w.shape[0]))
     resid = k_w - a_w @ rates
     return float(resid @ resid), int(np.sum(keep)) - rank
 
