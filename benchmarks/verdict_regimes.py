@@ -19,17 +19,22 @@ state-space form, no rigidid code), identified by ``rigidid.api.identify`` as a 
   their true relative noise) and the shapes (each model shape scaled by its complex least-
   squares factor, residuals over the true shape noise), started at the truth.
 - ``crash``: ``--method mounts`` on 200 noisy draws of the weakly observable engine.
-- ``time``: in-process time of ``identify`` on the samples with and without the default
-  standard errors.
+- ``time``: CPU time of ``rigidid identify`` (a fresh process: start-up and run) on every
+  sample, with and without the default standard errors and checks (and without the
+  noise-weighted refit too), the median of ``--draws`` (20) alternating rounds;
+  ``instructions``: the same counted by valgrind's callgrind (repeatable; about 30 s a run).
 
-Run: ``python benchmarks/verdict_regimes.py [matrix|coverage|efficiency|crash|time|all] [--draws N]``
+- ``plan``: ``plan``'s predicted standard deviations (noise-weighted, and fixed weights as before)
+  against the RMS error ``identify`` achieves on 200 draws of one regime.
+
+Run: ``python benchmarks/verdict_regimes.py [matrix|coverage|efficiency|crash|time|instructions|plan|all]
+[--draws N] [--baseline SRC]``
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
 import warnings
 from pathlib import Path
 from typing import Any
@@ -93,7 +98,7 @@ def run_modes(rig: Rig, pos: np.ndarray, dirs: np.ndarray, lam: np.ndarray, psi:
         warnings.simplefilter("always")
         try:
             res = api.identify(lay, table, method=method, mounts=mounts if method == "mounts" else None)  # type: ignore[arg-type]
-            if listed and method == "structured":
+            if listed:
                 res = api.with_mounts(res, mounts, torque_axis=[1.0, 0.0, 0.0])
         except RigididError as exc:
             return {"error": str(exc), "crash": False}
@@ -306,8 +311,10 @@ def crash(draws: int, seed: int) -> None:
     rig = engine(observe=0.05)
     pos, dirs = layout(12)
     lam0, psi0 = rig.modes(pos, dirs)
+    truth = _truth(rig, 3)
     crashes = refusals = 0
     errors = []
+    inside: dict[str, list[np.ndarray]] = {}
     for _ in range(draws):
         lam, psi = add_noise(lam0, psi0, rng, F_NOISE, Z_NOISE, 0.01)
         out = run_modes(rig, pos, dirs, lam, psi, listed=3, method="mounts")
@@ -315,69 +322,154 @@ def crash(draws: int, seed: int) -> None:
             crashes += out["crash"]
             refusals += not out["crash"]
             errors.append(out["error"])
-        else:
-            errors.append(None)
+            continue
+        errors.append(None)
+        for key in ("cg", "J", "K", "rates"):
+            if key in out.get("se", {}):
+                hit = np.abs(out["value"][key] - truth[key]) <= 1.96 * out["se"][key]
+                inside.setdefault(key, []).append(np.ravel(hit))
     print(f"--method mounts, weakly observable engine, 12 sensors, 1 % shape noise: {draws} draws, {crashes} crashes, "
           f"{refusals} refusals")  # fmt: skip
+    shares = {key: float(np.mean(hits)) for key, hits in inside.items()}
+    every = float(np.mean(np.concatenate([np.concatenate(h) for h in inside.values()]))) if inside else float("nan")
+    print("  coverage of its default 95 % intervals (linearised from the output error's Jacobian): all "
+          f"{every:.3f}; " + ", ".join(f"{key} {share:.3f}" for key, share in shares.items()))  # fmt: skip
     for text in sorted({e for e in errors if e})[:3]:
         print("  ", text[:200])
 
 
-def timing(repeat: int) -> None:
-    from rigidid import api
+# --------------------------------------------------------------------------- plan against identify
+
+
+def plan_check(draws: int, seed: int) -> None:
+    """``plan``'s predicted standard deviations against what ``identify`` then achieves, one regime."""
+    from rigidid.core.noise import NoiseLevels
+    from rigidid.core.plan import predict_uncertainty
+    from rigidid.core.simulate import Body, Mount, body_modes
+    from rigidid.core.uncertainty import propagate
+
+    rig = engine(observe=0.3)
+    pos, dirs = layout(12)
+    shape = 0.01
+    levels = NoiseLevels(frequency=F_NOISE, damping=Z_NOISE, shape=shape)
+    mounts = [Mount(p, k, c) for p, k, c in zip(rig.mount_pos, rig.mount_k, rig.mount_c, strict=True)]
+    body = Body(rig.mass, rig.cg, rig.inertia, mounts)
+    planned = predict_uncertainty(body, pos, dirs, noise=levels, draws=400, seed=seed)
+    exact = body_modes(body, pos, dirs)
+    fixed = propagate(pos, dirs, exact.poles, exact.shapes, mass=rig.mass, noise=levels, draws=400, seed=seed)
+    lam0, psi0 = rig.modes(pos, dirs)
+    rng = np.random.default_rng(seed)
+    cg_err, mom_err, cg_se, mom_se = [], [], [], []
+    truth_moments = np.linalg.eigvalsh(rig.inertia)
+    for _ in range(draws):
+        lam, psi = add_noise(lam0, psi0, rng, F_NOISE, Z_NOISE, shape)
+        out = run_modes(rig, pos, dirs, lam, psi)
+        if out["error"] is not None:
+            continue
+        cg_err.append(out["value"]["cg"] - rig.cg)
+        mom_err.append(out["value"]["moments"] - truth_moments)
+        cg_se.append(out["se"]["cg"])
+        mom_se.append(out["se"]["moments"])
+    rms = lambda e: np.sqrt(np.mean(np.square(e), axis=0))  # noqa: E731
+    mm = 1000.0
+    print(f"plan vs identify: engine, observability scale 0.3, 12 sensors, shape noise {100 * shape:g} %; "
+          f"{len(cg_err)} identify draws (verdict_sim), plan 400 draws")  # fmt: skip
+    rows = (
+        ("plan (noise-weighted kernel)", planned.figures.center_of_gravity_std, planned.figures.principal_moments_std),
+        ("plan as before (fixed weights)", fixed.center_of_gravity.std, fixed.principal_moments.std),
+        ("identify: RMS error achieved", rms(cg_err), rms(mom_err)),
+        ("identify: mean default SE", np.mean(cg_se, axis=0), np.mean(mom_se, axis=0)),
+    )
+    for label, cg, mom in rows:
+        print(f"  {label:>31}: CG std (mm) {np.array2string(mm * np.asarray(cg), precision=2)}, "
+              f"principal moments std (kg m^2) {np.array2string(np.asarray(mom), precision=3)}")  # fmt: skip
+
+
+SAMPLES = ("paper-1994", "four-mounts", "engine-on-mounts", "uff-local-systems", "engine-test")
+
+_DRIVER = """
+import sys
+from rigidid.cli import main
+what = sys.argv.pop(1)
+if what in ("without", "none"):  # no default standard errors, verdict or plausibility checks
     from rigidid.api import checks
-
-    print("identify in-process, best of", repeat, "(s): without / with the default standard errors and checks")
-    for case in ("paper-1994", "four-mounts", "engine-on-mounts", "uff-local-systems"):
-        folder = ROOT / "samples" / case
-        lay = api.load_layout(folder / "layout.json")
-        table = api.load_modes(folder / "modes.csv", lay)
-        times = {}
-        for label, patched in (("without", True), ("with", False)):
-            original = checks.standard_errors_of, checks.checked
-            if patched:
-                checks.standard_errors_of = lambda *a, **k: None  # type: ignore[assignment]
-                checks.checked = lambda ident, *a, **k: ident  # type: ignore[assignment]
-            best = np.inf
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                for _ in range(repeat):
-                    t0 = time.perf_counter()
-                    api.identify(lay, table)
-                    best = min(best, time.perf_counter() - t0)
-            checks.standard_errors_of, checks.checked = original
-            times[label] = best
-        print(f"{case:>18}: {times['without']:.3f} / {times['with']:.3f}")
+    checks.standard_errors_of = lambda *a, **k: None
+    checks.checked = lambda ident, *a, **k: ident
+if what == "none":  # nor the noise-weighted refit (everything issue 22 added to identify)
+    from rigidid.api import identification
+    core = identification.identify_core
+    identification.identify_core = lambda *a, **k: core(*a, **{**k, "noise": None})
+sys.argv[0] = "rigidid"
+main()
+"""
 
 
-def cli_timing(repeat: int, baseline: str) -> None:
-    """Wall and CPU time of ``rigidid identify`` (a fresh process) on the samples, best of `repeat`."""
+def _identify_command(case: str, what: str, src: str) -> tuple[list[str], dict[str, str]]:
     import os
-    import resource
+
+    folder = ROOT / "samples" / case
+    command = [sys.executable, "-c", _DRIVER, what, "identify", str(folder / "layout.json"), str(folder / "modes.csv"),
+               "--json", os.devnull]  # fmt: skip
+    return command, {**os.environ, "PYTHONPATH": src, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+
+
+def _cpu_seconds(command: list[str], env: dict[str, str]) -> float:
+    """CPU time (user + system) of one process."""
+    import os
     import subprocess
 
-    print(f"rigidid identify as a process, best of {repeat} (wall s, CPU s): baseline {baseline} / this tree")
-    for case in ("paper-1994", "four-mounts", "engine-on-mounts", "uff-local-systems"):
-        folder = ROOT / "samples" / case
-        row = []
-        for src in (baseline, str(ROOT / "src")):
-            best_wall = best_cpu = np.inf
-            for _ in range(repeat):
-                before = resource.getrusage(resource.RUSAGE_CHILDREN)
-                t0 = time.perf_counter()
-                subprocess.run(
-                    [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"),
-                     str(folder / "modes.csv"), "--json", os.devnull],
-                    env={**os.environ, "PYTHONPATH": src}, capture_output=True, check=True,
-                )  # fmt: skip
-                wall = time.perf_counter() - t0
-                after = resource.getrusage(resource.RUSAGE_CHILDREN)
-                cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-                best_wall, best_cpu = min(best_wall, wall), min(best_cpu, cpu)
-            row.append((best_wall, best_cpu))
-        (w0, c0), (w1, c1) = row
-        print(f"{case:>18}: wall {w0:.2f} / {w1:.2f} (+{100 * (w1 / w0 - 1):.0f} %), "
-              f"CPU {c0:.2f} / {c1:.2f} (+{100 * (c1 / c0 - 1):.0f} %)")  # fmt: skip
+    child = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(child.pid, 0)
+    if status != 0:
+        raise RuntimeError(f"{command[3:]} failed ({status})")
+    return float(usage.ru_utime + usage.ru_stime)
+
+
+def _row(case: str, m: dict[str, float]) -> None:
+    added, issue = 100 * (m["with"] / m["without"] - 1), 100 * (m["with"] / m["none"] - 1)
+    print(f"{case:>18} {m['none']:7.3f} {m['without']:8.3f} {m['with']:7.3f}  {added:+15.1f} % {issue:+15.1f} %")
+
+
+def timing(rounds: int, baseline: str) -> None:
+    """CPU time of ``rigidid identify`` as a fresh process with and without the default intervals.
+
+    Rounds alternate the variants (ABAB..., the order flipped every round) so that the
+    machine's load hits them alike; the figure is the median over `rounds` processes each.
+    ``with``: as shipped; ``without``: no default standard errors, verdict or checks;
+    ``none``: nor the noise-weighted refit (all that issue 22 added to ``identify``).
+    """
+    import statistics
+
+    src = str(ROOT / "src")
+    print(f"rigidid identify as a process, CPU s (user + system), median of {rounds} alternating rounds")
+    print(f"{'sample':>18} {'none':>7} {'without':>8} {'with':>7}  intervals+checks  all of issue 22")
+    for case in SAMPLES:
+        cpu: dict[str, list[float]] = {"none": [], "without": [], "with": []}
+        for r in range(rounds):
+            for what in list(cpu) if r % 2 == 0 else list(cpu)[::-1]:
+                cpu[what].append(_cpu_seconds(*_identify_command(case, what, baseline or src)))
+        m = {what: statistics.median(values) for what, values in cpu.items()}
+        _row(case, m)
+
+
+def instructions(baseline: str) -> None:
+    """Instructions executed (valgrind callgrind, repeatable to about 0.1 %) by ``rigidid identify``."""
+    import re
+    import subprocess
+
+    src = str(ROOT / "src")
+    print("rigidid identify as a process under valgrind --tool=callgrind: instructions (1e9)")
+    print(f"{'sample':>18} {'none':>7} {'without':>8} {'with':>7}  intervals+checks  all of issue 22")
+    for case in SAMPLES:
+        m = {}
+        for what in ("none", "without", "with"):
+            command, env = _identify_command(case, what, baseline or src)
+            out = subprocess.run(
+                ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *command],
+                env=env, capture_output=True, text=True, check=True,
+            ).stderr  # fmt: skip
+            m[what] = int(re.findall(r"Collected : (\d+)", out)[-1]) / 1e9
+        _row(case, m)
 
 
 def main() -> None:
@@ -385,7 +477,7 @@ def main() -> None:
     parser.add_argument("what", nargs="?", default="all")
     parser.add_argument("--draws", type=int, default=None)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--baseline", default=None, help="src directory of the tree to compare with (time)")
+    parser.add_argument("--baseline", default=None, help="src directory of another tree to time instead of this one")
     args = parser.parse_args()
     what = args.what
     if what in ("matrix", "all"):
@@ -397,9 +489,11 @@ def main() -> None:
     if what in ("crash", "all"):
         crash(args.draws or 200, args.seed)
     if what in ("time", "all"):
-        timing(args.draws or 5)
-        if args.baseline:
-            cli_timing(args.draws or 5, args.baseline)
+        timing(args.draws or 20, args.baseline)
+    if what in ("plan", "all"):
+        plan_check(args.draws or 200, args.seed)
+    if what == "instructions":
+        instructions(args.baseline)
 
 
 if __name__ == "__main__":

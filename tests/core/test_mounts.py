@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rigidid.core.estimator import Estimates
 from rigidid.core.identify import identify
 from rigidid.core.mounts import mount_rates, torque_roll_axis
 from rigidid.core.simulate import Body, Mount, body_modes, system_matrices
@@ -112,7 +113,7 @@ def test_mount_model_is_flagged_inadequate_with_a_hidden_support() -> None:
     dirs = np.eye(3)[[0, 1, 2, 0, 1, 2, 0, 1]]
     for truth, adequate in ((body, True), (hidden, False)):
         modes = body_modes(truth, pos, dirs)
-        _, fit = mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
+        _, fit, _ = mount_model(pos, dirs, modes.poles, modes.shapes, truth.mass, _mounts_file(where, axes), _LAYOUT)
         assert fit.verdict is adequate, (fit.residual, fit.free_residual)
 
 
@@ -212,3 +213,38 @@ def test_mount_model_starts_from_an_indefinite_inertia() -> None:
     assert ident.inertia_tensor is not None
     np.testing.assert_allclose(ident.inertia_tensor, body.inertia_tensor, atol=MOUNT_RATES_REL * 3.0)
     assert np.all(np.linalg.eigvalsh(feasible_inertia(bad)) > 0.0)
+
+
+def test_mount_model_standard_errors_are_calibrated() -> None:
+    """Its linearised standard errors (from the output error's Jacobian) hold the truth as often as they say."""
+    from rigidid.api.mounts import mount_model
+    from rigidid.core.noise import DEFAULT_NOISE
+    from rigidid.core.simulate import add_noise
+
+    body, where, axes, rates = _body(3)
+    pos, dirs = _sensors()
+    exact = body_modes(body, pos, dirs)
+    levels = {"frequency": DEFAULT_NOISE.frequency, "damping": DEFAULT_NOISE.damping, "shape": DEFAULT_NOISE.shape}
+    z = []
+    for seed in range(4):
+        m = add_noise(exact, **levels, seed=seed)
+        ident, fit, errors = mount_model(
+            pos, dirs, m.poles, m.shapes, body.mass, _mounts_file(where, axes), _LAYOUT, DEFAULT_NOISE
+        )
+        assert errors is not None and fit.model.linearised is not None
+        assert ident.inertia_tensor is not None and ident.stiffness_matrix is not None
+        moved = fit.model.linearised
+        rate_sd = body.mass * errors.inflation * moved.std(lambda e: _split(e, where, axes))
+        z.append(np.concatenate([
+            (ident.center_of_gravity - body.center_of_gravity) / errors.center_of_gravity,
+            np.diag(ident.inertia_tensor - body.inertia_tensor) / np.diag(errors.inertia),
+            ((fit.model.stiffness_per_mass * body.mass - rates) / rate_sd).ravel(),
+        ]))  # fmt: skip
+    rms = np.sqrt(np.mean(np.square(z)))
+    # observed 0.75 (4 draws x 15 figures, correlated); standard errors half as large give 1.49
+    assert 0.45 < rms < 1.25, rms
+
+
+def _split(est: Estimates, where: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    k, g = est.stiffness_per_mass, est.center_of_gravity
+    return np.stack([mount_rates(k[b], g[b], where, axes).stiffness for b in range(k.shape[0])])

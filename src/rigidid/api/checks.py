@@ -29,6 +29,7 @@ __all__ = [
     "checked",
     "damping_meaning",
     "noise_levels",
+    "paper_standard_errors",
     "pass_on",
     "plausibility",
     "rate_errors",
@@ -73,6 +74,57 @@ def standard_errors_of(
     except (np.linalg.LinAlgError, ValueError):
         return None
     return errors
+
+
+def paper_standard_errors(
+    ident: Identification,
+    positions: Array,
+    directions: Array,
+    poles: NDArray[np.complex128],
+    shapes: NDArray[np.complex128],
+    levels: NoiseLevels,
+) -> StandardErrors | None:
+    """Linearised standard errors of the paper's sequential route (eqs. (36)-(40) of [1]).
+
+    The route is identified again with the data moved along each noise direction
+    (:func:`rigidid.core.linearised.noise_directions`; forward differences, as the
+    structured route's). A moved test that the route refuses counts as no response
+    (:attr:`StandardErrors.failed`). None when the noise is zero.
+
+    References
+    ----------
+    .. [1] "Determination of rigid body characteristics from time domain modal test
+       data", Journal of Sound and Vibration, 1994.
+    """
+    from rigidid.core.estimator import Estimates
+    from rigidid.core.identify import identify
+    from rigidid.core.linearised import Linearised, assembled, noise_directions
+    from rigidid.errors import RigididError
+
+    moved = noise_directions(positions, directions, poles, shapes, levels)
+    k = moved.sigma.size
+    if k == 0:
+        return None
+    cg, inertia = np.full((k, 3), np.nan), np.full((k, 3, 3), np.nan)
+    stiff, damp = np.full((k, 6, 6), np.nan), np.full((k, 6, 6), np.nan)
+    status = np.full(k, 5, dtype=np.int8)
+    for i in range(k):
+        try:
+            one = identify(
+                moved.positions[i], moved.directions[i], moved.poles[i], moved.shapes[i], method="paper", warn=False
+            )
+        except (RigididError, np.linalg.LinAlgError):
+            continue
+        cg[i], inertia[i] = one.center_of_gravity, one.inertia_per_mass
+        stiff[i], damp[i], status[i] = one.stiffness_per_mass, one.damping_per_mass, 0
+    base = Estimates(
+        ident.center_of_gravity[None], ident.inertia_per_mass[None], ident.stiffness_per_mass[None],
+        ident.damping_per_mass[None], np.zeros(1, dtype=np.int8),
+    )  # fmt: skip
+    lin = Linearised(base, Estimates(cg, inertia, stiff, damp, status), moved.sigma, levels)
+    return assembled(
+        lin, inertia_per_mass=ident.inertia_per_mass, mass=ident.mass, misfit=None, misfit_dof=0, weighted=False
+    )
 
 
 def rate_errors(

@@ -149,11 +149,10 @@ def identify(
     notes = _check_data(t, used, ids)
     poles = poles_from_modal(used.frequency_hz, used.damping_ratio)
     body_mass = mass if mass is not None else lay.mass
-    fit = None
-    errors = None
+    fit = errors = None
     if method == "mounts":
         assert mounts is not None
-        result, fit = mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
+        result, fit, errors = mount_model(positions, directions, poles, used.shapes, body_mass, mounts, lay, noise)
     else:
         levels = checks.noise_levels(noise, positions, directions, used.shapes)
         weighted = levels if method == "structured" else None
@@ -166,6 +165,8 @@ def identify(
         result = checks.checked(
             result, errors, (positions, directions, poles, used.shapes), levels, units, assumed=assumed
         )
+    elif method == "paper":
+        errors = checks.paper_standard_errors(result, positions, directions, poles, used.shapes, levels)
     intervals = None
     if uncertainty:
         from rigidid.core.uncertainty import propagate

@@ -20,6 +20,7 @@ from rigidid.results import IdentifyResult, MountModelFit, Mounts, PathLike
 from rigidid.units import check_same_units
 
 if TYPE_CHECKING:
+    from rigidid.core.linearised import StandardErrors
     from rigidid.core.noise import NoiseLevels
 
     pass
@@ -114,11 +115,14 @@ def mount_model(
     mounts: PathLike | MountsFile,
     layout: LayoutFile,
     noise: NoiseLevels | Mapping[str, float] | None = None,
-) -> tuple[Identification, MountModelFit]:
-    """The mount model, started from the free route when six modes allow it, and the comparison with it.
+) -> tuple[Identification, MountModelFit, StandardErrors | None]:
+    """The mount model, started from the free route when six modes allow it, the comparison with it, and
+    its standard errors.
 
     The output residuals are weighted by `noise` (default: ``estimate_noise``, the shape noise from the
-    rigid-body fit, with any overrides of a mapping), as the Monte Carlo intervals are.
+    rigid-body fit, with any overrides of a mapping), as the Monte Carlo intervals are. The standard
+    errors are linearised at the fit from the Jacobian of those residuals
+    (:attr:`rigidid.core.mounts.MountModel.linearised`), scaled up by the misfit when it exceeds the noise.
     """
     from rigidid.core.geometry import layout_frame
     from rigidid.core.mounts import eigen_residual, identify_mount_model
@@ -156,4 +160,12 @@ def mount_model(
         free_residual = eigen_residual(
             poles, free.mode_shapes_cg, free.inertia_per_mass, free.stiffness_per_mass, free.damping_per_mass, length
         )
-    return ident, MountModelFit(model, residual, free_residual, noise=levels)
+    errors = None
+    if model.linearised is not None:
+        from rigidid.core.linearised import assembled
+
+        errors = assembled(
+            model.linearised, inertia_per_mass=ident.inertia_per_mass, mass=mass, misfit=model.cost,
+            misfit_dof=model.misfit_dof, weighted=True,
+        )  # fmt: skip
+    return ident, MountModelFit(model, residual, free_residual, noise=levels), errors

@@ -53,6 +53,7 @@ __all__ = [
     "eq18_residuals",
     "eq36_system",
     "estimate",
+    "estimate_near",
     "inertia_from_params",
     "observability_batch",
     "prepare",
@@ -696,6 +697,11 @@ def _estimate_chunk(
 ) -> Estimates:
     g0 = None if start is None else (start[None, :] - prepared.centre) / prepared.scale[:, None]
     g, j, _ = solve_cg(prepared.stiffness, prepared.damping, damping_weight, weights, g0)
+    return _estimates(prepared, g, j)
+
+
+def _estimates(prepared: Prepared, g: Array, j: Array) -> Estimates:
+    """Per-mass estimates in the layout's units from the CG and ``J / m`` in each test's frame."""
     k = _sym(at_cg(prepared.stiffness, g, j))
     c = _sym(at_cg(prepared.damping, g, j))
     scale, omega = prepared.scale, prepared.omega
@@ -775,3 +781,87 @@ def estimate(
         return parts[0]
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     return Estimates(*(np.concatenate([getattr(part, name) for part in parts]) for name in names))
+
+
+_HESSIAN_STEP = 1e-4
+"""Central-difference step (dimensionless CG) of the cost's Hessian in :func:`estimate_near`."""
+
+
+def _cost_hessian(problem: _VarPro, g: Array) -> Array:
+    """The exact Hessian (3, 3) of the variable-projection cost at one test's CG `g` (3,).
+
+    Central differences of the exact gradient (Kaufman's Jacobian gives it: the dropped
+    Golub-Pereyra term is orthogonal to the residual); unlike the Gauss-Newton matrix
+    ``J^T J`` it holds the curvature of a residual that is not zero.
+    """
+    h = _HESSIAN_STEP * max(1.0, float(np.max(np.abs(g))))
+    moves = np.concatenate([np.eye(3), -np.eye(3)]) * h
+    grad = problem.take(np.zeros(6, dtype=np.intp)).normal_equations(g[None] + moves)[1]
+    hess = (grad[:3] - grad[3:]) / (2.0 * h)
+    result: Array = 0.5 * (hess + hess.T)
+    return result
+
+
+def estimate_near(
+    positions: Array,
+    directions: Array,
+    poles: CArray,
+    shapes: CArray,
+    *,
+    start: Array,
+    damping_weight: float = DAMPING_WEIGHT,
+    weights: Array | None = None,
+) -> Estimates | None:
+    """:func:`estimate` of tests that differ slightly from the first one, solved at `start`, by one Newton step.
+
+    Parameters
+    ----------
+    positions, directions : ndarray, shape (B, p, 3)
+        Sensor locations (length) and unit measuring axes; test 0 is the one
+        identified.
+    poles : ndarray of complex, shape (B, 6)
+        Poles of the six rigid-body modes (rad/s).
+    shapes : ndarray of complex, shape (B, p, 6)
+        Mode shapes as the sensors read them.
+    start : ndarray, shape (3,)
+        Test 0's CG from :func:`estimate` with the same weights (length, the
+        layout's axes): the minimum of its eq. (18) cost.
+    damping_weight : float
+        As in :func:`estimate`.
+    weights : ndarray, shape (30, 30), optional
+        As in :func:`estimate`.
+
+    Returns
+    -------
+    Estimates or None
+        Every test's estimate to first order in its difference from test 0
+        (exact to second order), with test 0's too (from the same step, so that
+        differences are clean); None when test 0 cannot be prepared or its
+        cost's Hessian is singular (use :func:`estimate`).
+
+    Notes
+    -----
+    The CG minimises the cost of eq. (18) of [1] with ``J / m`` eliminated
+    (:func:`solve_cg`); by the implicit function theorem a small change of
+    the data moves it by ``-H^-1 dgrad``, with ``H`` the cost's Hessian at the
+    minimum and ``dgrad`` the change of the gradient at the old CG. One Newton
+    step with test 0's Hessian is that, and ``J / m``, ``K`` and ``C`` follow
+    at the new CG. The cost: one gradient per test and six for the Hessian,
+    against a Levenberg-Marquardt run per test.
+    """
+    prepared = prepare(positions, directions, poles, shapes)
+    if not prepared.ok[0]:
+        return None
+    problem = _problem(prepared.stiffness, prepared.damping, damping_weight, weights)
+    g0 = (np.asarray(start, dtype=float)[None, :] - prepared.centre) / prepared.scale[:, None]
+    hess = _cost_hessian(problem.take(np.zeros(1, dtype=np.intp)), g0[0])
+    grad = problem.normal_equations(g0)[1]
+    try:
+        step = -np.linalg.solve(hess, grad.T).T
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(step)) or np.linalg.cond(hess) > 1e12:
+        return None
+    g = g0 + step
+    _, j, *_ = problem.evaluate(g)
+    return _estimates(prepared, g, inertia_from_params(j))

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.estimator import DAMPING_WEIGHT, Estimates, estimate
+from rigidid.core.estimator import DAMPING_WEIGHT, Estimates, estimate, estimate_near
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.noise import NoiseLevels, tilt_directions
 from rigidid.core.statespace import modal_from_poles
@@ -49,6 +49,7 @@ __all__ = [
     "STEP",
     "Linearised",
     "StandardErrors",
+    "assembled",
     "misfit_parts",
     "noise_directions",
     "principal_axis_deviation",
@@ -293,8 +294,11 @@ def spread(
     step : float
         Relative central-difference step (:data:`STEP`).
     start : ndarray, shape (3,), optional
-        The estimate's CG (length): every moved test starts there (faster, and
-        the same local solution).
+        The estimate's CG (length), the minimum of its cost with these
+        weights: each moved test is then one Newton step from it
+        (:func:`rigidid.core.estimator.estimate_near`, exact to first order);
+        without it, or when that step cannot be taken, each moved test is
+        identified again (:func:`rigidid.core.estimator.estimate`).
 
     Returns
     -------
@@ -310,15 +314,14 @@ def spread(
     """
     moved = noise_directions(positions, directions, poles, shapes, noise, step=step)
     batch = np.concatenate
-    all_est = estimate(
+    data = (
         batch([positions[None], moved.positions]),
         batch([directions[None], moved.directions]),
         batch([poles[None], moved.poles]),
         batch([shapes[None], moved.shapes]),
-        damping_weight=damping_weight,
-        weights=weights,
-        start=start,
     )
+    near = None if start is None else estimate_near(*data, start=start, damping_weight=damping_weight, weights=weights)
+    all_est = near or estimate(*data, damping_weight=damping_weight, weights=weights, start=start)
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     base = Estimates(*(getattr(all_est, n)[:1] for n in names))
     rest = Estimates(*(getattr(all_est, n)[1:] for n in names))
@@ -640,6 +643,44 @@ def standard_errors(
         positions, directions, poles, shapes, noise, damping_weight=damping_weight, weights=weights,
         start=center_of_gravity,
     )  # fmt: skip
+    return assembled(
+        lin, inertia_per_mass=inertia_per_mass, mass=mass, misfit=misfit, misfit_dof=misfit_dof,
+        weighted=weights is not None,
+    )  # fmt: skip
+
+
+def assembled(
+    lin: Linearised,
+    *,
+    inertia_per_mass: Array,
+    mass: float | None,
+    misfit: float | None,
+    misfit_dof: int,
+    weighted: bool,
+) -> StandardErrors:
+    """The standard errors of every reported figure from an estimator's responses.
+
+    Parameters
+    ----------
+    lin : Linearised
+        Responses of the estimator to one standard deviation of each noise
+        source (:func:`spread`, or any estimator's, e.g. the mount model's).
+    inertia_per_mass : ndarray, shape (3, 3)
+        The estimate's ``J / m`` (for the principal axes).
+    mass : float or None
+        Mass; None for per-mass standard errors.
+    misfit : float or None
+        Chi-square misfit of the fit, for the inflation.
+    misfit_dof : int
+        Its degrees of freedom.
+    weighted : bool
+        Whether the estimate is noise-weighted.
+
+    Returns
+    -------
+    StandardErrors
+    """
+    noise = lin.noise
     inflation = 1.0 if misfit is None or misfit_dof <= 0 else float(np.sqrt(max(1.0, misfit / misfit_dof)))
     axes = np.linalg.eigh(0.5 * (inertia_per_mass + inertia_per_mass.T))[1]
     turn = lin.std(principal_axis_deviation(axes))  # (3 axes, 3 components)
@@ -656,7 +697,7 @@ def standard_errors(
         misfit=misfit,
         misfit_dof=misfit_dof if misfit is not None else 0,
         inflation=inflation,
-        weighted=weights is not None,
+        weighted=weighted,
         failed=lin.failed,
         linearised=lin,
         mass=mass,

@@ -29,7 +29,9 @@ from rigidid.errors import InputError
 if TYPE_CHECKING:
     from collections.abc import Hashable, Sequence
 
+    from rigidid.core.estimator import Estimates
     from rigidid.core.identify import Identification
+    from rigidid.core.linearised import Linearised
     from rigidid.core.noise import NoiseLevels
     from rigidid.core.simulate import Body
 
@@ -438,6 +440,14 @@ class MountModel:
         right and the noise is as given.
     cost : float or None
         Sum of squared noise-weighted output residuals (None without noise levels).
+    linearised : Linearised or None
+        The fit's response to one standard deviation of each independent
+        combination of the noise (from the Jacobian of its noise-weighted output
+        error at the solution), for the standard error of any figure (None
+        without noise levels).
+    misfit_dof : int
+        Degrees of freedom of `cost`: the residuals less the modes' complex
+        scales and the parameters.
     """
 
     center_of_gravity: Array
@@ -452,6 +462,8 @@ class MountModel:
     f_dof: tuple[int, int] | None = None
     p_value: float | None = None
     cost: float | None = None
+    linearised: Linearised | None = None
+    misfit_dof: int = 0
 
     @property
     def aic(self) -> float:
@@ -724,21 +736,19 @@ def fit_mount_model(
     x0 = np.concatenate([g0, np.linalg.cholesky(feasible_inertia(j0))[np.tril_indices(3)]])
     sol = least_squares(lambda x: rates_and_residual(x)[1], x0, method="lm", xtol=1e-12, ftol=1e-12)
     x, (rates, resid) = sol.x, rates_and_residual(sol.x)
-    f_result = cost = None
+    f_result = cost = lin = None
     if noise is not None:
-        x, rates, cost, f_result = _refit_output_error(
+        x, rates, cost, f_result, jac = _refit_output_error(
             x, rates, (local_pos, dirs), mu, psi, noise, (local_mounts, u, ties)
         )
         a, b = system(x)
         resid = a @ rates - b
-    g, j = x[:3], _inertia(x[3:])
-    k = (ties @ rates[:shared]).reshape(q, 3) * omega**2
-    c = (ties @ rates[shared:]).reshape(q, 3) * omega
+        lin = _model_spread(np.concatenate([x, rates]), jac, noise, (frame.centre, length, omega), (mp, u, ties))
     return MountModel(
-        center_of_gravity=frame.centre + length * g,
-        inertia_per_mass=length**2 * j,
-        stiffness_per_mass=k,
-        damping_per_mass=c,
+        center_of_gravity=frame.centre + length * x[:3],
+        inertia_per_mass=length**2 * _inertia(x[3:]),
+        stiffness_per_mass=(ties @ rates[:shared]).reshape(q, 3) * omega**2,
+        damping_per_mass=(ties @ rates[shared:]).reshape(q, 3) * omega,
         axes=u,
         residual=float(np.sqrt(np.mean(resid**2))),
         parameters=9 + 2 * shared,
@@ -747,7 +757,54 @@ def fit_mount_model(
         f_dof=None if f_result is None else f_result[1],
         p_value=None if f_result is None else f_result[2],
         cost=cost,
+        linearised=lin,
+        misfit_dof=0 if lin is None else 2 * psi.size - 9 - 2 * shared,
     )
+
+
+def _model_estimates(z: Array, frame: tuple[Array, float, float], mounts: tuple[Array, Array, Array]) -> Estimates:
+    """The mount model's figures (layout units, per mass) for parameter rows ``z`` (B, 9 + 2 s)."""
+    from rigidid.core.estimator import Estimates
+
+    centre, length, omega = frame
+    mp, u, ties = mounts
+    b, q, shared = z.shape[0], mp.shape[0], ties.shape[1]
+    cg = centre + length * z[:, :3]
+    inertia = np.stack([_inertia(row) for row in z[:, 3:9]]) * length**2
+    kr = (z[:, 9 : 9 + shared] @ ties.T).reshape(b, q, 3) * omega**2
+    cr = (z[:, 9 + shared :] @ ties.T).reshape(b, q, 3) * omega
+    k = np.stack([_support_matrix(kr[i], mp - cg[i], u) for i in range(b)])
+    c = np.stack([_support_matrix(cr[i], mp - cg[i], u) for i in range(b)])
+    return Estimates(cg, inertia, k, c, np.zeros(b, dtype=np.int8))
+
+
+def _model_spread(
+    z: Array, jac: Array, noise: NoiseLevels, frame: tuple[Array, float, float], mounts: tuple[Array, Array, Array]
+) -> Linearised:
+    """The mount model's response to the noise, from the Jacobian of its noise-weighted output error.
+
+    The residuals have unit variance, so the parameters' covariance is ``(J^T J)^+``:
+    with ``J = U S V^T`` the moves ``V_i / s_i`` are independent, one standard
+    deviation each. Each is taken by a small step (:data:`~rigidid.core.linearised.STEP`
+    of the largest parameter) and the figures are moved by it.
+    """
+    from rigidid.core.linalg import rank_tolerance
+    from rigidid.core.linearised import STEP, Linearised
+
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    keep = s > rank_tolerance(s[0], jac.shape[0])
+    moves = vt[keep] / s[keep, None]
+    step = STEP * max(1.0, float(np.max(np.abs(z)))) / np.max(np.abs(moves), axis=1)
+    base = _model_estimates(z[None], frame, mounts)
+    moved = _model_estimates(z[None] + step[:, None] * moves, frame, mounts)
+    return Linearised(base, moved, 1.0 / step, noise)
+
+
+_REFINE_EVALUATIONS = 100
+"""Budget of the output-error refinement (iterations of ``least_squares``, each with a Jacobian of
+``9 + 2 s`` more evaluations): from the equation-error fit it converges in 5-7 on noisy tests of
+a model that fits (``benchmarks/verdict_regimes.py crash``); a model that cannot fit (F test
+inadequate) crawled through ``100 (9 + 2 s)`` of them, minutes with four mounts."""
 
 
 def _mount_geometry(
@@ -768,8 +825,9 @@ def _refit_output_error(
     psi: NDArray[np.complex128],
     noise: Any,
     mounts: tuple[Array, Array, Array],
-) -> tuple[Array, Array, float, tuple[float, tuple[int, int], float] | None]:
-    """The mount model refined by noise-weighted output error, its cost and the F test against the free model.
+) -> tuple[Array, Array, float, tuple[float, tuple[int, int], float] | None, Array]:
+    """The mount model refined by noise-weighted output error, its cost, the F test against the free model
+    and the Jacobian of its noise-weighted residuals at the solution.
 
     `x` holds the CG and the inertia's Cholesky factor (local frame), `rates` the grouped mount rates
     (stiffness then damping); `mounts` is (local positions, axes, group ties).
@@ -796,14 +854,15 @@ def _refit_output_error(
     z0 = np.concatenate([x, rates])
     lower = np.concatenate([np.full(9, -np.inf), np.zeros(2 * shared)])
     refined = least_squares(
-        lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac", max_nfev=100 * z0.size
-    )
+        lambda z: output(*build(z)), z0, bounds=(lower, np.inf), method="trf", x_scale="jac",
+        max_nfev=_REFINE_EVALUATIONS,
+    )  # fmt: skip
     cost = float(np.sum(output(*build(refined.x)) ** 2))
     f_result = _f_test(
         cost, output.free_cost(sensor_matrix(*sensors)), mu.size, sensors[0].shape[0], 9 + 2 * shared,
         output.floored,
     )  # fmt: skip
-    return refined.x[:9], refined.x[9:], cost, f_result
+    return refined.x[:9], refined.x[9:], cost, f_result, np.asarray(refined.jac, dtype=float)
 
 
 def split_misfit(

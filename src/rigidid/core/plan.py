@@ -195,7 +195,8 @@ def predict_uncertainty(
     -----
     The exact modes of the body as the layout would read them
     (:func:`~rigidid.core.simulate.body_modes`) are perturbed by `noise` and
-    identified again (:func:`~rigidid.core.uncertainty.propagate`). The figures
+    identified again (:func:`~rigidid.core.uncertainty.propagate`) with the
+    noise-weighted kernel, as ``identify`` will identify the test. The figures
     hold for this body and these mounts: a CAD estimate that is far off (or
     mounts that couple the modes differently) changes them.
     """
@@ -205,7 +206,7 @@ def predict_uncertainty(
     modes = body_modes(body, pos, dirs)
     result = propagate(
         pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=draws, seed=seed,
-        damping_weight=damping_weight, progress=progress,
+        damping_weight=damping_weight, progress=progress, weighted=True,
     )  # fmt: skip
     moments = np.linalg.eigvalsh(body.inertia_tensor)
     cg_std = result.center_of_gravity.std
