@@ -242,11 +242,11 @@ def test_sensor_outline_is_a_closed_ring_of_distinct_points() -> None:
 
 def test_stabilisation_accepts_order_poles_of_the_time_domain_estimator() -> None:
     from rigidid.core.timedomain.stabilisation import OrderPoles
-    from rigidid.reporting import _check_stabilisation
+    from rigidid.reporting import check_stabilisation
 
     poles = np.array([-0.1 + 2 * np.pi * 6.0j, -0.2 + 2 * np.pi * 9.0j])
     entry = OrderPoles(order=8, poles=poles, stable=np.array([True, False]), shapes=np.ones((6, 2), dtype=complex))
-    ((order, freq, stable),) = _check_stabilisation([entry])
+    ((order, freq, stable),) = check_stabilisation([entry])
     assert order == 8
     np.testing.assert_allclose(freq, np.abs(poles) / (2 * np.pi))
     assert stable.tolist() == [True, False]

@@ -15,7 +15,7 @@ from rigidid.io.files import ModeTable
 from rigidid.models import LayoutFile
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import ScaledBody
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.linearised import StandardErrors
     from rigidid.core.massline import MassLine
     from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
@@ -322,6 +322,9 @@ class MassLineResult:
     scaled : rigidid.core.frfmodes.ScaledBody or None
         Route residues: the body from the six scaled rigid-body modes, with the
         stiffness and damping in absolute units.
+    fitted : rigidid.core.frfmodes.FrfModes or None
+        Route residues without a modes file: the modes fitted to the FRFs (poles,
+        residues, stabilisation diagram), for the report's figures.
     """
 
     massline: MassLine
@@ -330,6 +333,7 @@ class MassLineResult:
     reason: str
     route: str = "massline"
     scaled: ScaledBody | None = None
+    fitted: FrfModes | None = None
 
 
 PathLike = str | os.PathLike[str]

@@ -123,6 +123,7 @@ def identify_massline(
         freqs, h = load_frf_csv(frf, ids, rids)
     if mass is not None and not mass > 0.0:
         raise InputError(f"mass must be positive, got {mass}")
+    fitted = None
     if modes is None and method == "residues":
         from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
@@ -175,6 +176,7 @@ def identify_massline(
         reason,
         "massline" if modes is None and method != "residues" else "residues",
         scaled,
+        fitted,
     )
 
 
