@@ -1,8 +1,9 @@
 """A self-contained HTML report of an identification, with matplotlib figures.
 
 :func:`render_report` returns one HTML document: inline CSS, figures embedded
-as base64 PNG, no scripts, fonts or any other external resource, so it opens
-anywhere without a network. :func:`save_pngs` writes the same figures as PNG
+as base64 PNG, one inline script of rigidid's own (the interactive mode shapes,
+:mod:`rigidid.modeviewer`), no fonts, libraries or any other external
+resource, so it opens anywhere without a network. :func:`save_pngs` writes the same figures as PNG
 files. matplotlib is imported inside the functions that draw (an optional
 dependency), and figures are drawn on the Agg canvas without touching
 pyplot's global state.
@@ -55,6 +56,7 @@ from rigidid.core.energy import (
 from rigidid.core.geometry import sensor_outline
 from rigidid.errors import InputError, RigididError
 from rigidid.io.atomic import write_bytes_atomic
+from rigidid.modeviewer import VIEWER_CSS, mode_viewer_html
 from rigidid.progress import ProgressCallback, no_progress
 
 if TYPE_CHECKING:
@@ -735,7 +737,7 @@ table.test td { text-align: left; border: none; padding: 1px 0; white-space: pre
   details > summary { display: none; }
   .flex { gap: 12pt; }
 }
-"""
+""" + VIEWER_CSS
 
 
 def table_html(
@@ -995,6 +997,7 @@ def render_report(
         _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, [] if identified_mounts else mount_labels),
         _identified_mounts_html(identified_mounts, torque_roll_axis, units, has_mass, force_unit),
         "<h2>Mode shapes</h2>",
+        _viewer_html(ident, pos, ids, table, length),
         figure_html(
             pngs["modes"],
             "rigid-body mode shapes",
@@ -1017,6 +1020,19 @@ def render_report(
         parts += ["<h2>Uncertainty</h2>", uncertainty_table]
     parts += [_diagnostics_html(ident), "</body></html>"]
     return "\n".join(parts)
+
+
+def _viewer_html(
+    ident: Identification, pos: Array, ids: Sequence[str], table: _Decoupling, length: str
+) -> str:
+    """The interactive 3D view of the modes (:mod:`rigidid.modeviewer`), titled as the static figure."""
+    titles = [
+        _mode_title(label, float(f), float(z), fractions).replace("\n", " · ")
+        for label, f, z, fractions in zip(
+            table.labels, table.frequency_hz, table.damping_ratio, table.plain, strict=True
+        )
+    ]
+    return mode_viewer_html(pos, ids, ident.center_of_gravity, table.shapes, titles, length)
 
 
 def head_html(
