@@ -1257,7 +1257,7 @@ def _identified_mounts_html(
         ]  # fmt: skip
         parts += ["<h2>Mounts (identified)</h2>", table_html(
             ["mount", f"position [{length}]", "axes", f"stiffness [{k_unit}]", f"damping [{c_unit}]",
-             "nominal stiffness", "group"], rows,
+             f"data-sheet stiffness [{k_unit}]", "group"], rows,
             caption=f"rates along each mount's axes, fitted to the identified stiffness and damping at the CG; "
             f"residual |K - K_mounts| / |K| = {_residual(float(rates.stiffness_residual))}; {rates.statement}",
         )]  # fmt: skip

@@ -89,6 +89,11 @@ def simulate(
         for kind, value in zip(("frequency", "damping", "shape", "record", "frf"), renamed, strict=True):
             check_number(value, f"--add-{kind}-noise", nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
+        _refuse_unused_outputs(
+            records is not None, frf is not None, impact=impact is not None, sample_rate=sample_rate != 512.0,
+            duration=duration != 8.0, pretrigger=pretrigger != 0.1, add_record_noise=record_noise != 0.0,
+            add_frf_noise=frf_noise != 0.0, frf_format=frf_format is not None, references=references is not None,
+        )  # fmt: skip
         check_outputs({"--output": output, "--write-frf": frf}, {"--write-records": records})
         impacts = [parse_impact(text) for text in impact] if impact else None
         if mounts is not None:
@@ -212,3 +217,20 @@ def _simulate_frf(
         f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
         f"({data.frequencies.size} lines) to {out}\n"
     )
+
+
+def _refuse_unused_outputs(records: bool, frf: bool, **given: bool) -> None:
+    """Options of the records (``--write-records``) or FRFs (``--write-frf``) refused without that output."""
+    from rigidid.cli.common import refuse_unused
+
+    record_options = ("impact", "sample_rate", "duration", "pretrigger", "add_record_noise")
+    if not records:
+        refuse_unused(
+            "applies only with --write-records DIR (the impulse-response records)",
+            {"--" + k.replace("_", "-"): given[k] for k in record_options},
+        )
+    if not frf:
+        refuse_unused(
+            "applies only with --write-frf FILE (the FRFs)",
+            {"--" + k.replace("_", "-"): v for k, v in given.items() if k not in record_options},
+        )
