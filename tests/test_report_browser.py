@@ -154,3 +154,22 @@ def test_crowded_labels_are_placed_apart_or_left_out(tmp_path: Path, width: int)
     assert len(labels) + found["hidden"] == 4 + 20
     assert len(labels) >= 10  # most find a place
     assert _overlaps([label["box"] for label in labels]) == []
+
+
+@pytest.mark.slow
+def test_the_report_prints_to_a_few_a4_pages(page: Path, tmp_path: Path) -> None:
+    """The print stylesheet: the browser's print gives an A4 PDF of a few pages (the interactive view left out,
+    tables and figures not split); the engine test's report is six pages."""
+    browser = _browser()
+    if browser is None:
+        pytest.skip("no chromium on this machine (apt-get install chromium; .ci/run installs it)")
+    pdf = tmp_path / "report.pdf"
+    _chromium(browser, tmp_path / "profile", 1280, "--no-pdf-header-footer", f"--print-to-pdf={pdf}",
+              (page / "report.html").as_uri())  # fmt: skip
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF")
+    pages = len(re.findall(rb"/Type\s*/Page[^s]", data))
+    assert 3 <= pages <= 10
+    found = re.findall(rb"/MediaBox\s*\[\s*0 0 ([\d.]+) ([\d.]+)", data)
+    boxes = {tuple(round(float(v)) for v in box) for box in found}
+    assert boxes == {(595, 842)}  # A4 in points

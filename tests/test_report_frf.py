@@ -66,6 +66,7 @@ def test_the_report_puts_the_routes_side_by_side(measured: MeasuredFrfs, routes:
     assert header.count("95 % interval") == 2
     mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
     assert mass_row.count(">142<") == 2  # both routes measure the 142 kg through the force
+    assert "<td>± " in mass_row  # the residues route's interval, in kg
     for name in ("FRFs and the fits", "Mass line", "Stabilisation diagram", "Stiffness matrix at the CG"):
         assert f"<h2>{name}" in text
     assert text.count("data:image/png;base64,") == 3

@@ -254,11 +254,12 @@ def frf_figures(
     return figures
 
 
-def _interval_text(interval: Any, index: tuple[int, ...]) -> tuple[str, str]:
+def _interval_text(interval: Any, index: tuple[int, ...]) -> str:
+    """``± half-width`` of the 95 % interval (estimate ± 1.96 std), or a dash without one."""
     if interval is None:
-        return "\u2013", "\u2013"
-    low, high = np.asarray(interval.low)[index], np.asarray(interval.high)[index]
-    return fmt_num(float(np.asarray(interval.std)[index]), 3), f"{fmt_num(float(low))} … {fmt_num(float(high))}"
+        return "\u2013"
+    half = 0.5 * (float(np.asarray(interval.high)[index]) - float(np.asarray(interval.low)[index]))
+    return f"± {fmt_num(half, 3)}"
 
 
 def _routes_rows(routes: Sequence[MassLineResult], length: str, mass_unit: str) -> list[list[str]]:
@@ -280,7 +281,7 @@ def _routes_rows(routes: Sequence[MassLineResult], length: str, mass_unit: str) 
             ml = route.massline
             value = float(np.asarray(getattr(ml, attr))[index])
             intervals = None if ml.intervals is None else getattr(ml.intervals, attr)
-            row += [fmt_num(value), *_interval_text(intervals, index)]
+            row += [fmt_num(value), _interval_text(intervals, index)]
         rows.append(row)
     return rows
 
@@ -290,15 +291,15 @@ def _routes_html(routes: Sequence[MassLineResult], length: str, mass_unit: str) 
     header = ["quantity", "component", "unit"]
     for route in routes:
         name = _ROUTE_NAMES.get(route.route, route.route)
-        header += [f"{name}: estimate", "std", "95 % interval"]
+        header += [f"{name}: estimate", "95 % interval"]
     methods = "; ".join(
         f"{_ROUTE_NAMES.get(r.route, r.route)}: "
         + (r.massline.intervals.method if r.massline.intervals is not None else "no interval (the fit has no noise)")
         for r in routes
     )
-    caption = f"Every figure in the units of its row. Intervals: estimate ± 1.96 std; {methods}."
-    parts = ["<h2>Mass, centre of gravity and inertia</h2>", table_html(header, _routes_rows(routes, length, mass_unit),
-             caption=caption, label_cols=3)]  # fmt: skip
+    caption = f"Every figure in the units of its row. 95 % interval: estimate ± 1.96 standard errors; {methods}."
+    table = table_html(header, _routes_rows(routes, length, mass_unit), caption=caption, label_cols=3)
+    parts = ["<h2>Mass, centre of gravity and inertia</h2>", table]
     given = routes[0].mass_given
     if given is not None:
         diffs = ", ".join(
@@ -314,15 +315,17 @@ def _routes_html(routes: Sequence[MassLineResult], length: str, mass_unit: str) 
         rows.append([
             esc(_ROUTE_NAMES.get(r.route, r.route)), f"{fmt_num(ml.band[0], 4)} \u2013 {fmt_num(ml.band[1], 4)} Hz",
             esc(ml.band_source), str(ml.frequencies_used), f"{fmt_num(100.0 * ml.residual, 3)} %", noise,
-            esc(ml.supports), esc(r.reason),
+            esc(ml.supports),
         ])  # fmt: skip
+    why = "".join(f"<li><b>{esc(_ROUTE_NAMES.get(r.route, r.route))}</b>: {esc(r.reason)}</li>" for r in routes)
     parts += [
         "<h3>How each route fitted</h3>",
         table_html(
-            ["route", "band", "band from", "lines", "misfit (RMS)", "misfit / noise", "supports", "why"], rows,
+            ["route", "band", "band from", "lines", "misfit (RMS)", "misfit / noise", "supports"], rows,
             caption="misfit / noise: the fit's RMS misfit over the noise seen along frequency, about 1 when the "
             "model explains the FRFs.",
         ),
+        f"<ul>{why}</ul>",
     ]  # fmt: skip
     return "\n".join(parts)
 

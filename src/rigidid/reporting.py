@@ -716,6 +716,8 @@ table { border-collapse: collapse; margin: 6px 0 12px; font-variant-numeric: tab
 th, td { border: 1px solid #d5dbe2; padding: 4px 10px; text-align: right; }
 th { background: #eef2f6; font-weight: 600; }
 td.label, th.label { text-align: left; }
+td:not(.label) { white-space: nowrap; }
+.wide { overflow-x: auto; max-width: 100%; }
 caption { caption-side: bottom; text-align: left; color: #4a5663; font-size: 13px; padding-top: 4px; }
 figure { margin: 10px 0 20px; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e3e7ec; }
@@ -732,6 +734,7 @@ table.test td { text-align: left; border: none; padding: 1px 0; white-space: pre
   h3 { font-size: 10.5pt; break-after: avoid; }
   table, figure, .warn { break-inside: avoid; }
   th, td { padding: 2px 6px; }
+  .wide { overflow: visible; } td:not(.label) { white-space: normal; }  /* on paper nothing may be cut off */
   caption, figcaption { font-size: 8.5pt; }
   figure img { max-width: 100%; border: none; }
   details > summary { display: none; }
@@ -753,7 +756,8 @@ def table_html(
         for row in rows
     )
     cap = f"<caption>{esc(caption)}</caption>" if caption else ""
-    return f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    # in a box of the page's width that scrolls sideways when the table is wider (the page itself never does)
+    return f'<div class="wide"><table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>'
 
 
 def matrix_html(a: Array, labels: Sequence[str], caption: str | None = None) -> str:
