@@ -83,3 +83,23 @@ def test_report_frf_refuses_options_of_other_routes(tmp_path: Path) -> None:
         "rigidid: error: --uncertainty: applies to the modes and records routes, not to a report of FRFs (--frf)"
     ]
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_routes_that_disagree_beyond_their_errors_are_flagged(measured: MeasuredFrfs, routes: list) -> None:
+    """The last column is the routes' difference over their combined standard error; beyond 3 the page says so,
+    naming the entries (a route 5 SE off in mass is flagged, the same route agreeing is not)."""
+    from dataclasses import replace
+
+    ml = routes[0].massline
+    intervals = replace(ml.intervals, mass=replace(ml.intervals.mass, std=np.asarray(0.1)))  # 0.1 kg each
+    residues = replace(routes[0], massline=replace(ml, intervals=intervals))
+    twin = replace(residues, route="massline")  # same figures, same intervals: differ by 0 SE
+    text = render_frf_report(measured, [residues, twin], created="2026-01-01")
+    assert '<div class="warn">' not in text
+    off = replace(twin, massline=replace(twin.massline, mass=twin.massline.mass + 5.0 * np.sqrt(2.0) * 0.1))
+    text = render_frf_report(measured, [residues, off], created="2026-01-01")
+    mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
+    assert mass_row.endswith("<td>5</td>")
+    warning = re.search(r'<div class="warn">(.*?)</div>', text).group(1)
+    assert "in: mass." in warning  # only the mass

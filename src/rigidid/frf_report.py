@@ -262,8 +262,10 @@ def _interval_text(interval: Any, index: tuple[int, ...]) -> str:
     return f"± {fmt_num(half, 3)}"
 
 
-def _routes_rows(routes: Sequence[MassLineResult], length: str, mass_unit: str) -> list[list[str]]:
-    """Rows of the side-by-side table: quantity, component, unit, then per route: estimate, std, 95 % interval."""
+def _routes_rows(routes: Sequence[MassLineResult], length: str, mass_unit: str) -> tuple[list[list[str]], list[str]]:
+    """Rows of the side-by-side table (quantity, component, unit, per route: estimate and 95 % interval, and with
+    two routes their difference over the combined standard error), and the entries where that exceeds
+    :data:`SEPARATION`."""
     quantities: list[tuple[str, str, str, Any, tuple[int, ...]]] = [("mass", "", mass_unit, "mass", ())]
     quantities += [
         ("centre of gravity" if k == 0 else "", "xyz"[k], length, "center_of_gravity", (k,)) for k in range(3)
@@ -274,16 +276,31 @@ def _routes_rows(routes: Sequence[MassLineResult], length: str, mass_unit: str) 
          "inertia_tensor", (i, j))
         for n, (i, j) in enumerate(pairs)
     ]  # fmt: skip
-    rows = []
+    rows, apart, group = [], [], ""
     for name, component, unit, attr, index in quantities:
+        group = name or group
         row = [esc(name), esc(component), esc(unit)]
+        stds = []
         for route in routes:
             ml = route.massline
             value = float(np.asarray(getattr(ml, attr))[index])
             intervals = None if ml.intervals is None else getattr(ml.intervals, attr)
             row += [fmt_num(value), _interval_text(intervals, index)]
+            stds.append(None if intervals is None else float(np.asarray(intervals.std)[index]))
+        if len(routes) == 2:
+            values = [float(np.asarray(getattr(r.massline, attr))[index]) for r in routes]
+            known = [v for v in stds if v is not None]
+            scale = math.hypot(*known) if len(known) == 2 else 0.0
+            separation = abs(values[0] - values[1]) / scale if scale > 0.0 else None
+            row.append("\u2013" if separation is None else fmt_num(separation, 2))
+            if separation is not None and separation > SEPARATION:
+                apart.append(f"{group} {component}".strip())
         rows.append(row)
-    return rows
+    return rows, apart
+
+
+SEPARATION = 3.0
+"""Two routes whose estimates differ by more than this many combined standard errors are flagged."""
 
 
 def _routes_html(routes: Sequence[MassLineResult], length: str, mass_unit: str) -> str:
@@ -298,8 +315,17 @@ def _routes_html(routes: Sequence[MassLineResult], length: str, mass_unit: str) 
         for r in routes
     )
     caption = f"Every figure in the units of its row. 95 % interval: estimate ± 1.96 standard errors; {methods}."
-    table = table_html(header, _routes_rows(routes, length, mass_unit), caption=caption, label_cols=3)
-    parts = ["<h2>Mass, centre of gravity and inertia</h2>", table]
+    if len(routes) == 2:
+        header.append("routes differ by (combined SE)")
+        caption += " Last column: the two routes' difference over the root sum of squares of their standard errors."
+    rows, apart = _routes_rows(routes, length, mass_unit)
+    parts = ["<h2>Mass, centre of gravity and inertia</h2>", table_html(header, rows, caption=caption, label_cols=3)]
+    if apart:
+        parts.append(
+            f'<div class="warn">⚠ The routes differ by more than {fmt_num(SEPARATION)} combined standard errors in: '
+            f"{esc(', '.join(apart))}. One route's model does not hold on these FRFs or its intervals are too "
+            "narrow; see how each route fitted below before signing either.</div>"
+        )
     given = routes[0].mass_given
     if given is not None:
         diffs = ", ".join(
