@@ -32,10 +32,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from rigidid import __version__
 from rigidid.core.energy import DOF_LABELS
@@ -73,6 +74,7 @@ _ROUTE_NAMES = {"massline": "mass line", "residues": "scaled modes (residues)"}
 _ROUTE_COLOURS = {"massline": "#c0392b", "residues": "#1f5fa8"}
 
 
+@dataclass(frozen=True, init=False)
 class MeasuredFrfs:
     """Measured FRFs with the geometry of their responses and references (what the figures need).
 
@@ -89,25 +91,38 @@ class MeasuredFrfs:
     sensor_ids, reference_ids : sequence of str
     """
 
+    frequencies: Array
+    frf: CArray
+    positions: Array
+    directions: Array
+    reference_positions: Array
+    reference_directions: Array
+    sensor_ids: tuple[str, ...]
+    reference_ids: tuple[str, ...]
+
     def __init__(
         self,
-        frequencies: Any,
-        frf: Any,
-        positions: Any,
-        directions: Any,
-        reference_positions: Any,
-        reference_directions: Any,
+        frequencies: ArrayLike,
+        frf: ArrayLike,
+        positions: ArrayLike,
+        directions: ArrayLike,
+        reference_positions: ArrayLike,
+        reference_directions: ArrayLike,
         sensor_ids: Sequence[str],
         reference_ids: Sequence[str],
     ) -> None:
-        self.frequencies = np.asarray(frequencies, dtype=float).reshape(-1)
-        self.frf = np.asarray(frf, dtype=complex)
-        self.positions = np.asarray(positions, dtype=float).reshape(-1, 3)
-        self.directions = np.asarray(directions, dtype=float).reshape(-1, 3)
-        self.reference_positions = np.asarray(reference_positions, dtype=float).reshape(-1, 3)
-        self.reference_directions = np.asarray(reference_directions, dtype=float).reshape(-1, 3)
-        self.sensor_ids = [str(s) for s in sensor_ids]
-        self.reference_ids = [str(s) for s in reference_ids]
+        fields = {
+            "frequencies": np.asarray(frequencies, dtype=float).reshape(-1),
+            "frf": np.asarray(frf, dtype=complex),
+            "positions": np.asarray(positions, dtype=float).reshape(-1, 3),
+            "directions": np.asarray(directions, dtype=float).reshape(-1, 3),
+            "reference_positions": np.asarray(reference_positions, dtype=float).reshape(-1, 3),
+            "reference_directions": np.asarray(reference_directions, dtype=float).reshape(-1, 3),
+            "sensor_ids": tuple(str(s) for s in sensor_ids),
+            "reference_ids": tuple(str(s) for s in reference_ids),
+        }
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
         p, q = self.positions.shape[0], self.reference_positions.shape[0]
         if self.frf.shape != (p, q, self.frequencies.size) or len(self.sensor_ids) != p or len(self.reference_ids) != q:
             raise InputError(

@@ -529,41 +529,48 @@ def plan_tables(plan: PlanResult) -> Group:
             )
         parts.append(pred)
     if plan.suggestions is not None:
-        sug = Table(
-            title="Sensors to add (greedy, best first)",
-            caption="score: |CG std| over the body's radius of gyration plus |moments' relative std| (smaller is "
-            "better)",
-            title_justify="left",
-            caption_justify="left",
-        )
-        for name in (
-            "step", f"position ({length})", "direction (unit)", f"CG std ({length})", "moments rel. std (-)",
-            "score (-)",
-        ):  # fmt: skip
-            sug.add_column(name, justify="right")
-        base = plan.suggestions.baseline
-        sug.add_row(
-            "now",
-            "",
-            "",
-            _vector(base.center_of_gravity_std),
-            _vector(base.principal_moments_rel_std),
-            _fmt(base.score),
-        )
-        for step in plan.suggestions.steps:
-            f = step.figures
-            sug.add_row(
-                str(step.step),
-                _vector(step.position),
-                _vector(step.direction),
-                _vector(f.center_of_gravity_std),
-                _vector(f.principal_moments_rel_std),
-                _fmt(f.score),
-            )
-        parts.append(sug)
+        parts.append(_suggestions_table(plan.suggestions, length))
     if plan.references is not None:
         parts.append(_reference_table(plan.references))
     return Group(*parts)
+
+
+def _suggestions_table(suggestions: Any, length: str) -> Table:
+    """``plan --add``: the sensors to add, best first, each column with its unit."""
+    from rich.table import Table
+
+    sug = Table(
+        title="Sensors to add (greedy, best first)",
+        caption="score: |CG std| over the body's radius of gyration plus |moments' relative std| (smaller is "
+        "better)",
+        title_justify="left",
+        caption_justify="left",
+    )
+    for name in (
+        "step", f"position ({length})", "direction (unit)", f"CG std ({length})", "moments rel. std (-)",
+        "score (-)",
+    ):  # fmt: skip
+        sug.add_column(name, justify="right")
+    base = suggestions.baseline
+    sug.add_row(
+        "now",
+        "",
+        "",
+        _vector(base.center_of_gravity_std),
+        _vector(base.principal_moments_rel_std),
+        _fmt(base.score),
+    )
+    for step in suggestions.steps:
+        f = step.figures
+        sug.add_row(
+            str(step.step),
+            _vector(step.position),
+            _vector(step.direction),
+            _vector(f.center_of_gravity_std),
+            _vector(f.principal_moments_rel_std),
+            _fmt(f.score),
+        )
+    return sug
 
 
 def _reference_table(report: ReferenceReport) -> Table:
