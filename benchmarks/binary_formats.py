@@ -106,8 +106,10 @@ def main() -> None:
         t0 = time.perf_counter()
         files, lay = _files(folder, args.channels, args.rows)
         size = args.channels * args.rows * 8 / 1e6
-        print(f"{args.channels} channels x {args.rows} rows (record {size:.0f} MB), "
-              f"files ready in {time.perf_counter() - t0:.0f} s; medians of {args.repeat} interleaved runs")
+        print(
+            f"{args.channels} channels x {args.rows} rows (record {size:.0f} MB), "
+            f"files ready in {time.perf_counter() - t0:.0f} s; medians of {args.repeat} interleaved runs"
+        )
         commands = {
             name: [sys.executable, "-c", CLI_CODE, "modes", str(lay), str(p), "-o", str(folder / f"m{k}.csv")]
             for k, (name, p) in enumerate(files.items())

@@ -399,12 +399,14 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
         folder.mkdir(parents=True, exist_ok=True)
         load = os.getloadavg()
         print(f"load average at start: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f} ({os.cpu_count()} CPUs)")
-        print("contenders, each a fresh process (wall time includes Python start-up and imports; peak = its VmHWM):\n"
-              "  floor: plain numpy, pandas.read_csv or np.load whole, a numpy polyphase FIR to a 40 Hz factor, "
-              "Gram ERA\n"
-              "  issue's floor: the same with scipy.signal.decimate(ftype='fir'), as a plain script decimates\n"
-              "  rigidid modes: the command line, records streamed in blocks, impact and band found automatically\n"
-              "  pyOMA2 SSI-cov: pandas/np.load whole, decimated to the floor's factor, 20 block rows, orders to 24")
+        print(
+            "contenders, each a fresh process (wall time includes Python start-up and imports; peak = its VmHWM):\n"
+            "  floor: plain numpy, pandas.read_csv or np.load whole, a numpy polyphase FIR to a 40 Hz factor, "
+            "Gram ERA\n"
+            "  issue's floor: the same with scipy.signal.decimate(ftype='fir'), as a plain script decimates\n"
+            "  rigidid modes: the command line, records streamed in blocks, impact and band found automatically\n"
+            "  pyOMA2 SSI-cov: pandas/np.load whole, decimated to the floor's factor, 20 block rows, orders to 24"
+        )
         peaks: dict[tuple[int, int], float] = {}
         for channels, samples in cases:
             t0 = time.perf_counter()
@@ -454,8 +456,11 @@ def floor_comparison(cases: list[tuple[int, int]], repeat: int, keep: str | None
             print(f"record in memory: {channels * samples * 8 / 1e6:.0f} MB; frequencies: {freqs} Hz; "
                   f"CSV, .npy and .npz modes equal to 1e-9: {same}")  # fmt: skip
         load = os.getloadavg()
-        busy = " (near or above the CPU count: a shared machine, compare ratios within one run)" if max(load) > (
-            0.5 * (os.cpu_count() or 1)) else ""
+        busy = (
+            " (near or above the CPU count: a shared machine, compare ratios within one run)"
+            if max(load) > (0.5 * (os.cpu_count() or 1))
+            else ""
+        )
         print(f"\nload average at end: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}{busy}")  # fmt: skip
         for (c, n), peak in peaks.items():
             print(f"rigidid modes CSV peak, {c} channels x {n} rows: {peak:.0f} MB")

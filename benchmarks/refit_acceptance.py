@@ -79,5 +79,6 @@ def main() -> None:
     print(f"misfit ratio median {np.median(ratios):.4f} (range {np.min(ratios):.4f}-{np.max(ratios):.4f}); "
           f"normalised cost median {np.median(costs):.4f}; old rule (cost < 2) rejects {old:.3f}")  # fmt: skip
 
+
 if __name__ == "__main__":
     main()

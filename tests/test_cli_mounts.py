@@ -74,7 +74,9 @@ def test_plan_says_whether_the_mount_layout_determines_every_rate(tmp_path: Path
         m["group"] = "same"
     (tmp_path / "many.json").write_text(json.dumps(many))
     assert api.plan(CASE / "layout.json", mounts=tmp_path / "many.json").mount_split == (
-        3, 3, "unique: 3 rates, all determined by the 21 independent entries of the 6x6 matrix"
+        3,
+        3,
+        "unique: 3 rates, all determined by the 21 independent entries of the 6x6 matrix",
     )
 
 

@@ -14,6 +14,7 @@ from .tolerances import STREAMED_DECAY_ATOL, STREAMED_REFIT_REL
 
 FOUR = SAMPLES / "four-mounts"
 
+
 def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
     """Replace `name` in the package and in every API module that holds it (they import it by name)."""
     import importlib
@@ -25,7 +26,6 @@ def _patch(monkeypatch: pytest.MonkeyPatch, name: str, value: object) -> None:
         owner = importlib.import_module(f"rigidid.api.{module}")
         if hasattr(owner, name):
             monkeypatch.setattr(owner, name, value)
-
 
 
 @pytest.fixture(scope="module")

@@ -47,7 +47,8 @@ def test_engine_tables_fit_80_columns_without_cutting_cells() -> None:
     assert out.returncode == 0, out.stderr
     assert max(len(line) for line in out.stdout.splitlines()) <= 80
     assert "…" not in out.stdout
-    assert "N/mm" in out.stdout and "N m/rad" in out.stdout  # diagonal terms as mount data sheets give them
+    # one unit throughout: the diagonal terms in the matrices' units (N m/rad beside N mm/rad was printed)
+    assert "N/mm" in out.stdout and "N·mm/rad" in out.stdout and "N·m/rad" not in out.stdout
 
 
 def test_slug_layout_gives_the_same_lbf_per_inch() -> None:

@@ -27,8 +27,9 @@ def engine_csv(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[str
 def _modes(paths: list[Path]) -> np.ndarray:
     _, est = api.estimate_modes(ENGINE / "layout.json", paths)
     shapes = np.asarray(est.shapes)
-    return np.concatenate([np.asarray(est.frequency_hz), np.asarray(est.damping_ratio), shapes.real.ravel(),
-                           shapes.imag.ravel()])
+    return np.concatenate(
+        [np.asarray(est.frequency_hz), np.asarray(est.damping_ratio), shapes.real.ravel(), shapes.imag.ravel()]
+    )
 
 
 def test_binary_formats_give_the_csv_modes(engine_csv: tuple[Path, list[str], list[Path]]) -> None:

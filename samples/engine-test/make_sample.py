@@ -53,8 +53,11 @@ def write_inputs() -> None:
            "inertia_tensor": [[5.0e6, 0.0, 0.0], [0.0, 7.5e6, 0.0], [0.0, 0.0, 6.0e6]]}  # fmt: skip
     _json("cad-estimate.json", cad)
     sensors = [{"id": f"{n}+{a}", "position": list(p), "direction": f"+{a}"} for n, p in NODES.items() for a in "xyz"]
+    test = {"id": "E4-2231-T03", "specimen": "engine E4, s/n 2231, on its three production mounts",
+            "date": "2026-11-20", "operator": "A. Tester",
+            "notes": "synthetic test of rigidid's samples (truth: body.json)"}  # the report shows it under the title
     _json("layout.json", {"name": "engine test, four triaxial accelerometers", "units": UNITS, "mass": 142.0,
-                          "sensors": sensors})  # fmt: skip
+                          "test": test, "sensors": sensors})  # fmt: skip
     _json("mounts.json", {
         "name": "the engine's three mounts: data-sheet rates and damping along the test's axes",
         "units": UNITS,

@@ -66,7 +66,7 @@ def comparison_table(comparison: Comparison) -> Any:
         ratio = "-" if worst.sigma is None or d is None or worst.sigma == 0 else f"{abs(d) / worst.sigma:.2g}"
         table.add_row(
             escape(figure.name),
-            escape(f"{worst.label} ({worst.unit})" if worst.unit else worst.label),
+            escape(f"{worst.label} ({_unit_word(worst.unit)})" if worst.unit else worst.label),
             _status(worst, k),
             _num(d, 4),
             _num(worst.tolerance, 4),
@@ -75,6 +75,11 @@ def comparison_table(comparison: Comparison) -> Any:
             _num(worst.reference, 4),
         )
     return table
+
+
+def _unit_word(unit: str) -> str:
+    """A unit as one word (``kg·mm^2``), so a wrapped table never breaks inside it."""
+    return unit.replace(" ", "\u00b7")
 
 
 def comparison_junit(comparison: Comparison, suite: str = "rigidid compare") -> str:

@@ -147,12 +147,13 @@ class ForceChannel(_Strict):
         Field(description="the force's direction on the body: +x ... -z or a vector, normalised by the reader"),
     ]
     force_window: Annotated[float, Field(gt=0.0, description="force window: s after the pulse's start")] | None = None
-    exponential_end: Annotated[
-        float, Field(gt=0.0, le=1.0, description="exponential window's value at the record's end (1: none)")
-    ] | None = None
-    sensitivity: Annotated[
-        float, Field(ge=0.0, le=0.5, description="force sensor's relative sensitivity bound (type B)")
-    ] | None = None
+    exponential_end: (
+        Annotated[float, Field(gt=0.0, le=1.0, description="exponential window's value at the record's end (1: none)")]
+        | None
+    ) = None
+    sensitivity: (
+        Annotated[float, Field(ge=0.0, le=0.5, description="force sensor's relative sensitivity bound (type B)")] | None
+    ) = None
 
     def unit_direction(self) -> tuple[float, float, float]:
         """The force's direction as a unit vector."""

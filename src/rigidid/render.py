@@ -51,6 +51,11 @@ def _fmt(v: float) -> str:
     return f"{mantissa:.{max(0, digits - 1 - (e - e3))}f}e{e3}"
 
 
+def _unit(text: str) -> str:
+    """A unit as the tables show it: one word (``N·mm/rad``), so a wrapped title never breaks inside it."""
+    return text.replace(" ", "\u00b7")
+
+
 def _matrix_table(title: str, a: NDArray[np.float64], labels: Sequence[str], caption: str | None = None) -> Table:
     from rich import box
     from rich.table import Table
@@ -123,13 +128,13 @@ def _mass_tables(result: IdentifyResult) -> list[Table]:
     head.add_row(*(_fmt(float(v)) for v in ident.center_of_gravity))
     note = None if absolute else "no mass given: values per unit mass (pass --mass or set mass in the layout)"
     inertia = _matrix_table(
-        f"Inertia tensor about the CG ({mass} {length}^2{per})",
+        f"Inertia tensor about the CG ({mass}·{length}^2{per})",
         m * ident.inertia_per_mass,
         ("x", "y", "z"),
         "off-diagonal entries are minus the products of inertia" + (f"; {note}" if note else ""),
     )
     principal = Table(title="Principal moments and axes", title_justify="left")
-    principal.add_column(f"moment ({mass} {length}^2{per})", justify="right")
+    principal.add_column(f"moment ({mass}·{length}^2{per})", justify="right")
     for axis in ("x", "y", "z"):
         principal.add_column(f"axis {axis}", justify="right")
     moments = m * ident.principal_moments_per_mass
@@ -155,7 +160,7 @@ def _scaled_tables(result: IdentifyResult) -> list[Table]:
         table.add_row("difference", f"{_fmt(diff)} {mass} ({100.0 * diff / given:+.2f} %)")
     table.add_row(f"CG ({length})", _vector(sb.center_of_gravity))
     inertia = _matrix_table(
-        f"Inertia tensor about the CG from the scaled modes ({mass} {length}^2)", sb.inertia_tensor, ("x", "y", "z")
+        f"Inertia tensor about the CG from the scaled modes ({mass}·{length}^2)", sb.inertia_tensor, ("x", "y", "z")
     )
     return [table, inertia]
 
@@ -173,16 +178,19 @@ def _mount_tables(result: IdentifyResult, force_unit: str | None) -> list[Table]
         per_mass = result.identification.mass is None
         factor, k_unit, c_unit = rate_units(result.units["length"], result.units["mass"], force_unit, per_mass=per_mass)
         table = Table(
-            title=f"Mounts: rates along their axes (stiffness {k_unit}, damping {c_unit})",
+            title=f"Mounts: rates along their axes (stiffness {_unit(k_unit)}, damping {_unit(c_unit)})",
             caption=f"fit residual {rates.stiffness_residual:.2e} of |K|; {rates.statement}",
             title_justify="left",
             caption_justify="left",
         )
         for name in ("mount", "k1", "k2", "k3", "c1", "c2", "c3"):
-            table.add_column(name, justify="right")
+            table.add_column(name, justify="left" if name == "mount" else "right")
         for k, name in enumerate(mounts.ids):
             damping = ["-"] * 3 if rates.damping is None else [_fmt(factor * v) for v in rates.damping[k]]
             table.add_row(name, *(_fmt(factor * v) for v in rates.stiffness[k]), *damping)
+            if mounts.nominal is not None:  # the data sheet beside the test (the JSON's nominal_stiffness)
+                table.add_row("  data sheet", *(_fmt(factor * v) for v in mounts.nominal[k]), "", "", "",
+                              style="dim")  # fmt: skip
         tables.append(table)
     if result.mount_model is not None:
         fit = result.mount_model
@@ -366,8 +374,8 @@ def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Tabl
     if ident.mass is None:
         for name, mat, t in (("Stiffness", ident.stiffness_per_mass, "s^2"), ("Damping", ident.damping_per_mass, "s")):
             caption = (
-                f"units / {mass}: {mass}/{t} (x-z rows and columns), {mass} {length}/{t} (coupling), "
-                f"{mass} {length}^2/{t} (rx-rz block); rotations in rad"
+                f"units / {mass}: {mass}/{t} (x-z rows and columns), {mass}·{length}/{t} (coupling), "
+                f"{mass}·{length}^2/{t} (rx-rz block); rotations in rad"
             )
             tables.append(_matrix_table(f"{name} of the supports at the CG, per unit mass", mat, DOF, caption))
         return tables
@@ -377,9 +385,10 @@ def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Tabl
         ("Damping", ident.damping_per_mass, fu.damping),
     ):
         mat = ident.mass * per_mass
-        title = f"{name} of the supports at the CG ({u['translation']}, {u['rotation']})"
+        title = f"{name} of the supports at the CG ({_unit(u['translation'])}, {_unit(u['rotation'])})"
         caption = (
-            f"x-z block {u['translation']}, rx-rz block {u['rotation']}, coupling blocks {u['coupling']}; "
+            f"x-z block {_unit(u['translation'])}, rx-rz block {_unit(u['rotation'])}, coupling blocks "
+            f"{_unit(u['coupling'])}; "
             "rotations in rad"
         )
         tables.append(_matrix_table(title, fu.factor * mat, DOF, caption))
@@ -388,23 +397,22 @@ def _support_tables(result: IdentifyResult, force_unit: str | None) -> list[Tabl
 
 
 def _diagonal_table(result: IdentifyResult, force_unit: str | None) -> Table:
-    """The diagonals of stiffness and damping in the units of mount data sheets (N/mm and N m/rad...)."""
+    """The diagonals of stiffness and damping, in the units of the matrices above (one unit throughout)."""
     from rich.table import Table
 
-    from rigidid.units import diagonal_units
+    from rigidid.units import force_units
 
     ident = result.identification
     assert ident.mass is not None
-    (t_unit, t_factor), (r_unit, r_factor) = diagonal_units(result.units["length"], result.units["mass"], force_unit)
+    fu = force_units(result.units["length"], result.units["mass"], force_unit)
     table = Table(title="Supports at the CG, diagonal terms", title_justify="left")
     for name in ("dof", "stiffness", "unit", "damping", "unit "):
         table.add_column(name, justify="left" if name.startswith(("dof", "unit")) else "right")
     for i, dof in enumerate(DOF):
-        factor, unit = (t_factor, t_unit) if i < 3 else (r_factor, r_unit)
-        k = ident.mass * factor * float(ident.stiffness_per_mass[i, i])
-        c = ident.mass * factor * float(ident.damping_per_mass[i, i])
-        damping_unit = unit.replace("/", " s/", 1)
-        table.add_row(dof, _fmt(k), unit, _fmt(c), damping_unit)
+        block = "translation" if i < 3 else "rotation"
+        k = ident.mass * fu.factor * float(ident.stiffness_per_mass[i, i])
+        c = ident.mass * fu.factor * float(ident.damping_per_mass[i, i])
+        table.add_row(dof, _fmt(k), _unit(fu.stiffness[block]), _fmt(c), _unit(fu.damping[block]))
     return table
 
 
@@ -431,15 +439,15 @@ def _interval_table(result: IdentifyResult, unc: Any, title: str, caption: str, 
         values = [scale * np.ravel(getattr(interval, key)) for key in ("estimate", "std", "low", "high")]
         for label, i in zip(labels, flat if flat is not None else range(len(labels)), strict=True):
             est, std, low, high = (float(v[i]) for v in values)
-            table.add_row(f"{name}{label} ({unit})", _fmt(est), _fmt(std), f"{_fmt(low)} .. {_fmt(high)}")
+            table.add_row(f"{name}{label} ({_unit(unit)})", _fmt(est), _fmt(std), f"{_fmt(low)} .. {_fmt(high)}")
 
     rows("CG ", length, unc.center_of_gravity, ("x", "y", "z"))
     # upper triangle of the symmetric tensor, flat indices into the 3x3 entries
-    rows("J_", f"{mass} {length}^2{per}", unc.inertia, ("xx", "yy", "zz", "xy", "xz", "yz"), (0, 4, 8, 1, 2, 5))
-    rows("principal moment ", f"{mass} {length}^2{per}", unc.principal_moments, ("1", "2", "3"))
+    rows("J_", f"{mass}·{length}^2{per}", unc.inertia, ("xx", "yy", "zz", "xy", "xz", "yz"), (0, 4, 8, 1, 2, 5))
+    rows("principal moment ", f"{mass}·{length}^2{per}", unc.principal_moments, ("1", "2", "3"))
     if unc.per_mass:
         rows("stiffness ", f"{mass}/s^2{per}", unc.stiffness_diagonal, DOF[:3])
-        rows("stiffness ", f"{mass} {length}^2/s^2{per}", unc.stiffness_diagonal, DOF[3:], (3, 4, 5))
+        rows("stiffness ", f"{mass}·{length}^2/s^2{per}", unc.stiffness_diagonal, DOF[3:], (3, 4, 5))
     else:
         fu = force_units(length, mass, force_unit)
         rows("stiffness ", fu.stiffness["translation"], unc.stiffness_diagonal, DOF[:3], scale=fu.factor)
@@ -492,7 +500,7 @@ def plan_tables(plan: PlanResult) -> Group:
         summary.add_row(
             f"mount model: predicted std ({mp.draws} draws)",
             f"CG {', '.join(_fmt(float(v)) for v in mp.center_of_gravity_std)} {length}; inertia diagonal "
-            f"{', '.join(_fmt(float(v)) for v in np.diag(mp.inertia_std))} {mass} {length}^2",
+            f"{', '.join(_fmt(float(v)) for v in np.diag(mp.inertia_std))} {mass}·{length}^2",
         )
     parts: list[Any] = [summary]
     if report.findings:
@@ -516,37 +524,52 @@ def plan_tables(plan: PlanResult) -> Group:
             pred.add_row(f"CG {axis} ({length})", _fmt(float(v)))
         for k in range(3):
             pred.add_row(
-                f"principal moment {k + 1} ({mass} {length}^2)",
+                f"principal moment {k + 1} ({mass}·{length}^2)",
                 f"{_fmt(float(fig.principal_moments_std[k]))} ({100 * fig.principal_moments_rel_std[k]:.2g} %)",
             )
         parts.append(pred)
     if plan.suggestions is not None:
-        sug = Table(title="Sensors to add (greedy, best first)", title_justify="left")
-        for name in ("step", "position", "direction", "CG std", "moments rel. std", "score"):
-            sug.add_column(name, justify="right")
-        base = plan.suggestions.baseline
-        sug.add_row(
-            "now",
-            "",
-            "",
-            _vector(base.center_of_gravity_std),
-            _vector(base.principal_moments_rel_std),
-            _fmt(base.score),
-        )
-        for step in plan.suggestions.steps:
-            f = step.figures
-            sug.add_row(
-                str(step.step),
-                _vector(step.position),
-                _vector(step.direction),
-                _vector(f.center_of_gravity_std),
-                _vector(f.principal_moments_rel_std),
-                _fmt(f.score),
-            )
-        parts.append(sug)
+        parts.append(_suggestions_table(plan.suggestions, length))
     if plan.references is not None:
         parts.append(_reference_table(plan.references))
     return Group(*parts)
+
+
+def _suggestions_table(suggestions: Any, length: str) -> Table:
+    """``plan --add``: the sensors to add, best first, each column with its unit."""
+    from rich.table import Table
+
+    sug = Table(
+        title="Sensors to add (greedy, best first)",
+        caption="score: |CG std| over the body's radius of gyration plus |moments' relative std| (smaller is better)",
+        title_justify="left",
+        caption_justify="left",
+    )
+    for name in (
+        "step", f"position ({length})", "direction (unit)", f"CG std ({length})", "moments rel. std (-)",
+        "score (-)",
+    ):  # fmt: skip
+        sug.add_column(name, justify="right")
+    base = suggestions.baseline
+    sug.add_row(
+        "now",
+        "",
+        "",
+        _vector(base.center_of_gravity_std),
+        _vector(base.principal_moments_rel_std),
+        _fmt(base.score),
+    )
+    for step in suggestions.steps:
+        f = step.figures
+        sug.add_row(
+            str(step.step),
+            _vector(step.position),
+            _vector(step.direction),
+            _vector(f.center_of_gravity_std),
+            _vector(f.principal_moments_rel_std),
+            _fmt(f.score),
+        )
+    return sug
 
 
 def _reference_table(report: ReferenceReport) -> Table:
@@ -637,7 +660,7 @@ def result_csv_files(result: IdentifyResult, force_unit: str | None = None) -> d
         return "\n".join(lines) + "\n"
 
     inertia = ident.inertia_tensor if ident.inertia_tensor is not None else ident.inertia_per_mass
-    j_unit = f"{mass} {length}^2" if has_mass else f"{length}^2 per {mass}"
+    j_unit = f"{mass}·{length}^2" if has_mass else f"{length}^2 per {mass}"
     moments = ident.principal_moments if ident.principal_moments is not None else ident.principal_moments_per_mass
     out = {
         "center_of_gravity.csv": text(
@@ -690,5 +713,5 @@ def massline_tables(result: MassLineResult) -> Group:
     table.add_row(f"CG ({length})", _vector(ml.center_of_gravity))
     table.add_row("band", f"{ml.band[0]:.4g}-{ml.band[1]:.4g} Hz ({ml.band_source}, {ml.frequencies_used} lines)")
     table.add_row("misfit", f"{100.0 * ml.residual:.2f} % RMS")
-    inertia = _matrix_table(f"Inertia tensor about the CG ({mass} {length}^2)", ml.inertia_tensor, ("x", "y", "z"))
+    inertia = _matrix_table(f"Inertia tensor about the CG ({mass}·{length}^2)", ml.inertia_tensor, ("x", "y", "z"))
     return Group(table, inertia)

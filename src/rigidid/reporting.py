@@ -1,8 +1,9 @@
 """A self-contained HTML report of an identification, with matplotlib figures.
 
 :func:`render_report` returns one HTML document: inline CSS, figures embedded
-as base64 PNG, no scripts, fonts or any other external resource, so it opens
-anywhere without a network. :func:`save_pngs` writes the same figures as PNG
+as base64 PNG, one inline script of rigidid's own (the interactive mode shapes,
+:mod:`rigidid.modeviewer`), no fonts, libraries or any other external
+resource, so it opens anywhere without a network. :func:`save_pngs` writes the same figures as PNG
 files. matplotlib is imported inside the functions that draw (an optional
 dependency), and figures are drawn on the Agg canvas without touching
 pyplot's global state.
@@ -55,6 +56,7 @@ from rigidid.core.energy import (
 from rigidid.core.geometry import sensor_outline
 from rigidid.errors import InputError, RigididError
 from rigidid.io.atomic import write_bytes_atomic
+from rigidid.modeviewer import VIEWER_CSS, mode_viewer_html
 from rigidid.progress import ProgressCallback, no_progress
 
 if TYPE_CHECKING:
@@ -121,7 +123,7 @@ def _block_units(length: str, mass: str | None, time_power: int) -> tuple[str, s
     return f"{mass}/{s}", f"{mass}·{length}/{s}", f"{mass}·{length}²/{s}"
 
 
-def _num(v: float | None, digits: int = 5) -> str:
+def fmt_num(v: float | None, digits: int = 5) -> str:
     """`digits` significant digits; plain notation (thin-space thousands) from 1e-3 to 1e9."""
     if v is None or not math.isfinite(v):
         return "\u2013"  # en dash
@@ -140,17 +142,17 @@ def _num(v: float | None, digits: int = 5) -> str:
 
 def _residual(v: float) -> str:
     """A relative residual: below 1e-12 it is round-off, shown as 0."""
-    return "0" if abs(v) < 1e-12 else _num(v, 3)
+    return "0" if abs(v) < 1e-12 else fmt_num(v, 3)
 
 
-def _esc(text: object) -> str:
+def esc(text: object) -> str:
     return html.escape(str(text), quote=True)
 
 
 # --------------------------------------------------------------------------- figures
 
 
-def _new_figure(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
@@ -369,9 +371,9 @@ def _layout_key(notes: Any, scene: _Scene, moments: Array, moment_unit: str, len
     notes.legend(handles=handles, loc="upper left", fontsize=11, frameon=False)
     mounts = "".join(f"\n  {_mount_tag(k)} {text}" for k, text in enumerate(scene.mount_labels[: len(scene.mounts)]))
     text = (
-        f"CG = ({', '.join(_num(float(v), 4) for v in scene.g)}) {length}\n"
+        f"CG = ({', '.join(fmt_num(float(v), 4) for v in scene.g)}) {length}\n"
         f"principal moments [{moment_unit}]:\n  "
-        + ", ".join(f"{k + 1}: {_num(float(m), 4)}" for k, m in enumerate(moments))
+        + ", ".join(f"{k + 1}: {fmt_num(float(m), 4)}" for k, m in enumerate(moments))
         + (f"\nmounts:{mounts}" if mounts else "")
     )
     notes.text(0.0, 0.02, text, transform=notes.transAxes, fontsize=11, va="bottom", family="DejaVu Sans")
@@ -424,7 +426,7 @@ def _layout_figure(
     centre = 0.5 * (lo + hi)
     half = 0.5 * np.maximum(hi - lo, 0.25 * float(np.max(hi - lo))) + 0.08 * float(np.max(hi - lo))
 
-    fig = _new_figure(12.0, 13.0)
+    fig = new_figure(12.0, 13.0)
     grid = fig.add_gridspec(
         3, 2, width_ratios=[half[0], half[1]], height_ratios=[1.15 * (half[0] + half[1]) / 2.0, half[1], half[2]]
     )
@@ -438,7 +440,7 @@ def _layout_figure(
     _layout_key(fig.add_subplot(grid[1, 1]), scene, moments, moment_unit, length)
     fig.suptitle("Sensors, centre of gravity and principal axes of inertia", fontsize=13)
     fig.draw_without_rendering()  # the constrained layout fixes the axes, then the labels are placed
-    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]  # the Agg canvas of _new_figure
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]  # the Agg canvas of new_figure
     for ax, labels, points in views:
         _place_labels(ax, labels, points, renderer)
     fig.set_layout_engine("none")  # keep the axes where the labels were placed
@@ -490,7 +492,7 @@ def _modes_figure(ident: Identification, positions: Array, length: str, table: _
     shapes = table.shapes
     outline = sensor_outline(positions)
     size = _scene_size(positions, g[None, :])
-    fig = _new_figure(13.0, 7.4)
+    fig = new_figure(13.0, 7.4)
     points = np.vstack([positions, g[None, :]])
     for k in range(shapes.shape[1]):
         ax = fig.add_subplot(2, 3, k + 1, projection="3d")
@@ -526,7 +528,7 @@ def _modes_figure(ident: Identification, positions: Array, length: str, table: _
 
 def _decoupling_figure(table: _Decoupling) -> Figure:
     rows = [f"{label}: {f:#.4g} Hz" for label, f in zip(table.labels, table.frequency_hz, strict=True)]
-    fig = _new_figure(11.0, 4.4)
+    fig = new_figure(11.0, 4.4)
     panels = (
         (table.plain, DOF_LABELS, "test axes"),
         (table.principal, PRINCIPAL_DOF_LABELS, "rotations about the principal axes"),
@@ -556,7 +558,7 @@ def _decoupling_figure(table: _Decoupling) -> Figure:
     return fig
 
 
-def _check_stabilisation(stabilisation: Stabilisation) -> list[tuple[int, Array, NDArray[np.bool_]]]:
+def check_stabilisation(stabilisation: Stabilisation) -> list[tuple[int, Array, NDArray[np.bool_]]]:
     from rigidid.core.timedomain.stabilisation import OrderPoles
 
     out = []
@@ -583,30 +585,37 @@ def _check_stabilisation(stabilisation: Stabilisation) -> list[tuple[int, Array,
     return out
 
 
-def _stabilisation_figure(
-    ident: Identification,
+def stabilisation_figure(
+    used_hz: Array,
     entries: list[tuple[int, Array, NDArray[np.bool_]]],
     spectrum: tuple[Array, Array] | None = None,
+    spectrum_names: tuple[str, str] = (
+        "sum of the records' spectra",
+        "power spectral density (sum over channels and records)",
+    ),
 ) -> Figure:
-    """Poles per model order over the summed spectrum of the records; the legend below the axes."""
-    fig = _new_figure(11.0, 5.4)
+    """Poles per model order over a summed spectrum; vertical lines at the frequencies `used_hz`; legend below.
+
+    `spectrum_names` are the legend entry and the right axis' label of the spectrum.
+    """
+    fig = new_figure(11.0, 5.4)
     ax = fig.add_subplot(1, 1, 1)
     handles: list[Any] = []
-    top = max([float(np.max(f)) for _, f, _ in entries if f.size] + [float(np.max(ident.frequency_hz))])
+    top = max([float(np.max(f)) for _, f, _ in entries if f.size] + [float(np.max(used_hz))])
     ax.set_xlim(0.0, 1.1 * top)
     if spectrum is not None:
         freq, power = spectrum
         back = ax.twinx()
         shown = (power > 0.0) & (freq <= 1.1 * top)
         back.fill_between(freq[shown], power[shown], color="#d9dee5", lw=0.0, zorder=0)
-        (line,) = back.plot(freq[shown], power[shown], color="#9aa7b5", lw=0.8, label="sum of the records' spectra")
+        (line,) = back.plot(freq[shown], power[shown], color="#9aa7b5", lw=0.8, label=spectrum_names[0])
         back.set_yscale("log")
-        back.set_ylabel("power spectral density (sum over channels and records)", color="#6b7886", fontsize=9)
+        back.set_ylabel(spectrum_names[1], color="#6b7886", fontsize=9)
         back.tick_params(axis="y", colors="#6b7886", labelsize=8)
         ax.set_zorder(back.get_zorder() + 1)  # poles in front of the spectrum
         ax.patch.set_visible(False)
         handles.append(line)
-    for f in ident.frequency_hz:
+    for f in used_hz:
         ax.axvline(float(f), color=_CG_COLOUR, lw=0.9, alpha=0.6, zorder=1)
     first = [True, True]
     for order, f, s in entries:
@@ -666,7 +675,7 @@ def _figures(
 ) -> dict[str, Figure]:
     length, mass = _units(units)
     pos, dirs, ids, m = _as_arrays(positions, directions, sensor_ids, mounts)
-    entries = None if stabilisation is None else _check_stabilisation(stabilisation)  # check before drawing
+    entries = None if stabilisation is None else check_stabilisation(stabilisation)  # check before drawing
     table = _decoupling(ident, mode_labels)
     back = None
     if spectrum is not None:
@@ -680,7 +689,7 @@ def _figures(
         ("decoupling", lambda: _decoupling_figure(table)),
     ]
     if entries is not None:
-        drawers.append(("stabilisation", lambda: _stabilisation_figure(ident, entries, back)))
+        drawers.append(("stabilisation", lambda: stabilisation_figure(ident.frequency_hz, entries, back)))
     figures = {}
     for k, (name, draw) in enumerate(drawers):
         step("drawing the report's figures", k, len(drawers))
@@ -689,7 +698,7 @@ def _figures(
     return figures
 
 
-def _png(fig: Figure) -> bytes:
+def png_bytes(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_DPI, metadata={"Software": None})  # no URL in the file
     return buffer.getvalue()
@@ -697,7 +706,8 @@ def _png(fig: Figure) -> bytes:
 
 # --------------------------------------------------------------------------- HTML
 
-_CSS = """
+CSS = (
+    """
 body { font-family: "DejaVu Sans", "Segoe UI", Helvetica, Arial, sans-serif; font-size: 15px; color: #1a1a1a;
        max-width: 1180px; margin: 24px auto; padding: 0 16px; line-height: 1.45; }
 h1 { font-size: 26px; margin-bottom: 4px; }
@@ -708,6 +718,8 @@ table { border-collapse: collapse; margin: 6px 0 12px; font-variant-numeric: tab
 th, td { border: 1px solid #d5dbe2; padding: 4px 10px; text-align: right; }
 th { background: #eef2f6; font-weight: 600; }
 td.label, th.label { text-align: left; }
+td:not(.label) { white-space: nowrap; }
+.wide { overflow-x: auto; max-width: 100%; }
 caption { caption-side: bottom; text-align: left; color: #4a5663; font-size: 13px; padding-top: 4px; }
 figure { margin: 10px 0 20px; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e3e7ec; }
@@ -724,19 +736,22 @@ table.test td { text-align: left; border: none; padding: 1px 0; white-space: pre
   h3 { font-size: 10.5pt; break-after: avoid; }
   table, figure, .warn { break-inside: avoid; }
   th, td { padding: 2px 6px; }
+  .wide { overflow: visible; } td:not(.label) { white-space: normal; }  /* on paper nothing may be cut off */
   caption, figcaption { font-size: 8.5pt; }
   figure img { max-width: 100%; border: none; }
   details > summary { display: none; }
   .flex { gap: 12pt; }
 }
 """
+    + VIEWER_CSS
+)
 
 
-def _table(
+def table_html(
     header: Sequence[str], rows: Sequence[Sequence[str]], *, caption: str | None = None, label_cols: int = 1
 ) -> str:
     head = "".join(
-        f'<th class="label">{_esc(h)}</th>' if i < label_cols else f"<th>{_esc(h)}</th>" for i, h in enumerate(header)
+        f'<th class="label">{esc(h)}</th>' if i < label_cols else f"<th>{esc(h)}</th>" for i, h in enumerate(header)
     )
     body = "".join(
         "<tr>"
@@ -744,25 +759,34 @@ def _table(
         + "</tr>"
         for row in rows
     )
-    cap = f"<caption>{_esc(caption)}</caption>" if caption else ""
-    return f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    cap = f"<caption>{esc(caption)}</caption>" if caption else ""
+    # in a box of the page's width that scrolls sideways when the table is wider (the page itself never does)
+    return f'<div class="wide"><table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>'
 
 
-def _matrix_html(a: Array, labels: Sequence[str], caption: str | None = None) -> str:
-    rows = [[_esc(labels[i]), *(_num(float(v)) for v in a[i])] for i in range(a.shape[0])]
-    return _table(["", *labels], rows, caption=caption)
+def matrix_html(a: Array, labels: Sequence[str], caption: str | None = None) -> str:
+    """A square matrix as a table; entries below 1e-9 of ``sqrt(|a_ii a_jj|)`` (their own unit) print as 0."""
+    from rigidid.render import ROUNDING_ZERO
+
+    floor = np.zeros_like(a)
+    if a.ndim == 2 and a.shape[0] == a.shape[1] and np.all(np.isfinite(a)):
+        scale = np.sqrt(np.abs(np.diag(a)))
+        floor = ROUNDING_ZERO * np.outer(scale, scale)
+    shown = np.where(np.abs(a) < floor, 0.0, a)
+    rows = [[esc(labels[i]), *(fmt_num(float(v)) for v in shown[i])] for i in range(a.shape[0])]
+    return table_html(["", *labels], rows, caption=caption)
 
 
-def _figure_html(png: bytes, alt: str, caption: str) -> str:
+def figure_html(png: bytes, alt: str, caption: str) -> str:
     data = base64.b64encode(png).decode("ascii")
     return (
-        f'<figure><img src="data:image/png;base64,{data}" alt="{_esc(alt)}">'
-        f"<figcaption>{_esc(caption)}</figcaption></figure>"
+        f'<figure><img src="data:image/png;base64,{data}" alt="{esc(alt)}">'
+        f"<figcaption>{esc(caption)}</figcaption></figure>"
     )
 
 
 def _percent(v: float) -> str:
-    return f"{_num(100.0 * v, 3)} %"
+    return f"{fmt_num(100.0 * v, 3)} %"
 
 
 def _interval_caption(source: Uncertainty | RecordSpread | RecordBound, length: str) -> tuple[str, str]:
@@ -774,7 +798,7 @@ def _interval_caption(source: Uncertainty | RecordSpread | RecordBound, length: 
         n = source.noise
         noise = (
             f"frequency {_percent(n.frequency)}, damping {_percent(n.damping)}, shape {_percent(n.shape)} of each "
-            f"mode's RMS, position {_num(n.position, 3)} {length}, angle {_num(n.angle_deg, 3)}°"
+            f"mode's RMS, position {fmt_num(n.position, 3)} {length}, angle {fmt_num(n.angle_deg, 3)}°"
         )
         seed = "" if source.seed is None else f", seed {source.seed}"
         return "Monte Carlo", (
@@ -786,7 +810,7 @@ def _interval_caption(source: Uncertainty | RecordSpread | RecordBound, length: 
             f"{source.used} of {source.segments} interleaved segments of the records identified apart; the "
             f"spread of their estimates over √{source.used}; interval with Student's t. Measurement noise only."
         )
-    cost = _num(source.normalised_cost, 3)
+    cost = fmt_num(source.normalised_cost, 3)
     return "Cramér-Rao bound on the records", (
         f"the refit on the records (output error): standard errors from its {source.variance_from} covariance, "
         f"noise from the {source.noise_from}, normalised cost {cost} (about 1 at a good fit); "
@@ -830,8 +854,8 @@ def _uncertainty_rows(
             if est.shape == (3, 3) and index[0] > index[1]:
                 continue  # symmetric tensor: the upper triangle says it all
             rows.append([
-                _esc(name) if k == 0 else "", _esc(labels[k]), _esc(units[k]), _num(float(est[index])),
-                _num(float(std[index]), 3), f"{_num(float(low[index]))} … {_num(float(high[index]))}",
+                esc(name) if k == 0 else "", esc(labels[k]), esc(units[k]), fmt_num(float(est[index])),
+                fmt_num(float(std[index]), 3), f"{fmt_num(float(low[index]))} … {fmt_num(float(high[index]))}",
             ])  # fmt: skip
     return rows
 
@@ -846,9 +870,9 @@ def _uncertainty_html(
         if not np.asarray(source.center_of_gravity.estimate).shape == (3,):
             raise InputError("the intervals of the CG are not three numbers", source="uncertainty")
         rows = _uncertainty_rows(source, length, mass, force_unit)
-        parts.append(f"<h3>{_esc(heading)}</h3>")
+        parts.append(f"<h3>{esc(heading)}</h3>")
         parts.append(
-            _table(["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption,
+            table_html(["quantity", "component", "unit", "estimate", "std", "95 % interval"], rows, caption=caption,
                    label_cols=3)
         )  # fmt: skip
     return "\n".join(parts)
@@ -969,11 +993,11 @@ def render_report(
         ident, pos, dirs, ids, units, mounts, stabilisation, mode_labels=mode_labels, mount_labels=drawn_labels,
         spectrum=spectrum, progress=progress, roll_axis=roll,
     )  # fmt: skip
-    pngs = {name: _png(fig) for name, fig in figures.items()}
+    pngs = {name: png_bytes(fig) for name, fig in figures.items()}
     parts = [
-        _head_html(title, ident, ids, length, mass_unit, inputs, created),
-        _test_html(test),
-        *(f'<div class="warn">⚠ {_esc(message)}</div>' for message in ident.diagnostics.warnings),
+        head_html(title, ident, ids, length, mass_unit, inputs, created),
+        test_html(test),
+        *(f'<div class="warn">⚠ {esc(message)}</div>' for message in ident.diagnostics.warnings),
         _mass_properties_html(ident, length, mass_unit),
         _modes_html(ident, table),
         _supports_html(ident, length, mass_unit, force_unit),
@@ -981,7 +1005,8 @@ def render_report(
         _layout_html(pngs["layout"], pos, dirs, ids, length, mount_pos, [] if identified_mounts else mount_labels),
         _identified_mounts_html(identified_mounts, torque_roll_axis, units, has_mass, force_unit),
         "<h2>Mode shapes</h2>",
-        _figure_html(
+        _viewer_html(ident, pos, ids, table, length),
+        figure_html(
             pngs["modes"],
             "rigid-body mode shapes",
             "Each measured mode used, as the rigid-body motion that best fits its sensor readings (the rows of the "
@@ -993,7 +1018,7 @@ def render_report(
         parts.append("<h2>Stabilisation diagram</h2>")
         behind = "; grey: the sum of the records' power spectra (right axis)" if spectrum is not None else ""
         parts.append(
-            _figure_html(
+            figure_html(
                 pngs["stabilisation"],
                 "stabilisation diagram",
                 f"Poles per model order; vertical lines: the measured modes used{behind}.",
@@ -1005,7 +1030,18 @@ def render_report(
     return "\n".join(parts)
 
 
-def _head_html(
+def _viewer_html(ident: Identification, pos: Array, ids: Sequence[str], table: _Decoupling, length: str) -> str:
+    """The interactive 3D view of the modes (:mod:`rigidid.modeviewer`), titled as the static figure."""
+    titles = [
+        _mode_title(label, float(f), float(z), fractions).replace("\n", " · ")
+        for label, f, z, fractions in zip(
+            table.labels, table.frequency_hz, table.damping_ratio, table.plain, strict=True
+        )
+    ]
+    return mode_viewer_html(pos, ids, ident.center_of_gravity, table.shapes, titles, length)
+
+
+def head_html(
     title: str,
     ident: Identification,
     ids: Sequence[str],
@@ -1018,29 +1054,29 @@ def _head_html(
     import datetime
 
     when = created or datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    mass_text = f"{_num(ident.mass)} {mass_unit}" if ident.mass is not None else "not given (results per unit mass)"
-    files = f'<p class="meta">input: {_esc(", ".join(inputs))}</p>' if inputs else ""
+    mass_text = f"{fmt_num(ident.mass)} {mass_unit}" if ident.mass is not None else "not given (results per unit mass)"
+    files = f'<p class="meta">input: {esc(", ".join(inputs))}</p>' if inputs else ""
     return "\n".join(
         [
             "<!DOCTYPE html>",
             '<html lang="en"><head><meta charset="utf-8">',
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
-            f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
-            f"<h1>{_esc(title)}</h1>",
-            f'<p class="meta">rigidid {_esc(__version__)} · {_esc(when)} · method {_esc(ident.method)} · units: '
-            f"length {_esc(length)}, mass {_esc(mass_unit)}, time s · mass {_esc(mass_text)} · {len(ids)} sensors</p>",
+            f"<title>{esc(title)}</title><style>{CSS}</style></head><body>",
+            f"<h1>{esc(title)}</h1>",
+            f'<p class="meta">rigidid {esc(__version__)} · {esc(when)} · method {esc(ident.method)} · units: '
+            f"length {esc(length)}, mass {esc(mass_unit)}, time s · mass {esc(mass_text)} · {len(ids)} sensors</p>",
             files,
         ]
     )
 
 
-def _test_html(test: TestInfo | None) -> str:
+def test_html(test: TestInfo | None) -> str:
     """The test block under the title: id, specimen, date, operator, notes (what is given)."""
     if test is None:
         return ""
     fields = [("test", test.id), ("specimen", test.specimen), ("date of measurement", test.date),
               ("operator", test.operator), ("notes", test.notes)]  # fmt: skip
-    rows = "".join(f"<tr><th>{_esc(k)}</th><td>{_esc(v)}</td></tr>" for k, v in fields if v)
+    rows = "".join(f"<tr><th>{esc(k)}</th><td>{esc(v)}</td></tr>" for k, v in fields if v)
     return f'<table class="test">{rows}</table>' if rows else ""
 
 
@@ -1048,9 +1084,9 @@ def _mass_properties_html(ident: Identification, length: str, mass_unit: str) ->
     has_mass = ident.mass is not None
     parts = ["<h2>Centre of gravity and inertia</h2>", '<div class="flex"><div><h3>Centre of gravity</h3>']
     parts.append(
-        _table(
+        table_html(
             ["", f"[{length}]"],
-            [[a, _num(float(v))] for a, v in zip("xyz", ident.center_of_gravity, strict=True)],
+            [[a, fmt_num(float(v))] for a, v in zip("xyz", ident.center_of_gravity, strict=True)],
             caption="in the layout's axes",
         )
     )
@@ -1058,7 +1094,7 @@ def _mass_properties_html(ident: Identification, length: str, mass_unit: str) ->
     inertia_unit = f"{mass_unit}·{length}²" if has_mass else f"{length}² (per unit mass)"
     parts.append("</div><div><h3>Inertia tensor about the CG</h3>")
     parts.append(
-        _matrix_html(
+        matrix_html(
             inertia,
             ["x", "y", "z"],
             caption=f"[{inertia_unit}]; off-diagonal entries are tensor entries (minus the products of inertia)",
@@ -1068,9 +1104,9 @@ def _mass_properties_html(ident: Identification, length: str, mass_unit: str) ->
     axes = ident.principal_axes
     parts.append("</div><div><h3>Principal moments and axes</h3>")
     parts.append(
-        _table(
+        table_html(
             ["axis", f"moment [{inertia_unit}]", "x", "y", "z"],
-            [[str(k + 1), _num(float(moments[k])), *(_num(float(v), 4) for v in axes[:, k])] for k in range(3)],
+            [[str(k + 1), fmt_num(float(moments[k])), *(fmt_num(float(v), 4) for v in axes[:, k])] for k in range(3)],
             caption="ascending moments; unit axis vectors in the layout's axes",
         )
     )
@@ -1082,17 +1118,17 @@ def _modes_html(ident: Identification, table: _Decoupling) -> str:
     diag = ident.diagnostics
     rows = [
         [
-            _esc(table.labels[k]),
-            _num(float(ident.frequency_hz[k])),
-            _num(100 * float(ident.damping_ratio[k]), 4),
-            _num(float(diag.model_frequency_hz[k])),
-            _num(100 * float(diag.model_damping_ratio[k]), 4),
+            esc(table.labels[k]),
+            fmt_num(float(ident.frequency_hz[k])),
+            fmt_num(100 * float(ident.damping_ratio[k]), 4),
+            fmt_num(float(diag.model_frequency_hz[k])),
+            fmt_num(100 * float(diag.model_damping_ratio[k]), 4),
             f"{float(diag.model_mac[k]):.4f}",
             _residual(float(diag.rigid_fit_residual[k])),
         ]
         for k in range(ident.frequency_hz.shape[0])
     ]
-    return "<h2>Modes</h2>" + _table(
+    return "<h2>Modes</h2>" + table_html(
         [
             "mode",
             "measured f [Hz]",
@@ -1121,7 +1157,7 @@ def _supports_html(ident: Identification, length: str, mass_unit: str, force_uni
             blocks = _block_units(length, None, power)
             parts.append(f"<h2>{name} matrix at the CG per unit mass</h2>")
             caption = f"units: x-z block [{blocks[0]}], coupling blocks [{blocks[1]}], rx-rz block [{blocks[2]}]"
-            parts.append(_matrix_html(per_mass, DOF_LABELS, caption=caption))
+            parts.append(matrix_html(per_mass, DOF_LABELS, caption=caption))
             continue
         u = fu.stiffness if power == 2 else fu.damping
         blocks_mass = _block_units(length, mass_unit, power)
@@ -1130,16 +1166,16 @@ def _supports_html(ident: Identification, length: str, mass_unit: str, force_uni
             f"units: x-z block [{u['translation']}], coupling blocks [{u['coupling']}], rx-rz block "
             f"[{u['rotation']}]; rotations in rad. In the layout's units (result JSON {name.lower()}_matrix): "
             f"x-z block [{blocks_mass[0]}], coupling blocks [{blocks_mass[1]}], rx-rz block [{blocks_mass[2]}]; "
-            f"multiplied by {_num(fu.factor, 6)} they give the force units."
+            f"multiplied by {fmt_num(fu.factor, 6)} they give the force units."
         )
-        parts.append(_matrix_html(fu.factor * ident.mass * per_mass, DOF_LABELS, caption=caption))
+        parts.append(matrix_html(fu.factor * ident.mass * per_mass, DOF_LABELS, caption=caption))
     return "\n".join(parts)
 
 
 def _decoupling_html(table: _Decoupling, png: bytes) -> str:
     parts = ["<h2>Decoupling: kinetic energy distribution</h2>"]
     parts.append(
-        _figure_html(
+        figure_html(
             png,
             "kinetic energy distribution heat map",
             "Share of each measured mode's kinetic energy in each DOF at the CG (cycle-averaged for complex modes); "
@@ -1150,7 +1186,7 @@ def _decoupling_html(table: _Decoupling, png: bytes) -> str:
     )
     numbers = [
         [
-            _esc(f"{label} ({f:#.4g} Hz)"),
+            esc(f"{label} ({f:#.4g} Hz)"),
             *(f"{100 * v:.1f}" for v in table.plain[k]),
             *(f"{100 * v:.1f}" for v in table.principal[k]),
         ]
@@ -1158,7 +1194,7 @@ def _decoupling_html(table: _Decoupling, png: bytes) -> str:
     ]
     parts.append("<details><summary>the numbers [%]</summary>")
     parts.append(
-        _table(
+        table_html(
             ["mode", *DOF_LABELS, *(f"{c}\u2032" for c in PRINCIPAL_DOF_LABELS)],
             numbers,
             caption="primed columns: rotations about the principal axes",
@@ -1195,7 +1231,7 @@ def identified_mount_labels(
     """
     factor, unit, _ = _rate_units(units, has_mass, force_unit)
     return [
-        f"{name}: k " + "/".join(_num(float(v), 3) for v in factor * identified.rates.stiffness[k]) + f" {unit}"
+        f"{name}: k " + "/".join(fmt_num(float(v), 3) for v in factor * identified.rates.stiffness[k]) + f" {unit}"
         for k, name in enumerate(identified.ids)
     ]
 
@@ -1203,7 +1239,7 @@ def identified_mount_labels(
 def _triple(values: ArrayLike | None, factor: float = 1.0) -> str:
     if values is None:
         return "-"
-    return " / ".join(_num(factor * float(v), 4) for v in np.asarray(values, dtype=float))
+    return " / ".join(fmt_num(factor * float(v), 4) for v in np.asarray(values, dtype=float))
 
 
 def _identified_mounts_html(
@@ -1218,25 +1254,25 @@ def _identified_mounts_html(
         rates = identified.rates
         damping = rates.damping
         rows = [
-            [_esc(name), _triple(identified.positions[k]),
+            [esc(name), _triple(identified.positions[k]),
              "; ".join(_direction_text(rates.axes[k][:, a]) for a in range(3)),
              _triple(rates.stiffness[k], factor), "-" if damping is None else _triple(damping[k], factor),
              "-" if identified.nominal is None else _triple(identified.nominal[k], factor),
-             _esc((identified.groups[k] if identified.groups else None) or "-")]
+             esc((identified.groups[k] if identified.groups else None) or "-")]
             for k, name in enumerate(identified.ids)
         ]  # fmt: skip
-        parts += ["<h2>Mounts (identified)</h2>", _table(
+        parts += ["<h2>Mounts (identified)</h2>", table_html(
             ["mount", f"position [{length}]", "axes", f"stiffness [{k_unit}]", f"damping [{c_unit}]",
-             "nominal stiffness", "group"], rows,
+             f"data-sheet stiffness [{k_unit}]", "group"], rows,
             caption=f"rates along each mount's axes, fitted to the identified stiffness and damping at the CG; "
             f"residual |K - K_mounts| / |K| = {_residual(float(rates.stiffness_residual))}; {rates.statement}",
         )]  # fmt: skip
     if roll is not None:
-        parts += ["<h2>Torque roll axis</h2>", _table(
+        parts += ["<h2>Torque roll axis</h2>", table_html(
             ["torque axis", "roll axis (J⁻¹t)", "angle to torque axis [°]", "angles to principal axes 1/2/3 [°]"],
-            [[_esc(_direction_text(np.asarray(roll.torque_axis, dtype=float))),
-              _esc(_direction_text(np.asarray(roll.direction, dtype=float))),
-              _num(float(roll.angle_to_torque_deg), 3), _triple(roll.angle_to_principal_deg)]],
+            [[esc(_direction_text(np.asarray(roll.torque_axis, dtype=float))),
+              esc(_direction_text(np.asarray(roll.direction, dtype=float))),
+              fmt_num(float(roll.angle_to_torque_deg), 3), _triple(roll.angle_to_principal_deg)]],
             caption="the axis through the CG the free body starts to turn about under a pure torque about the "
             "torque axis (dashed orange in the layout figure)",
         )]  # fmt: skip
@@ -1255,7 +1291,7 @@ def stiffness_labels(
     labels = []
     for k in stiffness:
         diag = fu.factor * np.diag(np.asarray(k, dtype=float).reshape(3, 3))
-        labels.append("k " + "/".join(_num(float(v), 3) for v in diag) + f" {fu.stiffness['translation']}")
+        labels.append("k " + "/".join(fmt_num(float(v), 3) for v in diag) + f" {fu.stiffness['translation']}")
     return labels
 
 
@@ -1267,7 +1303,7 @@ def _layout_html(
     if mounts.size:
         mount_text = " Mounts: black triangles" + (", with their stiffness along x/y/z." if mount_labels else ".")
     parts.append(
-        _figure_html(
+        figure_html(
             png,
             "sensor layout with CG and principal axes",
             f"Sensors (blue, arrows along the measuring directions; in the projections ⊙ points towards, ⊗ away "
@@ -1276,20 +1312,20 @@ def _layout_html(
         )
     )
     parts.append(
-        _table(
+        table_html(
             ["sensor", f"x [{length}]", f"y [{length}]", f"z [{length}]", "direction"],
             [
-                [_esc(sid), *(_num(float(v)) for v in p), _esc(_direction_text(d))]
+                [esc(sid), *(fmt_num(float(v)) for v in p), esc(_direction_text(d))]
                 for sid, p, d in zip(ids, pos, dirs, strict=True)
             ],
         )
     )
     if mount_labels:
         parts.append(
-            _table(
+            table_html(
                 ["mount", f"x [{length}]", f"y [{length}]", f"z [{length}]", "stiffness x/y/z"],
                 [
-                    [str(k + 1), *(_num(float(v)) for v in m), _esc(text.removeprefix("k "))]
+                    [str(k + 1), *(fmt_num(float(v)) for v in m), esc(text.removeprefix("k "))]
                     for k, (m, text) in enumerate(zip(mounts, mount_labels, strict=False))
                 ],
                 caption="from the body description",
@@ -1300,10 +1336,10 @@ def _layout_html(
 
 def _diagnostics_html(ident: Identification) -> str:
     diag = ident.diagnostics
-    return "<h2>Diagnostics</h2>" + _table(
+    return "<h2>Diagnostics</h2>" + table_html(
         ["quantity", "value"],
         [
-            ["layout condition number", _num(diag.layout_condition, 4)],
+            ["layout condition number", fmt_num(diag.layout_condition, 4)],
             ["layout rank", str(diag.layout_rank)],
             ["structure residual |DQ - (DQ)ᵀ| / |DQ|", _residual(diag.structure_residual)],
             ["largest rigid-fit residual", _residual(float(np.max(diag.rigid_fit_residual)))],
@@ -1368,6 +1404,6 @@ def save_pngs(
     for name in FIGURE_NAMES:
         if name in figures:
             path = folder / f"{name}.png"
-            write_bytes_atomic(path, _png(figures[name]))
+            write_bytes_atomic(path, png_bytes(figures[name]))
             paths.append(path)
     return paths

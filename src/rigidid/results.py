@@ -15,7 +15,7 @@ from rigidid.io.files import ModeTable
 from rigidid.models import LayoutFile
 
 if TYPE_CHECKING:
-    from rigidid.core.frfmodes import ScaledBody
+    from rigidid.core.frfmodes import FrfModes, ScaledBody
     from rigidid.core.linearised import StandardErrors
     from rigidid.core.massline import MassLine
     from rigidid.core.mounts import MountModel, MountModelPrediction, MountRates, TorqueRollAxis
@@ -337,6 +337,9 @@ class MassLineResult:
     routes : tuple of RouteAnswer
         ``--method auto``: every route tried, in order, with its answer or why
         it does not apply (empty for a route asked by name).
+    fitted : rigidid.core.frfmodes.FrfModes or None
+        Route residues without a modes file: the modes fitted to the FRFs (poles,
+        residues, stabilisation diagram), for the report's figures.
     """
 
     massline: MassLine
@@ -346,6 +349,7 @@ class MassLineResult:
     route: str = "massline"
     scaled: ScaledBody | None = None
     routes: tuple[RouteAnswer, ...] = ()
+    fitted: FrfModes | None = None
 
 
 @dataclass(frozen=True)

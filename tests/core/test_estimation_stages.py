@@ -173,4 +173,3 @@ def test_channel_energy_is_the_weighted_sum_of_squares() -> None:
     peaks = np.abs(x).max(axis=0)
     scale = np.divide(1.0, peaks, out=np.zeros(5), where=peaks > 0)
     np.testing.assert_allclose(channel_energy(x), ((x * scale) ** 2).sum(axis=1), rtol=1e-13, atol=0.0)
-

@@ -224,8 +224,9 @@ def test_a_warning_before_an_error_reaches_the_caller() -> None:
     """Notices are emitted when the error is known, not lost with it."""
     body, pos, dirs = flat_layout_on_symmetric_mounts()
     modes = body_modes(body, pos, dirs)
-    with pytest.warns(IllConditionedWarning, match="ill-conditioned"), pytest.raises(
-        IdentificationError, match="not observable"
+    with (
+        pytest.warns(IllConditionedWarning, match="ill-conditioned"),
+        pytest.raises(IdentificationError, match="not observable"),
     ):
         identify(pos, dirs, modes.poles, modes.shapes, mass=body.mass)
 

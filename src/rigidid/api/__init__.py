@@ -68,6 +68,7 @@ _HOME = {
     "write_simulated_frf": "rigidid.api.simulation",
     "convert": "rigidid.api.conversion",
     "compare": "rigidid.api.comparison",
+    "frf_report": "rigidid.api.reports",
     "report": "rigidid.api.reports",
     "report_pngs": "rigidid.api.reports",
 }
@@ -92,6 +93,7 @@ __all__ = [
     "estimate_rigid_modes",
     "fit_modes_frf",
     "fitted_layout",
+    "frf_report",
     "identify",
     "identify_massline",
     "identify_records",
@@ -147,7 +149,7 @@ if TYPE_CHECKING:
         with_record_spread,
         with_refinement,
     )
-    from rigidid.api.reports import report, report_pngs
+    from rigidid.api.reports import frf_report, report, report_pngs
     from rigidid.api.simulation import simulate, simulate_records, write_simulated_frf
     from rigidid.results import (
         Arrays,

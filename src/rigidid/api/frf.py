@@ -149,6 +149,7 @@ def _identify_route(
     ids, pos, dirs = files.layout_arrays(lay)
     _, rpos, rdirs = reference_arrays(refs)
     freqs, h = data.frequencies, data.frf
+    fitted = None
     if modes is None and method == "residues":
         from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
@@ -182,7 +183,7 @@ def _identify_route(
     _elastic_near(data, result.band)
     scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
-    return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled)
+    return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
 
 
 def _mass_line(
@@ -331,7 +332,14 @@ def identify_frf_auto(
     _disagreement({k: v[0] for k, v in ran.items()})
     reason = f"method auto: {chosen} chosen ({why}); {result.reason}"
     return MassLineResult(
-        result.massline, result.units, result.mass_given, reason, result.route, result.scaled, tuple(answers)
+        result.massline,
+        result.units,
+        result.mass_given,
+        reason,
+        result.route,
+        result.scaled,
+        tuple(answers),
+        result.fitted,
     )
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.api.records import summed_record_spectrum
-from rigidid.models import BodyFile
+from rigidid.models import BodyFile, LayoutFile, ReferencesFile
 from rigidid.results import IdentifyResult, PathLike
 
 if TYPE_CHECKING:
@@ -141,3 +141,80 @@ def report_pngs(
 def _intervals_for_report(result: IdentifyResult) -> list[Any]:
     """Every interval the result holds, as the report shows them: Monte Carlo, record segments, the refit's bound."""
     return [x for x in (result.uncertainty, result.record_spread, result.record_bound) if x is not None]
+
+
+FRF_ROUTES: tuple[str, ...] = ("massline", "residues")
+"""The FRF routes :func:`frf_report` can put side by side."""
+
+
+def frf_report(
+    layout: LayoutFile | PathLike,
+    frf: PathLike,
+    references: ReferencesFile | PathLike,
+    *,
+    method: str = "massline",
+    compare: Sequence[str] = FRF_ROUTES,
+    mass: float | None = None,
+    band: tuple[float, float] | None = None,
+    modes: PathLike | None = None,
+    modes_used: tuple[int, ...] | None = None,
+    title: str | None = None,
+    inputs: Sequence[str] = (),
+    force_unit: str | None = None,
+    progress: ProgressCallback | None = None,
+) -> str:
+    """A self-contained HTML report of the FRF routes (``rigidid report LAYOUT --frf FRF --references REFS``).
+
+    Parameters
+    ----------
+    layout, frf, references
+        As :func:`rigidid.api.frf.identify_massline`.
+    method : {"massline", "residues"}
+        The route chosen: tabled first, its stiffness and damping (scaled modes) shown.
+    compare : sequence of str
+        Routes to compute from the same FRFs and table beside it (the chosen one is always computed).
+    mass, band, modes, modes_used
+        As :func:`rigidid.api.frf.identify_massline` (`modes` and `modes_used` serve the residues route).
+    title : str, optional
+        Heading (default: the layout's name, else "rigidid report").
+    inputs : sequence of str
+        Input file names, listed under the title.
+    force_unit : {"N", "kN", "lbf"}, optional
+        Force unit of stiffness and damping.
+    progress : callable, optional
+        ``progress(task, done, total)`` while the figures are drawn.
+
+    Returns
+    -------
+    str
+        One HTML document (:func:`rigidid.frf_report.render_frf_report`); it needs no network to open.
+    """
+    from rigidid.api.frf import identify_massline
+    from rigidid.api.load import load_references_for
+    from rigidid.errors import InputError
+    from rigidid.frf_report import MeasuredFrfs, render_frf_report
+    from rigidid.io import files
+    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
+    from rigidid.results import TestInfo
+
+    unknown = [m for m in (method, *compare) if m not in FRF_ROUTES]
+    if unknown:
+        raise InputError(f"FRF routes are {', '.join(FRF_ROUTES)}, not {unknown[0]!r}", source="--method")
+    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
+    refs = load_references_for(references, lay)
+    ids, pos, dirs = files.layout_arrays(lay)
+    rids, rpos, rdirs = reference_arrays(refs)
+    if str(frf).lower().endswith((".uff", ".unv")):
+        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
+    else:
+        freqs, h = load_frf_csv(frf, ids, rids)
+    routes = [
+        identify_massline(lay, frf, refs, mass=mass, band=band, modes=modes if m == "residues" else None,
+                          modes_used=modes_used, method=m)
+        for m in (method, *(m for m in dict.fromkeys(compare) if m != method))
+    ]  # fmt: skip
+    data = MeasuredFrfs(freqs, h, pos, dirs, rpos, rdirs, ids, rids)
+    return render_frf_report(
+        data, routes, title=title or lay.name or "rigidid report", inputs=inputs, force_unit=force_unit,
+        test=TestInfo.from_layout(lay), progress=progress,
+    )  # fmt: skip

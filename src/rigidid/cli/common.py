@@ -290,3 +290,14 @@ def identify_files(
             geometry=geometry, resample=resample, spectrum=spectrum, progress=progress, mass=mass,
             modes_used=chosen, method=method, uncertainty=draws, seed=seed, mounts=mounts, **options,
         )  # fmt: skip
+
+
+def refuse_unused(context: str, given: dict[str, bool]) -> None:
+    """Refuse the first option of `given` (flag -> whether it was given) that does not apply in `context`.
+
+    Options that do not apply to the input given are refused, not ignored: the error names the option and
+    says what it would need (``context``, e.g. "applies only with --write-records").
+    """
+    for flag, was_given in given.items():
+        if was_given:
+            raise InputError(context, source=flag)

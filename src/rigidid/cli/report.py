@@ -8,7 +8,16 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rigidid.cli.common import add_mounts, check_force_unit, check_outputs, identify_files, noise_overrides, reported
+from rigidid.cli.common import (
+    add_mounts,
+    check_force_unit,
+    check_options,
+    check_outputs,
+    identify_files,
+    noise_overrides,
+    refuse_unused,
+    reported,
+)
 from rigidid.cli.options import (
     AngleNoise,
     Band,
@@ -17,6 +26,7 @@ from rigidid.cli.options import (
     Draws,
     ForceUnit,
     FrequencyNoise,
+    FrfPath,
     Geometry,
     IdMethod,
     Inputs,
@@ -28,6 +38,7 @@ from rigidid.cli.options import (
     NModes,
     PositionNoise,
     RecordsFlag,
+    ReferencesPath,
     Refine,
     Resample,
     Seed,
@@ -82,13 +93,34 @@ def report(
     refine: Refine = True,
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
+    frf: FrfPath = None,
+    references: ReferencesPath = None,
 ) -> None:
-    """Identify, then write one self-contained HTML report with tables and pictures."""
+    """Identify, then write one self-contained HTML report with tables and pictures.
+
+    With --frf (and --references) the report is of the FRF routes: the mass line and the scaled modes side by
+    side (--method chooses the one tabled first), the FRFs with the fits and bands, the stabilisation diagram.
+    """
     with reported():
         from rigidid.io.files import load_body
         from rigidid.units import check_same_units
 
         force_unit = check_force_unit(force_unit)
+        if frf is not None or method in ("massline", "residues"):
+            _refuse_for_frf(
+                records=records, uncertainty=uncertainty > 0, png=png is not None, body=body is not None,
+                mounts=mounts is not None, torque_axis=torque_axis is not None, geometry=geometry is not None,
+                units=units is not None, resample=resample > 0, modal_method=modal_method is not None,
+                decimate=decimate is not None, max_order=max_order is not None,
+                frequency_noise=frequency_noise is not None, damping_noise=damping_noise is not None,
+                shape_noise=shape_noise is not None, position_noise=position_noise is not None,
+                angle_noise=angle_noise is not None,
+            )  # fmt: skip
+            _write_frf_report(
+                layout, frf, references, inputs, output=output, method=method, mass=mass, band=band,
+                modes_used=modes_used, title=title, force_unit=force_unit,
+            )  # fmt: skip
+            return
         check_outputs({"--output": output}, {"--png": png})
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
@@ -146,3 +178,56 @@ def _write_report(
     sys.stderr.write(f"rigidid: wrote {output}\n")
     if png is not None:
         sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
+
+
+def _write_frf_report(
+    layout: Path,
+    frf: Path | None,
+    references: Path | None,
+    inputs: list[Path] | None,
+    *,
+    output: Path,
+    method: str,
+    mass: float | None,
+    band: tuple[float, float] | None,
+    modes_used: str | None,
+    title: str | None,
+    force_unit: str | None,
+) -> None:
+    """``report --frf``: the FRF routes side by side (rigidid.api.reports.frf_report)."""
+    from rigidid import api
+    from rigidid.cli.common import parse_modes
+    from rigidid.errors import InputError
+    from rigidid.io.atomic import write_text_atomic
+    from rigidid.progress import terminal_progress
+
+    check_options(mass=mass, band=band)
+    check_outputs({"--output": output})
+    if frf is None:
+        raise InputError(f"--method {method} needs --frf FRF", source="--frf")
+    if references is None:
+        raise InputError("--frf needs --references REFS.json", source="--references")
+    if len(inputs or []) > 1:
+        raise InputError("a report of FRFs takes one modes.csv (its rigid-body poles)", source="MODES")
+    chosen = method if method in ("massline", "residues") else "residues"
+    if method not in ("massline", "residues", "structured"):
+        raise InputError(f"FRFs are reported with --method massline or residues, not {method!r}", source="--method")
+    modes = inputs[0] if inputs else None
+    labels = parse_modes(modes_used) if modes_used is not None else None
+    named = [str(p) for p in (layout, frf, references, *(inputs or []))]
+    with terminal_progress() as progress:
+        text = api.frf_report(
+            layout, frf, references, method=chosen, mass=mass, band=band, modes=modes,
+            modes_used=None if labels is None else tuple(labels), title=title, inputs=named,
+            force_unit=force_unit, progress=progress,
+        )  # fmt: skip
+    write_text_atomic(output, text)
+    sys.stderr.write(f"rigidid: wrote {output}\n")
+
+
+def _refuse_for_frf(**given: bool) -> None:
+    """Refuse the options of the modes and records routes in a report of FRFs (name -> whether given)."""
+    refuse_unused(
+        "applies to the modes and records routes, not to a report of FRFs (--frf)",
+        {"--" + name.replace("_", "-"): was for name, was in given.items()},
+    )

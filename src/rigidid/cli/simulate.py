@@ -89,6 +89,8 @@ def simulate(
         for kind, value in zip(("frequency", "damping", "shape", "record", "frf"), renamed, strict=True):
             check_number(value, f"--add-{kind}-noise", nonnegative=True)
         check_options(sample_rate=sample_rate, duration=duration, pretrigger=pretrigger, seed=seed)
+        given = (impact, sample_rate, duration, pretrigger, record_noise, frf_noise, frf_format, references)
+        _refuse_unused_outputs(records is not None, frf is not None, *given)
         check_outputs({"--output": output, "--write-frf": frf}, {"--write-records": records})
         impacts = [parse_impact(text) for text in impact] if impact else None
         if mounts is not None:
@@ -188,3 +190,33 @@ def _simulate_frf(
         f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
         f"({data.frequencies.size} lines) to {out}\n"
     )
+
+
+def _refuse_unused_outputs(
+    records: bool,
+    frf: bool,
+    impact: list[str] | None,
+    sample_rate: float,
+    duration: float,
+    pretrigger: float,
+    record_noise: float,
+    frf_noise: float,
+    frf_format: str | None,
+    references: Path | None,
+) -> None:
+    """Options of the records (``--write-records``) or FRFs (``--write-frf``) refused without that output (an
+    option counts as given when it differs from its default)."""
+    from rigidid.cli.common import refuse_unused
+
+    if not records:
+        refuse_unused(
+            "applies only with --write-records DIR (the impulse-response records)",
+            {"--impact": impact is not None, "--sample-rate": sample_rate != 512.0, "--duration": duration != 8.0,
+             "--pretrigger": pretrigger != 0.1, "--add-record-noise": record_noise != 0.0},
+        )  # fmt: skip
+    if not frf:
+        refuse_unused(
+            "applies only with --write-frf FILE (the FRFs)",
+            {"--references": references is not None, "--add-frf-noise": frf_noise != 0.0,
+             "--frf-format": frf_format is not None},
+        )  # fmt: skip

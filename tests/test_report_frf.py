@@ -1,0 +1,105 @@
+"""``rigidid report --frf``: the FRF routes side by side, their fits drawn over the measured FRFs."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigidid import api
+from rigidid.api.load import load_references_for
+from rigidid.frf_report import MeasuredFrfs, mass_line_model, render_frf_report, rigid_model
+from rigidid.io import files
+from rigidid.io.frf import load_frf_csv, reference_arrays
+
+SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "engine-test"
+
+
+@pytest.fixture(scope="module")
+def measured() -> MeasuredFrfs:
+    lay = files.load_layout(SAMPLE / "layout.json")
+    refs = load_references_for(SAMPLE / "refs.json", lay)
+    ids, pos, dirs = files.layout_arrays(lay)
+    rids, rpos, rdirs = reference_arrays(refs)
+    freqs, h = load_frf_csv(SAMPLE / "frf.csv", ids, rids)
+    return MeasuredFrfs(freqs, h, pos, dirs, rpos, rdirs, ids, rids)
+
+
+@pytest.fixture(scope="module")
+def routes() -> list:
+    """Both routes on the sample's exact FRFs (the residues route fits the poles: the slow part, done once)."""
+    return [
+        api.identify_massline(SAMPLE / "layout.json", SAMPLE / "frf.csv", SAMPLE / "refs.json", method=m)
+        for m in ("residues", "massline")
+    ]
+
+
+@pytest.mark.slow
+def test_the_scaled_modes_model_reproduces_the_measured_frfs(measured: MeasuredFrfs, routes: list) -> None:
+    """The rigid body on supports from the scaled modes is the FRFs' own model: exact data, exact fit (1e-9),
+    and its high-frequency limit is the mass line T M^-1 T_f^T of the mass-line route."""
+    scaled = routes[0].scaled
+    model = rigid_model(measured, scaled.mass_matrix, scaled.stiffness_matrix, scaled.damping_matrix,
+                        scaled.center_of_gravity)  # fmt: skip
+    error = np.abs(model - measured.frf).max() / np.abs(measured.frf).max()
+    assert error < 1e-8  # observed ~3e-11 (the CSV keeps 17 digits; the fit's round-off)
+    ml = routes[1].massline
+    level = mass_line_model(measured, ml.mass, ml.center_of_gravity, ml.inertia_tensor)
+    far = MeasuredFrfs(
+        np.array([1e9]), measured.frf[:, :, :1], measured.positions, measured.directions,
+        measured.reference_positions, measured.reference_directions, measured.sensor_ids, measured.reference_ids,
+    )  # fmt: skip
+    limit = rigid_model(far, scaled.mass_matrix, scaled.stiffness_matrix, scaled.damping_matrix,
+                        scaled.center_of_gravity)[:, :, 0]  # fmt: skip
+    assert np.abs(limit - level).max() < 1e-6 * np.abs(level).max()  # the i C / (w M) term: 2e-9 at 1e9 Hz
+
+
+@pytest.mark.slow
+def test_the_report_puts_the_routes_side_by_side(measured: MeasuredFrfs, routes: list) -> None:
+    text = render_frf_report(measured, routes, title="engine FRFs", created="2026-01-01")
+    header = re.search(r"<thead><tr>(.*?)</tr></thead>", text).group(1)
+    assert "scaled modes (residues): estimate" in header and "mass line: estimate" in header
+    assert header.count("95 % interval") == 2
+    mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
+    assert mass_row.count(">142<") == 2  # both routes measure the 142 kg through the force
+    assert "<td>± " in mass_row  # the residues route's interval, in kg
+    for name in ("FRFs and the fits", "Mass line", "Stabilisation diagram", "Stiffness matrix at the CG"):
+        assert f"<h2>{name}" in text
+    assert text.count("data:image/png;base64,") == 3
+    assert "http://" not in text and "https://" not in text  # self-contained
+
+
+def test_report_frf_refuses_options_of_other_routes(tmp_path: Path) -> None:
+    out = tmp_path / "r.html"
+    cmd = [sys.executable, "-m", "rigidid", "report", str(SAMPLE / "layout.json"), "--frf", str(SAMPLE / "frf.csv"),
+           "--references", str(SAMPLE / "refs.json"), "--uncertainty", "50", "-o", str(out)]  # fmt: skip
+    run = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [
+        "rigidid: error: --uncertainty: applies to the modes and records routes, not to a report of FRFs (--frf)"
+    ]
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_routes_that_disagree_beyond_their_errors_are_flagged(measured: MeasuredFrfs, routes: list) -> None:
+    """The last column is the routes' difference over their combined standard error; beyond 3 the page says so,
+    naming the entries (a route 5 SE off in mass is flagged, the same route agreeing is not)."""
+    from dataclasses import replace
+
+    ml = routes[0].massline
+    intervals = replace(ml.intervals, mass=replace(ml.intervals.mass, std=np.asarray(0.1)))  # 0.1 kg each
+    residues = replace(routes[0], massline=replace(ml, intervals=intervals))
+    twin = replace(residues, route="massline")  # same figures, same intervals: differ by 0 SE
+    text = render_frf_report(measured, [residues, twin], created="2026-01-01")
+    assert '<div class="warn">' not in text
+    off = replace(twin, massline=replace(twin.massline, mass=twin.massline.mass + 5.0 * np.sqrt(2.0) * 0.1))
+    text = render_frf_report(measured, [residues, off], created="2026-01-01")
+    mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
+    assert mass_row.endswith("<td>5</td>")
+    warning = re.search(r'<div class="warn">(.*?)</div>', text).group(1)
+    assert "in: mass." in warning  # only the mass
