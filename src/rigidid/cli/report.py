@@ -117,7 +117,7 @@ def report(
                 angle_noise=angle_noise is not None,
             )  # fmt: skip
             _write_frf_report(
-                layout, frf, references, inputs, output=output, method=method, mass=mass, band=band,
+                layout, frf, references, inputs, output=output, method=method or "auto", mass=mass, band=band,
                 modes_used=modes_used, title=title, force_unit=force_unit,
             )  # fmt: skip
             return
@@ -210,7 +210,7 @@ def _write_frf_report(
     if len(inputs or []) > 1:
         raise InputError("a report of FRFs takes one modes.csv (its rigid-body poles)", source="MODES")
     chosen = method if method in ("massline", "residues") else "residues"
-    if method not in ("massline", "residues", "structured"):
+    if method not in ("massline", "residues", "structured", "auto"):
         raise InputError(f"FRFs are reported with --method massline or residues, not {method!r}", source="--method")
     modes = inputs[0] if inputs else None
     labels = parse_modes(modes_used) if modes_used is not None else None
