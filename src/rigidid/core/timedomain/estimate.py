@@ -336,6 +336,12 @@ def estimate_modes(
         raise InputError(f"the decimation factor must be a positive integer, got {decimate}")
     if max_order is not None and not (isinstance(max_order, int) and max_order >= 1):
         raise InputError(f"the maximum order must be a positive integer, got {max_order}")
+    if max_order is not None and method == "era" and max_order < 2 * n_modes:
+        raise InputError(
+            f"must be at least {2 * n_modes} for {n_modes} modes (an ERA model of n states holds n/2 modes), "
+            f"got {max_order}",
+            source="max_order",
+        )
     if not (math.isfinite(pulse_width) and pulse_width > 0.0):
         raise InputError(f"the pulse width must be positive, got {pulse_width}")
     crit = criteria if criteria is not None else Criteria()
@@ -620,7 +626,7 @@ def _ar_sweep(
     p_min = max(1, math.ceil(2 * n_modes / r))
     p_max = max_order if max_order is not None else p_min + math.ceil(_AR_EXTRA_STATES / r)
     if p_max < p_min:
-        raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
+        raise InputError(f"must be at least {p_min}: the AR lags {n_modes} modes need, got {p_max}", source="max_order")
     if min_samples <= 2 * p_max + 1:
         raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
     gram, columns = _scaled_gram(fitted, p_max, unscale)
