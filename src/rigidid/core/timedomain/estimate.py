@@ -149,6 +149,27 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array]
     return arrays, peaks
 
 
+_SAFE_PEAK = 2.0**200
+"""Records whose largest value is above this or below its inverse are scaled by a power of two first."""
+
+
+def _in_range(
+    arrays: list[Array], peaks: list[tuple[Array, Array, int]], energies: Sequence[Array] | None
+) -> tuple[list[Array], list[tuple[Array, Array, int]], Sequence[Array] | None]:
+    """The records (their peaks and energies) scaled together by a power of two when their largest value is
+    outside ``[2^-200, 2^200]``: squares and lagged products then neither overflow nor underflow (records of
+    1e300 or 1e-300). A common factor changes no estimate: the channels are scaled by their RMS and the shapes
+    normalised anyway."""
+    top = max((float(np.max(p[0])) if p[0].size else 0.0 for p in peaks), default=0.0)
+    if top == 0.0 or 1.0 / _SAFE_PEAK <= top <= _SAFE_PEAK:
+        return arrays, peaks, energies
+    k = -math.frexp(top)[1]  # the largest value in [0.5, 1)
+    scaled = [np.ldexp(a, k) for a in arrays]
+    moved = [(np.ldexp(p, k), np.ldexp(m, k), rows) for p, m, rows in peaks]
+    power = None if energies is None else [np.ldexp(np.asarray(e, dtype=float), 2 * k) for e in energies]
+    return scaled, moved, power
+
+
 def _scales_and_covariance(decays: list[Array]) -> tuple[Array, Array]:
     """Per-channel RMS over all decays and their summed product ``sum_k d_k^T d_k`` (one matrix product each)."""
     m = decays[0].shape[1]
@@ -324,6 +345,7 @@ def estimate_modes(
     the sweep (see :func:`~rigidid.core.timedomain.stabilisation.cluster_stable`).
     """
     decays_in, peaks = _check_records(records, dt)
+    decays_in, peaks, energies = _in_range(decays_in, peaks, energies)
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (isinstance(n_modes, int) and n_modes >= 1):

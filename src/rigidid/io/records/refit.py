@@ -25,7 +25,7 @@ from rigidid.core.timedomain.refine import PreparedDecays
 from rigidid.core.timedomain.streaming import locate_impacts as _locate
 from rigidid.core.timedomain.streaming import prepared_decays
 from rigidid.io.records.checks import layout_ids
-from rigidid.io.records.sources import open_source, values_of
+from rigidid.io.records.sources import in_range, open_source
 from rigidid.progress import ProgressCallback
 
 __all__ = ["locate_impacts", "read_prepared_decays"]
@@ -36,11 +36,16 @@ Array = NDArray[np.float64]
 def _opener(
     paths: Sequence[str | os.PathLike[str]], sensor_ids: Sequence[str], progress: ProgressCallback | None
 ) -> Callable[[int], Iterable[Array]]:
-    """``records(i)``: the row blocks of file ``i`` (opened when called)."""
+    """``records(i)``: the row blocks of file ``i`` (opened when called), scaled by the power of two the first
+    file opened chooses (:func:`~rigidid.io.records.sources.in_range`: records of 1e300 or 1e-300)."""
+    shared: list[int] = []
 
     def records(i: int) -> Iterable[Array]:
         path = Path(paths[i])
-        return values_of(open_source(path, layout_ids(sensor_ids, str(path)), progress))
+        source = open_source(path, layout_ids(sensor_ids, str(path)), progress)
+        blocks, exponent = in_range(source.blocks, shared[0] if shared else None)
+        shared[:] = [exponent]
+        return (values for _, values in blocks)
 
     return records
 
