@@ -213,3 +213,24 @@ def test_other_function_types_are_refused_by_name(tmp_path: Path, func: int, mes
     with pytest.raises(InputError, match=message) as info:
         load_frf_uff(path, ["1"], ["2"])
     assert info.value.location == "dataset 58 #1"
+
+
+def test_the_api_writes_simulated_frfs_as_the_command_does(tmp_path: Path, test_files: tuple[Path, Path]) -> None:
+    """``api.write_simulated_frf`` (what ``simulate --write-frf`` does) writes a UFF whose lines are
+    a grid its 6-digit step states exactly, and the same FRFs as the CSV on that grid."""
+    from rigidid import api
+
+    layout, refs = test_files
+    data = api.write_simulated_frf(FOUR / "body.json", layout, refs, tmp_path / "frf.uff")
+    step = data.frequencies[0]
+    assert float(f"{step:.5e}") == step
+    np.testing.assert_allclose(np.diff(data.frequencies), step, rtol=1e-12)
+    freqs, h = load_frf_uff(tmp_path / "frf.uff", data.sensor_ids, data.reference_ids, units=SI)
+    np.testing.assert_array_equal(freqs, data.frequencies)
+    np.testing.assert_array_equal(h, data.frf)
+    again = api_frf.simulate_frf(FOUR / "body.json", layout, refs, frequencies=data.frequencies)
+    np.testing.assert_allclose(again.frf, data.frf, rtol=1e-12)
+    with pytest.raises(InputError, match="hammer points") as err:
+        api.write_simulated_frf(FOUR / "body.json", layout, None, tmp_path / "x.csv")
+    assert err.value.source == "references"
+    assert not (tmp_path / "x.csv").exists()

@@ -65,6 +65,7 @@ _HOME = {
     "plan": "rigidid.api.planning",
     "simulate": "rigidid.api.simulation",
     "simulate_records": "rigidid.api.simulation",
+    "write_simulated_frf": "rigidid.api.simulation",
     "convert": "rigidid.api.conversion",
     "compare": "rigidid.api.comparison",
     "report": "rigidid.api.reports",
@@ -113,6 +114,7 @@ __all__ = [
     "with_record_spread",
     "with_refinement",
     "with_warnings",
+    "write_simulated_frf",
 ]
 
 if TYPE_CHECKING:
@@ -146,7 +148,7 @@ if TYPE_CHECKING:
         with_refinement,
     )
     from rigidid.api.reports import report, report_pngs
-    from rigidid.api.simulation import simulate, simulate_records
+    from rigidid.api.simulation import simulate, simulate_records, write_simulated_frf
     from rigidid.results import (
         Arrays,
         FrfData,

@@ -1,4 +1,4 @@
-"""Forward simulation: the modes (and impact records) of a body on its mounts, written as the files a test gives."""
+"""Forward simulation: the modes, impact records and FRF files of a body on its mounts, written as a test gives them."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from rigidid.io import files
 from rigidid.io.files import ModeTable
 from rigidid.models import BodyFile, LayoutFile
 from rigidid.progress import no_progress
-from rigidid.results import PathLike
+from rigidid.results import FrfData, PathLike
 
 if TYPE_CHECKING:
     from rigidid.io.files import ModeTable
@@ -161,3 +161,71 @@ def simulate_records(
             write_record(written[-1], record_time(values.shape[0], sample_rate, pretrigger), values, ids)
         step("writing records", len(data), len(data))
     return written
+
+
+def write_simulated_frf(
+    body: PathLike,
+    layout: PathLike,
+    references: PathLike | None,
+    out: PathLike,
+    *,
+    noise: float = 0.0,
+    seed: int | None = None,
+    frf_format: str | None = None,
+) -> FrfData:
+    """Simulate accelerance FRFs of a body on its mounts and write them as a CSV or UFF 58 file.
+
+    Parameters
+    ----------
+    body, layout, references : path-like
+        ``body.json``, ``layout.json`` and ``references.json`` (the hammer points).
+    out : path-like
+        The FRF file, written atomically; its format from `frf_format` or its suffix.
+    noise : float
+        Complex noise relative to each value (0.01 = 1 %).
+    seed : int, optional
+        Seed of the noise.
+    frf_format : str, optional
+        ``csv``, ``uff`` (binary 58b) or ``uff-ascii``; default from the suffix.
+
+    Returns
+    -------
+    FrfData
+        The FRFs written. A UFF 58 states its abscissa as a start and a step in 6
+        digits: the lines are then a grid those digits state exactly.
+
+    Raises
+    ------
+    InputError
+        No references, a negative noise, bad files (naming the file).
+    """
+    from rigidid.api.frf import simulate_frf
+    from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
+    from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
+
+    if references is None:
+        raise InputError("simulated FRFs need the hammer points (references.json)", source="references")
+    if not noise >= 0.0:
+        raise InputError(f"must be zero or positive, got {noise}", source="frf_noise")
+    fmt = frf_format_from(Path(out), frf_format)
+    if fmt == "csv":
+        data = simulate_frf(body, layout, references, noise=noise, seed=seed)
+        write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
+        return data
+    lay = files.load_layout(layout, require_rank=False)
+    refs = load_references(references)
+    default = simulate_frf(body, lay, refs, noise=noise, seed=seed).frequencies
+    step = float(f"{default[0]:.5e}")
+    grid = step * np.arange(1, default.size + 1, dtype=np.float64)
+    data = simulate_frf(body, lay, refs, frequencies=grid, noise=noise, seed=seed)
+    try:
+        content = frf_uff_bytes(
+            data.frequencies, data.frf, data.sensor_ids, files.layout_arrays(lay)[2], data.reference_ids,
+            reference_arrays(refs)[2], {"length": lay.units.length, "mass": lay.units.mass}, binary=fmt == "uff",
+        )  # fmt: skip
+    except InputError as exc:
+        if exc.source in ("sensors", "references"):
+            exc.source = str(layout if exc.source == "sensors" else references)
+        raise
+    write_bytes_atomic(out, content)
+    return data

@@ -173,41 +173,17 @@ def _simulate_frf(
     seed: int | None,
     frf_format: str | None = None,
 ) -> None:
-    import numpy as np
+    """``simulate --write-frf FILE``: the API writes the FRFs; the options named in its refusals."""
+    from rigidid.api.simulation import write_simulated_frf
 
-    from rigidid.api import frf as api_frf
-    from rigidid.io import files
-    from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
-    from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes, load_references, reference_arrays
-
-    if references is None:
-        raise InputError("--write-frf needs --references REFS.json", source="--references")
-    if not noise >= 0.0:
-        raise InputError(f"must be zero or positive, got {noise}", source="--add-frf-noise")
-    fmt = frf_format_from(out, frf_format)
-    if fmt == "csv":
-        data = api_frf.simulate_frf(body, layout, references, noise=noise, seed=seed)
-        write_text_atomic(out, frf_csv_text(data.frequencies, data.frf, data.sensor_ids, data.reference_ids))
-    else:
-        lay = files.load_layout(layout, require_rank=False)
-        refs = load_references(references)
-        data = api_frf.simulate_frf(body, lay, refs, noise=noise, seed=seed)
-        # UFF 58 states the abscissa as start and step in 6 digits: simulate on a grid that has them
-        step = float(f"{data.frequencies[0]:.5e}")
-        grid = step * np.arange(1, data.frequencies.size + 1, dtype=np.float64)
-        data = api_frf.simulate_frf(body, lay, refs, frequencies=grid, noise=noise, seed=seed)
-        dirs = files.layout_arrays(lay)[2]
-        rdirs = reference_arrays(refs)[2]
-        try:
-            content = frf_uff_bytes(
-                data.frequencies, data.frf, data.sensor_ids, dirs, data.reference_ids, rdirs,
-                {"length": lay.units.length, "mass": lay.units.mass}, binary=fmt == "uff",
-            )  # fmt: skip
-        except InputError as exc:
-            if exc.source in ("sensors", "references"):
-                exc.source = str(layout if exc.source == "sensors" else references)
-            raise
-        write_bytes_atomic(out, content)
+    try:
+        data = write_simulated_frf(body, layout, references, out, noise=noise, seed=seed, frf_format=frf_format)
+    except InputError as exc:
+        if exc.source in ("references", "frf_noise"):
+            flag = "--references" if exc.source == "references" else "--add-frf-noise"
+            message = "--write-frf needs --references REFS.json" if exc.source == "references" else exc.message
+            raise InputError(message, source=flag) from None
+        raise
     sys.stderr.write(
         f"rigidid: wrote {len(data.sensor_ids)} x {len(data.reference_ids)} FRFs "
         f"({data.frequencies.size} lines) to {out}\n"

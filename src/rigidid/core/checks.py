@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.linalg import numerical_rank
+
 __all__ = [
     "CG_OUTSIDE",
     "DENSITY_RANGE",
@@ -174,7 +176,7 @@ def sensor_outliers(
     if p <= 6 or psi.shape[0] != p or psi.shape[1] == 0:
         return ()
     u, s, _ = np.linalg.svd(t, full_matrices=False)
-    u = u[:, s > s[0] * 1e-10]
+    u = u[:, : int(numerical_rank(s, p))]
     leverage = np.sum(u * u, axis=1)
     coords, *_ = np.linalg.lstsq(t.astype(complex), psi, rcond=None)
     rms = np.sqrt(np.mean(np.abs(psi) ** 2, axis=0))

@@ -38,8 +38,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.geometry import frame_arrays, numerical_rank, sensor_matrix
-from rigidid.core.linalg import solve_rows
+from rigidid.core.geometry import frame_arrays, sensor_matrix
+from rigidid.core.linalg import numerical_rank, pseudo_inverse, solve_rows
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.selection import project_rigid_batch
 from rigidid.core.statespace import state_matrices_batch
@@ -132,7 +132,7 @@ def _pinv_psd(n: Array) -> Array:
     """Stacked inverse of symmetric positive semi-definite matrices; pseudo-inverse where singular."""
     x, ok = solve_rows(n, np.broadcast_to(np.eye(n.shape[-1]), n.shape).copy())
     if not np.all(ok):
-        x[~ok] = np.linalg.pinv(n[~ok], hermitian=True)
+        x[~ok] = [pseudo_inverse(m, symmetric=True)[0] for m in n[~ok]]
     return np.asarray(x, dtype=float)
 
 

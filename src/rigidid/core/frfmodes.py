@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.frfstats import local_noise, misfit_units, sandwich_variance
 from rigidid.core.geometry import sensor_matrix, transfer_matrix
+from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.timedomain.stabilisation import Criteria, OrderPoles, cluster_stable, stabilise
 from rigidid.errors import IdentificationError, InputError
 from rigidid.progress import ProgressCallback
@@ -547,7 +548,7 @@ def _pole_covariance(
     _, jac = _varpro_jacobian(w, hb, wts, theta, upper)
     n_val = resid.size
     s2 = float(np.sum(resid**2)) / max(n_val - resid.shape[0] * k - theta.size, 1)
-    cov = s2 * np.linalg.pinv(jac.T @ jac)
+    cov = s2 * pseudo_inverse(jac.T @ jac, symmetric=True)[0]
     p, q, _ = hb.shape
     jl = np.empty((p, q, theta.size))
     for i in range(theta.size):

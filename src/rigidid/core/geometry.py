@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.linalg import numerical_rank
 from rigidid.errors import InputError
 
 __all__ = [
@@ -23,7 +24,6 @@ __all__ = [
     "layout_frame",
     "local_sensor_matrix",
     "normalise_directions",
-    "numerical_rank",
     "sensor_matrix",
     "sensor_outline",
     "skew",
@@ -231,31 +231,6 @@ def local_sensor_matrix(positions: ArrayLike, directions: ArrayLike) -> Array:
     """
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     return sensor_matrix(layout_frame(pos).to_local(pos), directions)
-
-
-def numerical_rank(singular_values: ArrayLike, rows: int) -> NDArray[np.intp]:
-    """Numerical rank of sensor transformations from their singular values.
-
-    Parameters
-    ----------
-    singular_values : array_like, shape (..., k)
-        Singular values of ``(..., rows, 6)`` matrices, descending.
-    rows : int
-        Number of rows (sensors) of each matrix.
-
-    Returns
-    -------
-    ndarray of int, shape (...)
-        How many singular values exceed ``1000 max(rows, 6) eps s_max``: the
-        one rank tolerance of rigidid (a thousand times LAPACK's usual one, so
-        that layouts singular in exact arithmetic count as singular after
-        rounding of their coordinates).
-    """
-    s = np.asarray(singular_values, dtype=float)
-    top = s[..., :1] if s.shape[-1] else np.zeros((*s.shape[:-1], 1))
-    tol = 1e3 * max(rows, 6) * np.finfo(float).eps * top
-    rank: NDArray[np.intp] = np.sum(s > tol, axis=-1)
-    return rank
 
 
 def layout_condition(positions: ArrayLike, directions: ArrayLike) -> tuple[float, int]:

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.estimator import DAMPING_WEIGHT, Estimates, estimate
+from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.noise import NoiseLevels, tilt_directions
 from rigidid.core.statespace import modal_from_poles
 
@@ -499,7 +500,7 @@ def misfit_parts(
     parts = []
     for block in (slice(0, 15), slice(15, 30)):
         cov = d[:, block].T @ d[:, block]
-        parts.append(float(r[block] @ np.linalg.pinv(cov, rcond=1e-10, hermitian=True) @ r[block]))
+        parts.append(float(r[block] @ pseudo_inverse(cov, symmetric=True)[0] @ r[block]))
     return parts[0], parts[1]
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import transfer_matrix
+from rigidid.core.linalg import numerical_rank, rank_tolerance
 from rigidid.errors import InputError
 
 if TYPE_CHECKING:
@@ -185,7 +186,7 @@ def _uniqueness(design: Array) -> tuple[int, int, str]:
     """Unknowns, rank and the statement of a design matrix (21 rows, one column per shared rate)."""
     unknowns = design.shape[1]
     s = np.linalg.svd(design, compute_uv=False)
-    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
+    rank = int(numerical_rank(s, design.shape[0])) if s.size and s[0] > 0 else 0
     if rank == unknowns:
         statement = f"unique: {unknowns} rates, all determined by the 21 independent entries of the 6x6 matrix"
     else:
@@ -851,11 +852,11 @@ def split_misfit(
     design = np.stack(cols, axis=1)
     cov = np.asarray(covariance, dtype=float)
     w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    keep = w > 1e-12 * max(float(w[-1]), 1e-300)
+    keep = w > rank_tolerance(max(float(w[-1]), 1e-300), w.size)
     white = (v[:, keep] / np.sqrt(w[keep])).T
     a_w, k_w = white @ design, white @ k[iu]
     rates, *_ = np.linalg.lstsq(a_w, k_w, rcond=None)
-    rank = int(np.linalg.matrix_rank(a_w))
+    rank = int(numerical_rank(np.linalg.svd(a_w, compute_uv=False), a_w.shape[0]))
     resid = k_w - a_w @ rates
     return float(resid @ resid), int(np.sum(keep)) - rank
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .linalg import solve_rows
+from .linalg import rank_tolerance, solve_rows
 
 __all__ = ["ROUNDING_FLOOR", "Minimum", "gauss_newton_decrement", "levenberg_marquardt"]
 
@@ -48,7 +48,6 @@ data: it exceeds the statistical test only at a signal-to-noise ratio above abou
 _MU0 = 1e-3  # initial damping
 _MU_MAX = 1e10  # damping past which no step lowers the cost: give up
 _MU_MIN = 1e-12
-_RANK = 1e-12  # singular values of J^T J below this fraction of the largest: a null direction
 _GEODESIC_ALPHA = 0.75  # largest 2 |acceleration| / |step| (D norm) of a step that is tried
 _ACCELERATION_EVALUATIONS = 2  # a central difference of the residual
 
@@ -84,7 +83,8 @@ def gauss_newton_decrement(gradient: Array, hessian: Array) -> Array:
     gradient : ndarray, shape (m, n)
         ``g = J^T r``.
     hessian : ndarray, shape (m, n, n)
-        ``J^T J``; eigenvalues below ``1e-12`` of the largest are dropped (pseudo-inverse).
+        ``J^T J``; eigenvalues below the one rank tolerance
+        (:func:`rigidid.core.linalg.rank_tolerance`) are dropped (pseudo-inverse).
 
     Returns
     -------
@@ -92,7 +92,7 @@ def gauss_newton_decrement(gradient: Array, hessian: Array) -> Array:
         The decrement (cost units; zero at a stationary point).
     """
     w, v = np.linalg.eigh(hessian)
-    keep = w > _RANK * np.maximum(w[:, -1:], 1e-300)
+    keep = w > rank_tolerance(np.maximum(w[:, -1:], 1e-300), w.shape[1])  # below: a null direction
     proj = np.einsum("bji,bj->bi", v, gradient)
     out: Array = np.sum(np.where(keep, proj**2 / np.where(keep, w, 1.0), 0.0), axis=1)
     return out

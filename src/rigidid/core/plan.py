@@ -30,10 +30,10 @@ from rigidid.core.geometry import (
     layout_condition,
     local_sensor_matrix,
     normalise_directions,
-    numerical_rank,
     sensor_matrix,
 )
 from rigidid.core.layout_check import AXIS_COS, Finding, LayoutReport, check_layout
+from rigidid.core.linalg import numerical_rank
 from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels, StandardNormals, apply_noise, draw_normals
 from rigidid.core.simulate import Body, body_modes
 from rigidid.core.uncertainty import Uncertainty, propagate

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.timedomain.preprocess import fir_taps
 
 __all__ = ["VARIANCE_FROM", "ParameterCovariance", "noise_correlation", "parameter_covariance"]
@@ -158,8 +159,8 @@ def parameter_covariance(
 
     Notes
     -----
-    ``B = J^T J``, ``B^+`` its pseudo-inverse (singular values below ``1e-12``
-    of the largest dropped). The meat is ``M = sum_i sum_c v_ic J_ic^T P J_ic``
+    ``B = J^T J``, ``B^+`` its pseudo-inverse (cut at the one rank tolerance,
+    :func:`rigidid.core.linalg.pseudo_inverse`). The meat is ``M = sum_i sum_c v_ic J_ic^T P J_ic``
     over impacts ``i`` and channels ``c``, ``J_ic`` the rows of one impact and
     channel in time order, ``v_ic`` the mean square of their residual times
     ``N / (N - n - n_linear)``, ``P`` the Toeplitz matrix of
@@ -175,10 +176,8 @@ def parameter_covariance(
     if r.shape != (n_rows,) or n_rows != channels * int(sum(lengths)):
         raise ValueError("jacobian and residual rows must be channels * sum(lengths)")
     info = j.T @ j
-    u, sv, vt = np.linalg.svd(info)
-    keep = sv > sv[0] * 1e-12
-    binv = (vt.T[:, keep] / sv[keep]) @ u[:, keep].T
-    dof = max(n_rows - int(np.sum(keep)) - n_linear, 1)
+    binv, rank = pseudo_inverse(info, symmetric=True)
+    dof = max(n_rows - rank - n_linear, 1)
     s2 = float(r @ r) / dof
     rho = noise_correlation(factor)
     meat = np.zeros((n_par, n_par))

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
+from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
@@ -789,11 +790,7 @@ def _bound(
         n_linear = len(lengths) * (12 + pos_l.shape[0])
         cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
     else:
-        info = jm.T @ jm
-        u, sv, vt = np.linalg.svd(info)
-        tol = sv[0] * 1e-12
-        inv = (vt.T / np.where(sv > tol, sv, np.inf)) @ u.T  # pseudo-inverse of the information
-        cov = s2 * inv
+        cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
     base = _outputs(theta, frame, pos_l, dirs)
     grad = np.zeros((base.size, N_PARAMETERS))
     for i in range(N_PARAMETERS):

@@ -48,8 +48,6 @@ MIN_ROWS = 16
 """Fewest data rows a record may have."""
 
 
-
-
 def check_time(time: Array, line_of: Callable[[int], int], time_tokens: Callable[[], list[str]], src: str) -> float:
     n = time.shape[0]
     dt: float = float(time[-1] - time[0]) / (n - 1)
