@@ -656,8 +656,12 @@ def run_case(case: Case, folder: Path, timeout: float = 60.0) -> Result:
     def alarm(signum: int, frame: object) -> None:
         raise _Timeout()
 
+    # a hang: `timeout` seconds of this process's CPU (a busy machine stretches wall time, not CPU time), or ten
+    # times that of wall time (a read that blocks uses no CPU)
     old = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, timeout)
+    old_prof = signal.signal(signal.SIGPROF, alarm)
+    signal.setitimer(signal.ITIMER_REAL, 10.0 * timeout)
+    signal.setitimer(signal.ITIMER_PROF, timeout)
     try:
         with _in(folder), _captured() as (out, err):
             try:
@@ -670,7 +674,9 @@ def run_case(case: Case, folder: Path, timeout: float = 60.0) -> Result:
                 escaped = f"{type(exc).__name__}: {exc}"
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.setitimer(signal.ITIMER_PROF, 0)
         signal.signal(signal.SIGALRM, old)
+        signal.signal(signal.SIGPROF, old_prof)
         for reader in readers.values():
             reader.close()
     stderr = err.getvalue()
@@ -736,7 +742,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=3000)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--timeout", type=float, default=60.0, help="seconds before a case counts as a hang")
+    parser.add_argument("--timeout", type=float, default=60.0,
+                        help="CPU seconds (or 10 x as many wall seconds) before a case is a hang")  # fmt: skip
     parser.add_argument("--fast", action="store_true", help="leave out modes and report (the slow commands)")
     args = parser.parse_args()
     t0 = time.perf_counter()

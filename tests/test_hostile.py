@@ -336,3 +336,26 @@ def test_round_two_options_and_targets_are_refused_in_one_line(tmp_path: Path, a
     assert status == 2
     assert message in one_error(err)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_order_and_pretrigger_messages_blame_their_option(tmp_path: Path) -> None:
+    eng = SAMPLES / "engine-test"
+    status, _, err = cli(tmp_path, "modes", eng / "layout.json", eng / "hit1.npz", "--max-order", "1")
+    assert status == 2 and "--max-order: must be at least 12 for 6 modes" in one_error(err)
+    status, _, err = cli(tmp_path, "modes", eng / "layout.json", "--frf", eng / "frf.csv", "--references",
+                         eng / "refs.json", "--max-order", "2")  # fmt: skip
+    assert status == 2 and "--max-order: must be an integer of at least 3, got 2" in one_error(err)
+    body, layout = SAMPLES / "engine-on-mounts" / "body.json", SAMPLES / "engine-on-mounts" / "layout.json"
+    status, _, err = cli(tmp_path, "simulate", body, layout, "--write-records", tmp_path / "r", "--pretrigger", "1e7")
+    assert status == 2 and "--pretrigger: " in one_error(err) and "(lower the pre-trigger)" in err
+    assert not (tmp_path / "r").exists()
+
+
+def test_a_library_message_of_several_lines_is_printed_on_one(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    def numpy_like(*_: object, **__: object) -> None:
+        raise InputError("Cannot parse header: '{'\nException: unexpected EOF\n  while parsing", source="x.npy")
+
+    monkeypatch.setattr(api, "plan", numpy_like)
+    status, _, err = cli(tmp_path, "plan", PAPER / "layout.json")
+    assert status == 2
+    assert one_error(err) == "rigidid: error: x.npy: Cannot parse header: '{'; Exception: unexpected EOF; while parsing"

@@ -268,3 +268,21 @@ def test_wav_records_written_by_convert_round_trip(tmp_path: Path) -> None:
     assert dt == 1.0 / 2048.0
     with pytest.raises(InputError, match="whole number of Hz"):
         write_binary(tmp_path / "s.wav", np.arange(10) / 1000.5, np.zeros((10, 1)), ["p"])
+
+
+def test_convert_writes_a_uff_step_kept_to_six_digits_as_a_whole_rate(tmp_path: Path) -> None:
+    from scipy.io import wavfile
+
+    from rigidid.io.uff import write_uff_test
+
+    layout = {"units": {"length": "m", "mass": "kg"},
+              "sensors": [{"id": "p", "position": [0, 0, 0], "direction": "+x"}]}  # fmt: skip
+    t = np.arange(64) / 512.0  # the UFF keeps 1.95312e-3 s: 512.0013 Hz
+    x = np.exp(-t)[:, None]
+    write_uff_test(tmp_path / "t.uff", layout, [(t, x, ["p"])])
+    written = api.convert(tmp_path / "t.uff", tmp_path / "out", records_format="wav")
+    rate, data = wavfile.read(written[-1])
+    assert rate == 512
+    np.testing.assert_array_equal(data, x[:, 0])
+    with pytest.raises(InputError, match=r"1000\.5 Hz \(its step 0\.0009995 s kept to 6 digits\)"):
+        write_binary(tmp_path / "s.wav", np.arange(10) / 1000.5, np.zeros((10, 1)), ["p"], step_digits=6)

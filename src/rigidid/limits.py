@@ -66,7 +66,13 @@ def check_count(value: int | None, name: str, *, low: int, high: int) -> None:
 
 
 def check_record_size(
-    sample_rate: float, seconds: float, channels: int, records: int, *, name: str = "sample_rate"
+    sample_rate: float,
+    seconds: float,
+    channels: int,
+    records: int,
+    *,
+    name: str = "sample_rate",
+    advice: str = "lower the sample rate or the duration",
 ) -> None:
     """Refuse simulated records whose samples would exceed :data:`MAX_ARRAY_BYTES`.
 
@@ -80,12 +86,14 @@ def check_record_size(
         Sensors per record and number of records.
     name : str
         What to blame (an option or parameter name).
+    advice : str
+        What to change, in the message's closing brackets.
     """
     samples = sample_rate * seconds
     need = samples * max(channels, 1) * max(records, 1) * 8.0 * 2  # the records and one working copy
     if not math.isfinite(need) or need > MAX_ARRAY_BYTES:
         raise InputError(
             f"{samples:.3g} samples x {channels} sensors x {records} records would need {need / 2**30:.3g} GiB; "
-            f"the limit is {MAX_ARRAY_BYTES / 2**30:g} GiB (lower the sample rate or the duration)",
+            f"the limit is {MAX_ARRAY_BYTES / 2**30:g} GiB ({advice})",
             source=name,
         )

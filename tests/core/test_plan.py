@@ -237,3 +237,29 @@ def test_findings_name_sensors_by_their_ids() -> None:
     text = " ".join(f.message for f in report.findings if f.sensors)
     assert "acc-" in text
     assert all(f"sensor {i + 1} " not in text for i in range(len(pos)))
+
+
+def test_large_layouts_keep_every_warning_of_the_full_line_search(monkeypatch: pytest.MonkeyPatch) -> None:
+    # 90 sensors on the x axis and two off it: a line the layout barely sees rotate, among 4005 pairs
+    rng = np.random.default_rng(5)
+    on = np.column_stack([np.linspace(-9, 9, 90), 0.05 * rng.standard_normal(90), 0.05 * rng.standard_normal(90)])
+    positions = np.vstack([on, [[0.0, 1.2, 0.0], [2.0, -1.2, 0.3]]])
+    directions = np.vstack([np.eye(3)[np.arange(90) % 3], [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]])
+    quick = check_layout(positions, directions)
+    monkeypatch.setattr("rigidid.core.layout_check._EVERY_LINE_UP_TO", 10_000)
+    full = check_layout(positions, directions)
+    warned = [f for f in quick.findings if f.code == "collinear" and f.severity == "warning"]
+    assert warned and warned[0].sensors == tuple(range(1, 91))
+    assert warned == [f for f in full.findings if f.code == "collinear" and f.severity == "warning"]
+
+
+def test_prediction_in_windows_of_draws_is_the_prediction_in_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    whole = predict_uncertainty(body(), *good_layout(), noise=NOISE, draws=200, seed=4)
+    seen: list[tuple[float, float | None]] = []
+    monkeypatch.setattr("rigidid.core.uncertainty._VALUES_PER_WINDOW", 12 * 30)  # windows of 30 draws
+    parts = predict_uncertainty(
+        body(), *good_layout(), noise=NOISE, draws=200, seed=4, progress=lambda _, d, t: seen.append((d, t))
+    )
+    np.testing.assert_allclose(parts.center_of_gravity_std, whole.center_of_gravity_std, rtol=1e-9)
+    np.testing.assert_allclose(parts.principal_moments_std, whole.principal_moments_std, rtol=1e-9)
+    assert seen[-1] == (200, 200) and [d for d, _ in seen] == sorted(d for d, _ in seen)

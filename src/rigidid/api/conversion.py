@@ -66,6 +66,7 @@ def convert(
                 write_record(written[-1], np.arange(values.shape[0]) * dt, values, ids)
             else:
                 from rigidid.io.records.binary import write_binary
+                from rigidid.io.uff import UFF_STEP_DIGITS
 
-                write_binary(written[-1], np.arange(values.shape[0]) * dt, values, ids)
+                write_binary(written[-1], np.arange(values.shape[0]) * dt, values, ids, step_digits=UFF_STEP_DIGITS)
     return written

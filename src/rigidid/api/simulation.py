@@ -133,7 +133,10 @@ def simulate_records(
         raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
     from rigidid.limits import check_record_size
 
-    check_record_size(sample_rate, duration + pretrigger, len(ids), len(impacts))
+    check_record_size(sample_rate, duration, len(ids), len(impacts))
+    check_record_size(  # the decay fits: a pre-trigger that does not is to blame
+        sample_rate, duration + pretrigger, len(ids), len(impacts), name="pretrigger", advice="lower the pre-trigger"
+    )
     data = impulse_records(
         body_from_file(spec),
         positions,

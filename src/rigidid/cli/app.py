@@ -9,7 +9,7 @@ from typing import Annotated, NoReturn
 import typer
 
 from rigidid import __version__
-from rigidid.cli.common import EXIT_INPUT, StdoutGone
+from rigidid.cli.common import EXIT_INPUT, StdoutGone, one_line
 from rigidid.cli.compare import compare
 from rigidid.cli.convert import convert
 from rigidid.cli.identify import identify
@@ -144,7 +144,7 @@ def run(argv: list[str] | None = None) -> int:
 
     fault = _raw_output_fault(list(sys.argv[1:] if argv is None else argv))
     if fault is not None:
-        sys.stderr.write(f"rigidid: error: {fault}\n")
+        sys.stderr.write(f"rigidid: error: {one_line(fault)}\n")
         return EXIT_INPUT
     try:
         try:
@@ -163,7 +163,7 @@ def run(argv: list[str] | None = None) -> int:
     except (StdoutGone, BrokenPipeError):
         raise BrokenPipeError(32, "standard output is closed") from None
     except OSError as exc:
-        sys.stderr.write(f"rigidid: error: standard output: {exc.strerror or exc}\n")
+        sys.stderr.write(f"rigidid: error: standard output: {one_line(str(exc.strerror or exc))}\n")
         return EXIT_INPUT
     return int(status or 0)
 

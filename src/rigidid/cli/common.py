@@ -37,8 +37,13 @@ def _flag_text(exc: RigididError) -> str:
     return text
 
 
+def one_line(message: str) -> str:
+    """A message on one line: a library's several lines (numpy's header errors) joined by "; "."""
+    return "; ".join(line.strip() for line in str(message).splitlines() if line.strip())
+
+
 def _fail(message: str, code: int) -> NoReturn:
-    sys.stderr.write(f"rigidid: error: {message}\n")
+    sys.stderr.write(f"rigidid: error: {one_line(message)}\n")
     raise typer.Exit(code)
 
 
@@ -48,7 +53,7 @@ def _print_warnings(caught: list[warnings.WarningMessage]) -> None:
         text = str(w.message)
         if text not in seen and issubclass(w.category, UserWarning):
             seen.add(text)
-            sys.stderr.write(f"rigidid: warning: {text}\n")
+            sys.stderr.write(f"rigidid: warning: {one_line(text)}\n")
 
 
 @contextmanager

@@ -14,6 +14,7 @@ from rigidid.cli.common import (
     check_outputs,
     noise_overrides,
     old_name,
+    one_line,
     parse_units,
     reported,
     stage_tables,
@@ -127,10 +128,10 @@ def _verdict(result: PlanResult, layout: Path, references: Path | None) -> None:
     """One line on stderr for plan's exit-1 verdict, naming the file at fault (its report is written too)."""
     if not result.report.ok:
         first = next(f for f in result.report.findings if f.severity == "error")
-        sys.stderr.write(f"rigidid: error: {layout}: the layout is not usable: {first.message}\n")
+        sys.stderr.write(f"rigidid: error: {one_line(f'{layout}: the layout is not usable: {first.message}')}\n")
     elif result.references is not None:
         statement = result.references.statement.split(". ")[0].rstrip(".")
-        sys.stderr.write(f"rigidid: error: {references}: the references are not usable: {statement}\n")
+        sys.stderr.write(f"rigidid: error: {one_line(f'{references}: the references are not usable: {statement}')}\n")
 
 
 def parse_impact(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -31,7 +31,7 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,6 +50,7 @@ __all__ = [
     "Estimates",
     "Prepared",
     "at_cg",
+    "concatenate",
     "eq18_residuals",
     "eq36_system",
     "estimate",
@@ -777,8 +778,11 @@ def estimate(
         parts.append(_estimate_chunk(prepared, damping_weight, weights, start))
         if progress is not None:
             progress("identifying", min(i + _CHUNK, positions.shape[0]), positions.shape[0])
-    if len(parts) == 1:
-        return parts[0]
+    return parts[0] if len(parts) == 1 else concatenate(parts)
+
+
+def concatenate(parts: Sequence[Estimates]) -> Estimates:
+    """One :class:`Estimates` of several stacks of tests, in order."""
     names = ("center_of_gravity", "inertia_per_mass", "stiffness_per_mass", "damping_per_mass", "status")
     return Estimates(*(np.concatenate([getattr(part, name) for part in parts]) for name in names))
 

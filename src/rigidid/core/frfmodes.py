@@ -1372,7 +1372,7 @@ def fit_frf_modes(
         raise InputError(f"n_modes must be a positive integer, got {n_modes}")
     top = max_order if max_order is not None else max(8, -(-48 // q))
     if not (isinstance(top, int) and top >= 3):
-        raise InputError(f"max_order must be an integer of at least 3, got {max_order}")
+        raise InputError(f"must be an integer of at least 3, got {max_order}", source="max_order")
     auto_poles = rigid_band(freq, h)[0]
     (lo, hi), _ = _band_lines(freq, band if band is not None else auto_poles)
     res_band = residue_band if residue_band is not None else (lo, hi)

@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from itertools import combinations
 from typing import Literal
 
 import numpy as np
@@ -37,6 +36,9 @@ AXIS_COS = math.cos(math.radians(30.0))
 _COND_GOOD = 10.0
 _COND_POOR = 100.0
 _PARALLEL_COS = math.cos(math.radians(10.0))
+_EVERY_LINE_UP_TO = 60
+"""Layouts of up to this many sensors are searched for every near-line group; larger ones for the groups
+that can warn (a harmless line of four among hundreds of sensors is not worth a line of the report)."""
 
 
 @dataclass(frozen=True)
@@ -153,38 +155,79 @@ def _describe_motion(x: Array, centre: Array, scale: float, unit: str) -> str:
     return f"a rotation about the axis along {_vec(axis)} through {_vec(where)}" + (f" {unit}" if unit else "")
 
 
-def _line_groups(local: Array, tol: float) -> list[tuple[NDArray[np.intp], Array, Array, float]]:
-    """Maximal groups of at least 3 points within `tol` of one line: (members, point, direction, worst distance)."""
+def _line_groups(
+    local: Array, tol: float, pairs: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None
+) -> list[tuple[NDArray[np.intp], Array, Array, float]]:
+    """Maximal groups of at least 3 points within `tol` of one line: (members, point, direction, worst distance).
+
+    Each line through two points (`pairs`, default every pair) gathers the points within `tol`; a line
+    with three or more is refitted through them (SVD) and gathers again. Equal gatherings are refitted
+    once, and the subset test is one product of membership matrices.
+    """
     p = local.shape[0]
+    first, second = np.triu_indices(p, 1) if pairs is None else pairs
     found: list[tuple[NDArray[np.intp], Array, Array, float]] = []
-    seen: set[tuple[int, ...]] = set()
-    for i, j in combinations(range(p), 2):
+    tried: set[bytes] = set()
+    seen: set[bytes] = set()
+    for i, j in zip(first.tolist(), second.tolist(), strict=True):
         d = local[j] - local[i]
         length = float(np.linalg.norm(d))
         if length <= 2.0 * tol:
             continue
-        u = d / length
-        rel = local - local[i]
-        dist = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
-        members = np.flatnonzero(dist <= tol)
-        if members.size < 3:
+        inside = _distances(local, local[i], d / length) <= tol
+        key = np.packbits(inside).tobytes()
+        if np.count_nonzero(inside) < 3 or key in tried:
             continue
+        tried.add(key)
         # refit the line through the members and check again
-        pts = local[members]
+        pts = local[inside]
         c = pts.mean(axis=0)
-        _, _, vt = np.linalg.svd(pts - c)
-        u = vt[0]
-        rel = local - c
-        dist = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
-        members = np.flatnonzero(dist <= tol)
-        key = tuple(int(m) for m in members)
-        if members.size < 3 or key in seen:
+        u = np.linalg.svd(pts - c)[2][0]
+        dist = _distances(local, c, u)
+        inside = dist <= tol
+        key = np.packbits(inside).tobytes()
+        if np.count_nonzero(inside) < 3 or key in seen:
             continue
         seen.add(key)
-        found.append((members, c, u, float(dist[members].max())))
-    # keep the maximal groups only
-    sets = [set(g[0].tolist()) for g in found]
-    return [g for g, s in zip(found, sets, strict=True) if not any(s < other for other in sets)]
+        found.append((np.flatnonzero(inside), c, u, float(dist[inside].max())))
+    if not found:
+        return []
+    # keep the maximal groups only: a group inside a larger one goes
+    member = np.zeros((len(found), p), dtype=np.int64)
+    for row, group in enumerate(found):
+        member[row, group[0]] = 1
+    size = member.sum(axis=1)
+    overlap = member @ member.T
+    inner = (overlap == size[:, None]) & (size[None, :] > size[:, None])
+    return [g for g, lost in zip(found, inner.any(axis=1), strict=True) if not lost]
+
+
+def _distances(local: Array, point: Array, unit: Array) -> Array:
+    """Each point's distance from the line through `point` along the unit vector `unit`."""
+    rel = local - point
+    return np.asarray(np.linalg.norm(rel - np.outer(rel @ unit, unit), axis=1), dtype=float)
+
+
+def _hidden_lines(
+    lay: _Layout, pairs: tuple[NDArray[np.intp], NDArray[np.intp]], tol: float, floor: float
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The pairs whose line's rotation the whole layout sees more than `floor` times worse than its best motion.
+
+    ``|T x|^2 = x^T (T^T T) x`` for the unit rotation ``x`` about each line (eq. (3) of [1]), so every
+    pair costs a 6 x 6 form, not a pass over the sensors; pairs closer than ``2 tol`` have no line.
+    """
+    t, local = lay.transformation, lay.local
+    first, second = pairs
+    d = local[second] - local[first]
+    length = np.linalg.norm(d, axis=1)
+    keep = length > 2.0 * tol
+    first, second = first[keep], second[keep]
+    u = d[keep] / length[keep, None]
+    x = np.concatenate([-np.cross(u, local[first]), u], axis=1)
+    seen = np.sqrt(np.maximum(np.einsum("mi,ij,mj->m", x, t.T @ t, x), 0.0) / np.einsum("mi,mi->m", x, x))
+    s_max = float(np.linalg.norm(t, 2)) if t.size else 0.0
+    hidden = seen * floor < s_max
+    return first[hidden], second[hidden]
 
 
 @dataclass(frozen=True)
@@ -304,44 +347,55 @@ def _check_axes(lay: _Layout) -> list[Finding]:
 def _check_pairs(lay: _Layout, close_tolerance: float, same_tolerance: float) -> list[Finding]:
     """Redundant pairs (close together, parallel or anti-parallel) and shared positions (triaxial mounts)."""
     p = lay.count
-    dist = np.linalg.norm(lay.local[:, None] - lay.local[None], axis=2)
+    dist = _pair_distances(lay.local)
     cosang = np.abs(lay.directions @ lay.directions.T)
     found = []
-    for i, j in combinations(range(p), 2):
-        if dist[i, j] <= close_tolerance and cosang[i, j] >= _PARALLEL_COS:
-            angle = math.degrees(math.acos(min(1.0, float(cosang[i, j]))))
-            text = (
-                f"{_names([i, j], lay.names)} are {lay.length(dist[i, j])} apart and measure almost the same "
-                f"direction ({_fmt(angle)} degrees apart): the second adds little; "
-                "point one along another axis or move it elsewhere on the body"
-            )
-            found.append(Finding("warning", text, "redundant-pair", (i + 1, j + 1)))
-    shared_done: set[int] = set()
+    close = np.triu((dist <= close_tolerance) & (cosang >= _PARALLEL_COS), 1)
+    for i, j in np.argwhere(close).tolist():
+        angle = math.degrees(math.acos(min(1.0, float(cosang[i, j]))))
+        text = (
+            f"{_names([i, j], lay.names)} are {lay.length(dist[i, j])} apart and measure almost the same "
+            f"direction ({_fmt(angle)} degrees apart): the second adds little; "
+            "point one along another axis or move it elsewhere on the body"
+        )
+        found.append(Finding("warning", text, "redundant-pair", (i + 1, j + 1)))
+    shared_done = np.zeros(p, dtype=bool)
     for i in range(p):
-        if i in shared_done:
+        if shared_done[i]:
             continue
-        group = [j for j in range(p) if dist[i, j] <= same_tolerance]
-        if len(group) > 1:
-            shared_done.update(group)
+        group = np.flatnonzero(dist[i] <= same_tolerance)
+        if group.size > 1:
+            shared_done[group] = True
             text = (
                 f"{_names(group, lay.names)} share one position (a triaxial mount?): fine, but together they see "
                 "only the motion of that one point"
             )
-            found.append(Finding("info", text, "shared-position", tuple(g + 1 for g in group)))
+            found.append(Finding("info", text, "shared-position", tuple(int(g) + 1 for g in group)))
     return found
+
+
+def _pair_distances(local: Array) -> Array:
+    """The distance between every two points, shape (p, p), without a (p, p, 3) intermediate."""
+    sq = np.einsum("ij,ij->i", local, local)
+    gram = local @ local.T
+    dist: Array = np.sqrt(np.maximum(sq[:, None] + sq[None, :] - 2.0 * gram, 0.0))
+    return dist
 
 
 def _check_collinear(lay: _Layout, line_tolerance: float, same_tolerance: float) -> list[Finding]:
     """Groups of three or more sensors almost on one line, judged by how well the rest see rotation about it."""
     p, t, local, cond = lay.count, lay.transformation, lay.local, lay.condition
-    dist = np.linalg.norm(local[:, None] - local[None], axis=2)
+    dist = _pair_distances(local)
     s_max = float(np.linalg.norm(t, 2)) if t.size else 0.0
     label = np.arange(p)
-    for i, j in combinations(range(p), 2):
-        if dist[i, j] <= same_tolerance:
-            label[label == label[j]] = label[i]
+    for i, j in np.argwhere(np.triu(dist <= same_tolerance, 1)).tolist():
+        label[label == label[j]] = label[i]
+    pairs = np.triu_indices(p, 1)
+    if p > _EVERY_LINE_UP_TO:  # only lines that can warn: about 0.5 p^2 lines of 6 x 6 forms, not p^3
+        warns_above = _COND_GOOD if cond <= _COND_GOOD else min(_COND_GOOD, 0.5 * cond)
+        pairs = _hidden_lines(lay, pairs, line_tolerance, 0.5 * warns_above)
     found = []
-    for members, c, u, worst in _line_groups(local, line_tolerance):
+    for members, c, u, worst in _line_groups(local, line_tolerance, pairs):
         distinct = np.unique(label[members]).size
         if distinct < 3:
             continue  # fewer than three distinct points: a cluster, reported as shared position
@@ -368,7 +422,7 @@ def _check_collinear(lay: _Layout, line_tolerance: float, same_tolerance: float)
                 f"move {'one' if off >= 2 else 'two'} of them off the line by at least {move}"
             )
             severity = "warning"
-        elif distinct >= 4:
+        elif distinct >= 4 and p <= _EVERY_LINE_UP_TO:
             text = (
                 f"{group} lie almost on one line {where}: they do not see rotation about that line, "
                 f"which the other {off} sensors see well enough"
@@ -449,7 +503,11 @@ def check_layout(
       10) mostly because of it (``s_max / |T x_line|`` above half the
       condition number); info
       for harmless groups of four or more distinct positions; harmless triples
-      are not reported.
+      are not reported. Above 60 sensors only the lines that can warn are
+      searched (the rotation about the line through two sensors seen more
+      than half the warning threshold worse: ``x^T T^T T x`` per pair), and
+      harmless groups are not reported: the search then grows as ``p^2``,
+      not ``p^3`` (1,006 sensors: under a second).
 
     Tolerances are relative to the layout's size, so the check does not
     depend on units. Thresholds are rules of thumb, not guarantees; use

@@ -234,6 +234,13 @@ class StandardNormals:
     angle: Array  # (B, p, 3)
     mass: Array  # (B,)
 
+    def draws(self, index: slice) -> StandardNormals:
+        """The numbers of a window of the draws."""
+        return StandardNormals(
+            self.frequency[index], self.damping[index], self.shape[index], self.position[index], self.angle[index],
+            self.mass[index],
+        )  # fmt: skip
+
     def sensors(self, index: ArrayLike) -> StandardNormals:
         """The numbers of a subset (or reordering) of the sensors."""
         i = np.asarray(index, dtype=np.intp)

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from rigidid.core import estimator
 from rigidid.core.estimator import DAMPING_WEIGHT, Estimates
 from rigidid.core.identify import Identification, identify
-from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels, checked_test, perturb
+from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels, apply_noise, checked_test, draw_normals
 from rigidid.errors import IdentificationError, IllConditionedWarning, InputError, Notice, emit
 
 __all__ = [
@@ -44,6 +44,11 @@ CArray = NDArray[np.complex128]
 
 _FAILED_WARN_FRACTION = 0.05
 """Fraction of failed draws above which :func:`propagate` warns."""
+
+
+_VALUES_PER_WINDOW = 250_000
+"""Monte Carlo draws times sensors perturbed and identified at once (:func:`propagate`): bounds the memory
+of large layouts; below 250 sensors the 1000 default draws are one window."""
 
 
 def identify_batch(
@@ -302,12 +307,29 @@ def propagate(
         pos, dirs, lam, psi, mass=mass, method="structured", damping_weight=damping_weight, warn=False,
         noise=noise if weighted else None,
     )  # fmt: skip
-    data = perturb(pos, dirs, lam, psi, noise, int(draws), mass=mass, seed=seed)
-    batch = identify_batch(
-        data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight,
-        weights=base.diagnostics.residual_weights, progress=progress,
-    )  # fmt: skip
-    return summarise(base_estimate(base), batch, data.mass, noise=noise, seed=seed)
+    normals = draw_normals(np.random.default_rng(seed), int(draws), pos.shape[0])
+    window = max(1, _VALUES_PER_WINDOW // pos.shape[0])  # the perturbed copies of many sensors, a window at a time
+    parts, masses = [], []
+    for start in range(0, int(draws), window):
+        part = normals.draws(slice(start, start + window))
+        data = apply_noise(part, noise, pos, dirs, lam, psi, mass)
+        step = None if progress is None else _offset(progress, start, int(draws))
+        estimates = identify_batch(
+            data.positions, data.directions, data.poles, data.shapes, damping_weight=damping_weight,
+            weights=base.diagnostics.residual_weights, progress=step,
+        )  # fmt: skip
+        parts.append(estimates)
+        masses.append(data.mass)
+    batch = parts[0] if len(parts) == 1 else estimator.concatenate(parts)
+    masses_all = None if mass is None else np.concatenate([m for m in masses if m is not None])
+    return summarise(base_estimate(base), batch, masses_all, noise=noise, seed=seed)
+
+
+def _offset(
+    progress: Callable[[str, float, float | None], None], start: int, total: int
+) -> Callable[[str, float, float | None], None]:
+    """`progress` of one window of draws, counted among all `total` draws."""
+    return lambda task, done, _: progress(task, start + done, total)
 
 
 def base_estimate(result: Identification) -> dict[str, Array]:

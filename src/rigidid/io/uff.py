@@ -111,6 +111,7 @@ if TYPE_CHECKING:
     from rigidid.core.identify import Identification
 
 __all__ = [
+    "UFF_STEP_DIGITS",
     "ModeRow",
     "UffContents",
     "UffRecord",
@@ -121,6 +122,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
+
+UFF_STEP_DIGITS = 6
+"""Significant digits of a dataset 58's time step (``E13.5``, as pyuff writes and most tools do)."""
 
 ModeRow = tuple[int, float, float, str, float, float]
 """One ``modes.csv`` row: ``(mode, frequency_hz, damping_ratio, sensor_id, real, imag)``."""

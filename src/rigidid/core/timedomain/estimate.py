@@ -154,6 +154,27 @@ def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array]
     return arrays, peaks
 
 
+_SAFE_PEAK = 2.0**200
+"""Records whose largest value is above this or below its inverse are scaled by a power of two first."""
+
+
+def _in_range(
+    arrays: list[Array], peaks: list[tuple[Array, Array, int]], energies: Sequence[Array] | None
+) -> tuple[list[Array], list[tuple[Array, Array, int]], Sequence[Array] | None]:
+    """The records (their peaks and energies) scaled together by a power of two when their largest value is
+    outside ``[2^-200, 2^200]``: squares and lagged products then neither overflow nor underflow (records of
+    1e300 or 1e-300). A common factor changes no estimate: the channels are scaled by their RMS and the shapes
+    normalised anyway."""
+    top = max((float(np.max(p[0])) if p[0].size else 0.0 for p in peaks), default=0.0)
+    if top == 0.0 or 1.0 / _SAFE_PEAK <= top <= _SAFE_PEAK:
+        return arrays, peaks, energies
+    k = -math.frexp(top)[1]  # the largest value in [0.5, 1)
+    scaled = [np.ldexp(a, k) for a in arrays]
+    moved = [(np.ldexp(p, k), np.ldexp(m, k), rows) for p, m, rows in peaks]
+    power = None if energies is None else [np.ldexp(np.asarray(e, dtype=float), 2 * k) for e in energies]
+    return scaled, moved, power
+
+
 def _scales_and_covariance(decays: list[Array]) -> tuple[Array, Array]:
     """Per-channel RMS over all decays and their summed product ``sum_k d_k^T d_k`` (one matrix product each)."""
     m = decays[0].shape[1]
@@ -329,6 +350,7 @@ def estimate_modes(
     the sweep (see :func:`~rigidid.core.timedomain.stabilisation.cluster_stable`).
     """
     decays_in, peaks = _check_records(records, dt)
+    decays_in, peaks, energies = _in_range(decays_in, peaks, energies)
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (isinstance(n_modes, int) and n_modes >= 1):
@@ -341,6 +363,12 @@ def estimate_modes(
         raise InputError(f"the decimation factor must be a positive integer, got {decimate}")
     if max_order is not None and not (isinstance(max_order, int) and max_order >= 1):
         raise InputError(f"the maximum order must be a positive integer, got {max_order}")
+    if max_order is not None and method == "era" and max_order < 2 * n_modes:
+        raise InputError(
+            f"must be at least {2 * n_modes} for {n_modes} modes (an ERA model of n states holds n/2 modes), "
+            f"got {max_order}",
+            source="max_order",
+        )
     if not (math.isfinite(pulse_width) and pulse_width > 0.0):
         raise InputError(f"the pulse width must be positive, got {pulse_width}")
     crit = criteria if criteria is not None else Criteria()
@@ -625,7 +653,7 @@ def _ar_sweep(
     p_min = max(1, math.ceil(2 * n_modes / r))
     p_max = max_order if max_order is not None else p_min + math.ceil(_AR_EXTRA_STATES / r)
     if p_max < p_min:
-        raise InputError(f"the maximum AR order {p_max} is below the {p_min} lags {n_modes} modes need")
+        raise InputError(f"must be at least {p_min}: the AR lags {n_modes} modes need, got {p_max}", source="max_order")
     if min_samples <= 2 * p_max + 1:
         raise InputError(f"records too short ({min_samples} samples after trimming) for AR order {p_max}")
     gram, columns = _scaled_gram(fitted, p_max, unscale)

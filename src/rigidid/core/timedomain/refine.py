@@ -417,6 +417,18 @@ def prepare_decays(
 
 _prepare = prepare_decays
 
+_SAFE_PEAK = 2.0**200
+
+
+def _in_range(records: list[Array]) -> list[Array]:
+    """The records scaled together by a power of two when their largest value is outside ``[2^-200, 2^200]``
+    (squares of 1e300 overflow, of 1e-300 underflow); the fit's body does not depend on a common factor."""
+    top = max((float(np.max(np.abs(r))) if r.size else 0.0 for r in records), default=0.0)
+    if top == 0.0 or not math.isfinite(top) or 1.0 / _SAFE_PEAK <= top <= _SAFE_PEAK:
+        return records
+    k = -math.frexp(top)[1]
+    return [np.ldexp(r, k) for r in records]
+
 
 def fit_factor(lengths: Sequence[int], p: int, factor: int) -> int:
     """The smallest decimation factor up to `factor` whose decays fit :data:`MAX_ROWS`.
@@ -694,7 +706,7 @@ def refine_body(
     duration`` away falls into a local minimum, which a normalised cost well
     above 1 exposes (the caller falls back).
     """
-    recs = [np.asarray(r, dtype=float) for r in records]
+    recs = _in_range([np.asarray(r, dtype=float) for r in records])
     data = _prepare(recs, float(dt), starts, onsets, max(1, int(decimation)))
     del recs
     if drift:

@@ -452,12 +452,32 @@ def _read_binary(p: Path, src: str) -> RawRecord:
     raise InputError(f"unknown record suffix {suffix!r} (one of .csv {' '.join(BINARY_SUFFIXES)})", source=src)
 
 
-def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike, sensor_ids: Sequence[str]) -> None:
+def _rate_resolution(step: float, digits: int | None) -> float:
+    """How far a rate of time step `step` (s) can be from the true one: 1e-6 of it, or a step kept to `digits`
+    significant digits: one unit of its last digit, ``unit / step^2`` (Hz)."""
+    rate = 1.0 / step
+    if digits is None:
+        return 1e-6 * rate
+    unit = 10.0 ** (math.floor(math.log10(step)) - (digits - 1))
+    return max(1e-6 * rate, unit * rate * rate)
+
+
+def write_binary(
+    path: str | os.PathLike[str],
+    time: ArrayLike,
+    data: ArrayLike,
+    sensor_ids: Sequence[str],
+    *,
+    step_digits: int | None = None,
+) -> None:
     """Write a record as ``.npz`` or ``.h5`` (``time``, ``data``, ``channels``) or ``.wav``, atomically.
 
     A ``.wav`` file holds the channels in the order given as 64-bit floats
     (exact), at the record's rate, which must be a whole number of Hz; it
-    keeps no names (its channels are read in layout order).
+    keeps no names (its channels are read in layout order). With
+    `step_digits` (the significant digits the time step was written with: 6
+    in a UFF 58), the rate is a whole number when it is one to that
+    resolution (a UFF's ``1.95312E-03`` s is 512 Hz, not 512.0013 Hz).
 
     Raises
     ------
@@ -495,9 +515,15 @@ def write_binary(path: str | os.PathLike[str], time: ArrayLike, data: ArrayLike,
         step = np.diff(t)
         if t.size < 2 or not np.all(step > 0) or np.ptp(step) > 1e-9 * float(np.mean(step)):
             raise InputError("a WAV file holds uniformly sampled records only", source=str(p))
-        rate = 1.0 / float(np.mean(step))
-        if abs(rate - round(rate)) > 1e-6 * rate:
-            raise InputError(f"a WAV file's sample rate is a whole number of Hz, this one is {rate:.9g}", source=str(p))
+        mean_step = float(np.mean(step))
+        rate = 1.0 / mean_step
+        written = ""
+        if step_digits is not None:
+            written = f" (its step {mean_step:.{step_digits}g} s kept to {step_digits} digits)"
+        if abs(rate - round(rate)) > _rate_resolution(mean_step, step_digits):
+            raise InputError(
+                f"a WAV file's sample rate is a whole number of Hz, this one is {rate:.9g} Hz{written}", source=str(p)
+            )
         with atomic_path(p) as tmp:
             wavfile.write(tmp, round(rate), np.ascontiguousarray(x, dtype=np.float64))  # 64-bit float: exact
     else:

@@ -26,7 +26,7 @@ from rigidid.core.timedomain.streaming import locate_impacts as _locate
 from rigidid.core.timedomain.streaming import prepared_decays
 from rigidid.core.timedomain.trend import Trend
 from rigidid.io.records.checks import layout_ids
-from rigidid.io.records.sources import open_source, values_of
+from rigidid.io.records.sources import in_range, open_source
 from rigidid.progress import ProgressCallback
 
 __all__ = ["locate_impacts", "read_prepared_decays"]
@@ -40,13 +40,19 @@ def _opener(
     progress: ProgressCallback | None,
     trends: Sequence[Trend | None] | None = None,
 ) -> Callable[[int], Iterable[Array]]:
-    """``records(i)``: the row blocks of file ``i`` (opened when called), less its trend when it has one."""
+    """``records(i)``: the row blocks of file ``i`` (opened when called), scaled by the power of two the first
+    file opened chooses (:func:`~rigidid.io.records.sources.in_range`: records of 1e300 or 1e-300), less the
+    file's trend when it has one (in the scaled values, as the streamed read found it)."""
+    shared: list[int] = []
 
     def records(i: int) -> Iterable[Array]:
         path = Path(paths[i])
-        blocks = values_of(open_source(path, layout_ids(sensor_ids, str(path)), progress))
+        source = open_source(path, layout_ids(sensor_ids, str(path)), progress)
+        blocks, exponent = in_range(source.blocks, shared[0] if shared else None)
+        shared[:] = [exponent]
+        values = (values for _, values in blocks)
         trend = None if trends is None else trends[i]
-        return blocks if trend is None else _detrended(blocks, trend)
+        return values if trend is None else _detrended(values, trend)
 
     return records
 

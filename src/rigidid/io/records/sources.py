@@ -11,6 +11,8 @@ impacts) is :mod:`rigidid.core.timedomain.streaming`'s.
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +28,7 @@ from rigidid.io.records.columns import column_order
 from rigidid.io.records.columns import row as _where
 from rigidid.progress import ProgressCallback
 
-__all__ = ["BLOCK_ROWS", "BlockSource", "is_binary_record", "open_source", "values_of"]
+__all__ = ["BLOCK_ROWS", "SAFE_PEAK", "BlockSource", "in_range", "is_binary_record", "open_source", "values_of"]
 
 Array = NDArray[np.float64]
 
@@ -60,6 +62,32 @@ class BlockSource:
     line_of: Callable[[int], Callable[[int], int]]
     time_tokens: Callable[[], list[str]]
     dt: float | None = None
+
+
+SAFE_PEAK = 2.0**200
+"""Values read are scaled by a power of two when the first nonzero block's peak is above this or below its
+inverse (:func:`in_range`)."""
+
+
+def in_range(blocks: Iterator[tuple[Array, Array]], exponent: int | None) -> tuple[Iterator[tuple[Array, Array]], int]:
+    """`blocks` ``(time, values)`` with the values times ``2**exponent``; `exponent` None: chosen so that the
+    first block with a nonzero value peaks in ``[0.5, 1)`` when it peaks outside ``[2^-200, 2^200]``, else 0
+    (the blocks read to choose it are held and given first)."""
+    held: list[tuple[Array, Array]] = []
+    if exponent is None:
+        exponent = 0
+        for t, values in blocks:
+            held.append((t, values))
+            top = float(np.max(np.abs(values))) if values.size else 0.0
+            if top > 0.0:
+                if not 1.0 / SAFE_PEAK <= top <= SAFE_PEAK:
+                    exponent = -math.frexp(top)[1]
+                break
+    chained = itertools.chain(held, blocks)
+    if exponent == 0:
+        return chained, 0
+    scale = exponent
+    return ((t, np.ldexp(values, scale)) for t, values in chained), exponent
 
 
 def values_of(source: BlockSource) -> Iterator[Array]:

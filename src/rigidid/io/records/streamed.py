@@ -36,7 +36,7 @@ from rigidid.errors import InputError
 from rigidid.io.records.checks import MIN_ROWS, TimeCheck, check_decay, layout_ids, take_out_trend
 from rigidid.io.records.columns import column as _column
 from rigidid.io.records.columns import row as _where
-from rigidid.io.records.sources import BlockSource, open_source
+from rigidid.io.records.sources import BlockSource, in_range, open_source
 from rigidid.progress import ProgressCallback
 
 __all__ = ["StreamedRecord", "read_record_streamed", "read_records_streamed"]
@@ -84,6 +84,11 @@ class StreamedRecord:
     trend : Trend or None
         The DC offset and drift taken out of `data`, in the file's rows
         (:func:`~rigidid.io.records.checks.take_out_trend`); None: none mattered.
+    scale_exponent : int
+        The values as read were multiplied by ``2**scale_exponent`` (exactly) before anything else:
+        0 unless the first block with a nonzero value peaks outside ``[2^-200, 2^200]``, so that
+        squares neither overflow nor underflow (records of 1e300 or 1e-300). Every estimate of
+        :mod:`rigidid.core.timedomain` is unchanged by a factor common to the records of one test.
     """
 
     data: Array
@@ -97,6 +102,7 @@ class StreamedRecord:
     dt_uncertainty: float = 0.0
     clipped: NDArray[np.bool_] | None = None
     trend: Trend | None = None
+    scale_exponent: int = 0
 
 
 def read_record_streamed(
@@ -109,6 +115,7 @@ def read_record_streamed(
     cascade: bool = False,
     second: int | None = None,
     keep_rows: int | None = None,
+    scale_exponent: int | None = None,
 ) -> StreamedRecord:
     """Read one impact record block by block, checking it and decimating it as it arrives.
 
@@ -141,6 +148,9 @@ def read_record_streamed(
         (of its rows as the file's size tells them): for a caller that
         decimates further by a factor of its own (the refit, which fits the
         decays at the smallest factor its row budget allows).
+    scale_exponent : int, optional
+        Multiply the values by ``2**scale_exponent`` (another record's, so that the records of one
+        test share it); default: chosen from the record (see :class:`StreamedRecord`).
 
     Returns
     -------
@@ -166,7 +176,8 @@ def read_record_streamed(
 
     stream = StreamingDecimation(source.rows, len(wanted), factor=factor, f_limit=f_limit,
                                  cascade=cascade, second=second, keep_rows=keep_rows)  # fmt: skip
-    stream.run(source.blocks, check)
+    blocks, exponent = in_range(source.blocks, scale_exponent)
+    stream.run(blocks, check)
     dt = _checked_dt(source, times, tops.peak, wanted, src)
     try:
         done = stream.finish()
@@ -182,7 +193,7 @@ def read_record_streamed(
     dt_error = _stamp_uncertainty(source, times) if source.dt is None else 0.0
     return StreamedRecord(
         done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages,
-        dt_error * done.factor, tops.clipped(), trend,
+        dt_error * done.factor, tops.clipped(), trend, exponent,
     )  # fmt: skip
 
 
@@ -263,7 +274,8 @@ def read_records_streamed(
                                  cascade=cascade and factor is None, keep_rows=keep_rows)  # fmt: skip
     q0, q2 = first.stages
     streamed = [first]
-    streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress) for p in paths[1:]]
+    streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress,
+                                      scale_exponent=first.scale_exponent) for p in paths[1:]]  # fmt: skip
     from rigidid.core.timedomain.stamps import common_interval, different_intervals
 
     total = streamed[0].factor
