@@ -298,6 +298,9 @@ def _innovations(rows: Array, start: int) -> Array:
     lags = max(2, -(-13 // max(p, 1)))
     if n - start < 4 * (lags * p + 1) or start < lags:
         return np.zeros(0)
+    top = float(np.max(np.abs(rows)))
+    if top > 0.0:  # by a power of two, exactly: squares of records of 1e300 or 1e-300 stay finite
+        rows = np.ldexp(rows, -int(np.frexp(top)[1]))
     design = np.hstack([rows[lags - k - 1 : n - k - 1] for k in range(lags)] + [np.ones((n - lags, 1))])
     target = rows[lags:]
     fit = slice(start - lags, None)

@@ -124,8 +124,10 @@ def trend_matters(raw: Array, detrended: Array, trend: Trend) -> NDArray[np.bool
     """
     n = detrended.shape[0]
     k = n - max(2, n // 10)
-    rms = np.sqrt(np.mean(detrended[k:] ** 2, axis=0))
-    before = np.sqrt(np.mean(raw[k:] ** 2, axis=0))
-    largest = np.maximum(np.abs(trend.offset), np.abs(trend.offset + trend.slope * (n - 1)))
+    peak = np.max(np.abs(raw), axis=0) if n else np.ones(raw.shape[1])
+    unit = np.where(peak > 0.0, peak, 1.0)  # per channel: squares of records of 1e300 or 1e-300 stay finite
+    rms = np.sqrt(np.mean((detrended[k:] / unit) ** 2, axis=0))
+    before = np.sqrt(np.mean((raw[k:] / unit) ** 2, axis=0))
+    largest = np.maximum(np.abs(trend.offset), np.abs(trend.offset + trend.slope * (n - 1))) / unit
     result: NDArray[np.bool_] = (largest > TREND_RATIO * rms) & (before > TAIL_GAIN * rms)
     return result
