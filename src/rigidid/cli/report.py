@@ -133,9 +133,8 @@ def report(
             refine=refine, mounts=mounts,
         )  # fmt: skip
         result = add_mounts(run.result, mounts, torque_axis)
-        spec = None
-        if body is not None:
-            spec = load_body(body)
+        spec = None if body is None else load_body(body)
+        if spec is not None:
             check_same_units(spec.units, result.units, source=str(body))
         named = [str(p) for p in (layout, *(inputs or []))]
         _write_report(run, result, spec, output=output, png=png, title=title, inputs=named, force_unit=force_unit)
