@@ -352,7 +352,7 @@ def write_frf(path: PathLike, frf: ForceFrf, result: IdentifyResult, layout: Lay
 
     from rigidid.core.timedomain.force import tip_limit
     from rigidid.io.atomic import write_bytes_atomic, write_text_atomic
-    from rigidid.io.frf import frf_format_from, frf_uff_bytes
+    from rigidid.io.frf import frf_csv_text, frf_format_from, frf_uff_bytes
 
     channel = force_channel(layout, options)
     f = frf.frequency_hz
@@ -361,7 +361,8 @@ def write_frf(path: PathLike, frf: ForceFrf, result: IdentifyResult, layout: Lay
     ref = channel.column
     fmt = frf_format_from(path, None)
     if fmt == "csv":
-        write_text_atomic(path, _frf_csv(f[keep], values, frf.coherence[keep].T, result.sensor_ids, ref))
+        coherence = frf.coherence[keep].T[:, None, :]
+        write_text_atomic(path, frf_csv_text(f[keep], values, result.sensor_ids, [ref], coherence))
     else:
         content = frf_uff_bytes(
             f[keep], values, result.sensor_ids, result.directions, [ref],
@@ -375,19 +376,3 @@ def write_frf(path: PathLike, frf: ForceFrf, result: IdentifyResult, layout: Lay
     }
     target = Path(path)
     write_text_atomic(target.with_name(target.stem + ".references.json"), json.dumps(refs, indent=2) + "\n")
-
-
-def _frf_csv(
-    frequencies: Array, frf: NDArray[np.complex128], coherence: Array, sensor_ids: Sequence[str], reference: str
-) -> str:
-    """The FRF CSV (``frequency_hz,response,reference,real,imag``) with a ``coherence`` column."""
-    from rigidid.io.frf import FRF_COLUMNS
-
-    lines = [",".join([*FRF_COLUMNS, "coherence"])]
-    for i, sid in enumerate(sensor_ids):
-        for k, f in enumerate(frequencies):
-            v = frf[i, 0, k]
-            lines.append(
-                f"{float(f)!r},{sid},{reference},{float(v.real)!r},{float(v.imag)!r},{float(coherence[i, k])!r}"
-            )
-    return "\n".join(lines) + "\n"

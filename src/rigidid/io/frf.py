@@ -173,16 +173,21 @@ def frf_csv_text(
     frf: NDArray[np.complex128],
     sensor_ids: Sequence[str],
     reference_ids: Sequence[str],
+    coherence: NDArray[np.float64] | None = None,
 ) -> str:
-    """FRFs (p, q, f) as the CSV text :func:`load_frf_csv` reads (full precision)."""
+    """FRFs (p, q, f) as the CSV text :func:`load_frf_csv` reads (full precision).
+
+    With `coherence` (p, q, f), a sixth column ``coherence`` (the readers ignore it).
+    """
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
-    w.writerow(FRF_COLUMNS)
+    w.writerow([*FRF_COLUMNS, "coherence"] if coherence is not None else FRF_COLUMNS)
     for i, s in enumerate(sensor_ids):
         for j, r in enumerate(reference_ids):
             for k, f in enumerate(frequencies):
                 v = frf[i, j, k]
-                w.writerow([repr(float(f)), s, r, repr(float(v.real)), repr(float(v.imag))])
+                row = [repr(float(f)), s, r, repr(float(v.real)), repr(float(v.imag))]
+                w.writerow(row if coherence is None else [*row, repr(float(coherence[i, j, k]))])
     return out.getvalue()
 
 
