@@ -214,7 +214,7 @@ def write_simulated_frf(
         return data
     lay = files.load_layout(layout, require_rank=False)
     refs = load_references(references)
-    default = simulate_frf(body, lay, refs, noise=noise, seed=seed).frequencies
+    default = simulate_frf(body, lay, refs).frequencies  # the default lines (noise does not move them)
     step = float(f"{default[0]:.5e}")
     grid = step * np.arange(1, default.size + 1, dtype=np.float64)
     data = simulate_frf(body, lay, refs, frequencies=grid, noise=noise, seed=seed)
