@@ -53,15 +53,3 @@ def test_unknown_unit_names_the_kind() -> None:
         force_factor("m", "kg", "kgf")
     with pytest.raises(ValueError, match="mass unit 'oz'"):
         force_factor("m", "oz", "N")
-
-
-def test_diagonal_units_as_mount_data_sheets_give_them() -> None:
-    from rigidid.units import diagonal_units
-
-    (t_unit, t_factor), (r_unit, r_factor) = diagonal_units("mm", "kg")
-    assert (t_unit, r_unit) == ("N/mm", "N m/rad")
-    assert t_factor == pytest.approx(1e-3)  # kg/s^2 -> N/mm
-    assert r_factor == pytest.approx(1e-6)  # kg mm^2/s^2 = 1e-6 N m
-    (t_unit, _), (r_unit, r_factor) = diagonal_units("in", "lb")
-    assert (t_unit, r_unit) == ("lbf/in", "lbf in/rad")
-    assert r_factor == pytest.approx(1.0 / 386.08858267716535)

@@ -35,7 +35,6 @@ __all__ = [
     "N_PER_FORCE",
     "ForceUnits",
     "default_force_unit",
-    "diagonal_units",
     "force_factor",
     "force_units",
     "rate_units",
@@ -155,34 +154,6 @@ def force_units(length: str, mass: str, force: str | None = None) -> ForceUnits:
         "rotation": f"{f} {length} s/rad",
     }
     return ForceUnits(f, length, factor, stiffness, damping)
-
-
-def diagonal_units(length: str, mass: str, force: str | None = None) -> tuple[tuple[str, float], tuple[str, float]]:
-    """Units and factors of the diagonal of a stiffness matrix as mount data sheets give it.
-
-    Translations per the layout's length (``N/mm``, ``lbf/in``), rotations with
-    the moment in ``N m`` (``kN m``) for metric forces and ``lbf in`` (``lbf ft``
-    for foot layouts) for pounds-force: ``N m/rad``, ``lbf in/rad``.
-
-    Parameters
-    ----------
-    length, mass : str
-        Units of the layout.
-    force : str, optional
-        ``N``, ``kN`` or ``lbf`` (default :func:`default_force_unit`).
-
-    Returns
-    -------
-    (str, float), (str, float)
-        Unit and factor of the translational diagonal (from ``mass/s^2``) and
-        of the rotational diagonal (from ``mass length^2/s^2``); for damping
-        append `` s`` to the units, the factors are the same.
-    """
-    f = default_force_unit(mass) if force is None else force
-    translation = force_factor(length, mass, f)
-    arm = ("ft" if length == "ft" else "in") if f == "lbf" else "m"
-    rotation = KG_PER_MASS[mass] * M_PER_LENGTH[length] ** 2 / (N_PER_FORCE[f] * M_PER_LENGTH[arm])
-    return (f"{f}/{length}", translation), (f"{f} {arm}/rad", rotation)
 
 
 def check_same_units(given: Any, layout: Any, *, source: str | None, location: str = "units") -> None:
