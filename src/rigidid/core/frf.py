@@ -27,10 +27,43 @@ from rigidid.core.geometry import sensor_matrix
 from rigidid.core.simulate import Body, system_matrices
 from rigidid.errors import InputError
 
-__all__ = ["ElasticMode", "accelerance", "random_elastic_modes"]
+__all__ = ["ElasticMode", "accelerance", "random_elastic_modes", "rigid_receptance"]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
+
+
+def rigid_receptance(s: ArrayLike, mass: Array, stiffness: Array, damping: Array, loads: Array) -> CArray:
+    """Rigid-body coordinates per unit load at each line: ``(s^2 M + s C + K)^-1 F``.
+
+    Eq. (1) of [1] in the Laplace domain, shared by the forward model (:func:`accelerance`),
+    the exact support fit and the measured force's model; the accelerance is ``s^2`` times
+    it, seen through the sensor matrix.
+
+    Parameters
+    ----------
+    s : ndarray, shape (f,)
+        Laplace variable per line (``i w``; ``i w + a`` behind an exponential window).
+    mass, stiffness, damping : ndarray, shape (6, 6)
+        ``M``, ``K``, ``C`` in the coordinates of the loads.
+    loads : ndarray, shape (6, q)
+        Generalised forces, one column per reference (``T_f^T``).
+
+    Returns
+    -------
+    ndarray of complex, shape (f, 6, q)
+
+    Examples
+    --------
+    >>> x = rigid_receptance(np.array([2j]), np.eye(6), np.zeros((6, 6)), np.zeros((6, 6)), np.eye(6)[:, :1])
+    >>> float(x[0, 0, 0].real), x.shape
+    (-0.25, (1, 6, 1))
+    """
+    sv = np.asarray(s, dtype=np.complex128).reshape(-1)
+    z = (sv**2)[:, None, None] * mass[None] + sv[:, None, None] * damping[None] + stiffness[None]
+    rhs = np.broadcast_to(np.asarray(loads, dtype=np.complex128), (sv.size, *np.shape(loads)))
+    x: CArray = np.asarray(np.linalg.solve(z, rhs), dtype=np.complex128)
+    return x
 
 
 @dataclass(frozen=True)
@@ -155,9 +188,7 @@ def accelerance(
     tf = sensor_matrix(reference_positions, reference_directions, cg)
     m, k, c = system_matrices(body)
     w = 2.0 * np.pi * freq
-    z = k[None] - (w**2)[:, None, None] * m[None] + 1j * w[:, None, None] * c[None]
-    rhs = np.broadcast_to(tf.T.astype(complex), (freq.size, 6, tf.shape[0]))
-    x = np.linalg.solve(z, rhs)  # (f, 6, q)
+    x = rigid_receptance(1j * w, m, k, c, tf.T)  # (f, 6, q)
     h = -(w**2)[:, None, None] * np.einsum("ia,faj->fij", t, x)
     for mode in elastic:
         phi_s = np.asarray(mode.sensor_shape, dtype=float)

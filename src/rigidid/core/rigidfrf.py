@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.frf import rigid_receptance
 from rigidid.core.geometry import skew
 from rigidid.core.linalg import numerical_rank
 from rigidid.errors import IdentificationError, InputError
@@ -109,10 +110,9 @@ def _sym(v: Array) -> Array:
 
 def _model(u: Array, theta: Array, kv: Array, cv: Array, tft: Array) -> CArray:
     """``X(u) = -u^2 (K - u^2 M + i u C)^-1 T_f^T``, shape (n, 6, q)."""
-    m = mass_matrix_from_parameters(theta)
-    a = _sym(kv)[None] - (u**2)[:, None, None] * m[None] + 1j * u[:, None, None] * _sym(cv)[None]
-    x: CArray = np.linalg.solve(a, np.broadcast_to(tft.astype(complex), (u.size, *tft.shape)))
-    return -(u**2)[:, None, None] * x
+    x = rigid_receptance(1j * u, mass_matrix_from_parameters(theta), _sym(kv), _sym(cv), tft)
+    result: CArray = -(u**2)[:, None, None] * x
+    return result
 
 
 def rigid_frf_fit(

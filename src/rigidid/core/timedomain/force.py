@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.frf import rigid_receptance
 from rigidid.core.geometry import sensor_matrix
 
 Array = NDArray[np.float64]
@@ -249,9 +250,7 @@ def per_mass_accelerance(
     tf = sensor_matrix(np.reshape(drive_position, (1, 3)), np.reshape(drive_direction, (1, 3)), cg)[0]
     m = np.eye(6)
     m[3:, 3:] = inertia_per_mass
-    z = (s**2)[:, None, None] * m + s[:, None, None] * damping_per_mass + stiffness_per_mass
-    rhs = np.broadcast_to(tf.astype(complex), (s.size, 6))[..., None]
-    x = np.linalg.solve(z, rhs)[..., 0]
+    x = rigid_receptance(s, m, np.asarray(stiffness_per_mass), np.asarray(damping_per_mass), tf[:, None])[..., 0]
     result: CArray = (s**2)[:, None] * (x @ t.T)
     return result
 
