@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from rigidid.core.frfmodes import peak_split, summed_power
+
 __all__ = ["MIN_PLATEAU_LINES", "PLATEAU_SLOPE", "plateau_band", "top_slope"]
 
 MIN_PLATEAU_LINES = 10
@@ -47,19 +49,18 @@ def plateau_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float] 
 
     Notes
     -----
-    The peak test is the one of the automatic band (prominence ``log 2`` of
+    The peak test is the one of the automatic band
+    (:func:`rigidid.core.frfmodes.peak_split`: prominence ``log 2`` of
     ``log sum |H|^2``), so a file it refuses for "no resonance peak" is the
     file this function looks at.
     """
-    from scipy.signal import find_peaks
-
     f = np.asarray(frequencies, dtype=float).reshape(-1)
     h = np.asarray(frf)
-    s = np.sum(np.abs(h) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    s = summed_power(h)
     if f.size < 3 or s.shape != f.shape:
         return None
-    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
-    hi = float(f[-1]) if idx.size == 0 else 0.5 * float(f[idx[0]])  # kept clear of the first (elastic) peak
+    peaks, _ = peak_split(f, h)
+    hi = float(f[-1]) if peaks.size == 0 else 0.5 * float(peaks[0])  # kept clear of the first (elastic) peak
     sel = f <= hi
     if np.count_nonzero(sel) < MIN_PLATEAU_LINES:
         return None
@@ -98,7 +99,7 @@ def top_slope(frequencies: ArrayLike, frf: ArrayLike, band: tuple[float, float],
         0 when fewer than 5 lines lie there.
     """
     f = np.asarray(frequencies, dtype=float).reshape(-1)
-    s = np.sum(np.abs(np.asarray(frf)) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    s = summed_power(frf)
     lo, hi = float(band[0]), float(band[1])
     sel = (f >= hi - fraction * (hi - lo)) & (f <= hi)
     if np.count_nonzero(sel) < 5:

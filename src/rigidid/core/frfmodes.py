@@ -63,6 +63,7 @@ __all__ = [
     "residues_lsfd",
     "rigid_band",
     "rigid_shapes",
+    "summed_power",
     "with_nonrigid_residual",
 ]
 
@@ -209,6 +210,22 @@ mode and the first elastic one (:func:`peak_split`; the mass line's band then ne
 3x the one to half the other)."""
 
 
+def summed_power(frf: ArrayLike) -> Array:
+    """``sum |H|^2`` over responses and references per line (plus the smallest float: its log is finite).
+
+    Parameters
+    ----------
+    frf : array_like of complex, shape (p, q, f)
+        Accelerance.
+
+    Returns
+    -------
+    ndarray, shape (f,)
+    """
+    s: Array = np.sum(np.abs(np.asarray(frf)) ** 2, axis=(0, 1)) + np.finfo(float).tiny
+    return s
+
+
 def peak_split(frequencies: Array, frf: CArray) -> tuple[Array, int | None]:
     """The peaks of the FRFs and where they split into rigid-body and elastic ones.
 
@@ -231,8 +248,7 @@ def peak_split(frequencies: Array, frf: CArray) -> tuple[Array, int | None]:
     """
     from scipy.signal import find_peaks
 
-    s = np.sum(np.abs(frf) ** 2, axis=(0, 1)) + np.finfo(float).tiny
-    idx, _ = find_peaks(np.log(s), prominence=np.log(2.0))
+    idx, _ = find_peaks(np.log(summed_power(frf)), prominence=np.log(2.0))
     fp: Array = np.asarray(frequencies, dtype=float)[idx]
     ratios = fp[1:] / fp[:-1]
     if ratios.size and ratios.max() > PEAK_SPLIT_RATIO:
