@@ -123,3 +123,23 @@ def test_a_uff_of_frfs_with_an_option_of_the_other_routes_is_one_line(args: tupl
     out = run("identify", CASE / "test.uff", *args)
     assert out.returncode == 2 and re.search(says, out.stderr), out.stderr
     assert out.stderr.strip().count("\n") == 0
+
+
+def test_a_uff_of_frfs_is_read_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`identify LAYOUT --frf test.uff`: the references from the headers (through the file's geometry) and the
+    FRFs come from one reading of the file, and give the test of references.json + CSV; the command tells a file
+    of FRFs from one of records by the 58s' headers alone."""
+    from rigidid.io import uff
+    from rigidid.io.uff import uff_function_types
+
+    real, calls = uff.read_all, []
+    monkeypatch.setattr(uff, "read_all", lambda path: calls.append(path) or real(path))
+    _, refs, data = api_frf.load_frf_test(_bare_layout(tmp_path), CASE / "test.uff")
+    assert calls == [CASE / "test.uff"]
+    _, refs_csv, data_csv = api_frf.load_frf_test(_bare_layout(tmp_path), CASE / "frf.csv", CASE / "refs.json")
+    assert [r.id for r in refs.references] == [r.id for r in refs_csv.references]
+    np.testing.assert_allclose([r.position for r in refs.references], [r.position for r in refs_csv.references])
+    np.testing.assert_array_equal(data.frf, data_csv.frf)
+    assert uff_function_types(CASE / "test.uff") == [4] * data.frf.shape[0] * data.frf.shape[1]
+    assert set(uff_function_types(SAMPLES / "engine-test" / "test.uff") or [0]) == {1}  # time records
+    assert uff_function_types(CASE / "layout.json") is None  # not a universal file: read it to say why

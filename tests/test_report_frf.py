@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import base64
+import json
 import re
-import subprocess
-import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,6 +18,27 @@ from rigidid.io import files
 from rigidid.io.frf import load_frf_csv, reference_arrays
 
 SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "engine-test"
+
+
+def run(*args: str | Path) -> SimpleNamespace:
+    """The command line, in this process."""
+    from typer.testing import CliRunner
+
+    from rigidid.cli import app
+
+    result = CliRunner().invoke(app, [str(a) for a in args])
+    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory: pytest.TempPathFactory) -> SimpleNamespace:
+    """``rigidid report layout.json --frf frf.uff --png DIR``: references from the UFF's headers, route auto."""
+    folder = tmp_path_factory.mktemp("report")
+    out, png = folder / "report.html", folder / "png"
+    done = run("report", SAMPLE / "layout.json", "--frf", SAMPLE / "frf.uff", "--png", png, "-o", out,
+               "--title", "engine FRFs")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return SimpleNamespace(text=out.read_text(), png=png, stderr=done.stderr)
 
 
 @pytest.fixture(scope="module")
@@ -58,47 +80,75 @@ def test_the_scaled_modes_model_reproduces_the_measured_frfs(measured: MeasuredF
     assert np.abs(limit - level).max() < 1e-6 * np.abs(level).max()  # the i C / (w M) term: 2e-9 at 1e9 Hz
 
 
-@pytest.mark.slow
-def test_the_report_puts_the_routes_side_by_side(measured: MeasuredFrfs, routes: list) -> None:
-    text = render_frf_report(measured, routes, title="engine FRFs", created="2026-01-01")
-    header = re.search(r"<thead><tr>(.*?)</tr></thead>", text).group(1)
+def test_the_report_puts_the_routes_side_by_side(page: SimpleNamespace) -> None:
+    """The references come from the UFF's headers (no --references), every route tried is listed with the one
+    chosen, both are tabled with their intervals, and --png writes the page's own figures."""
+    text = page.text
+    assert "12 responses \u00d7 3 references" in text
+    tried = re.search(r"<h2>Routes tried</h2>.*?<tbody>(.*?)</tbody>", text, re.S).group(1)
+    assert tried.count("<tr>") == 2 and tried.count("<td>chosen</td>") == 1 and "<td>applies</td>" in tried
+    section = text[text.index("<h2>Mass, centre of gravity and inertia</h2>") :]
+    header = re.search(r"<thead><tr>(.*?)</tr></thead>", section).group(1)
     assert "scaled modes (residues): estimate" in header and "mass line: estimate" in header
     assert header.count("95 % interval") == 2
-    mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
+    mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", section).group(1)
     assert mass_row.count(">142<") == 2  # both routes measure the 142 kg through the force
-    assert "<td>± " in mass_row  # the residues route's interval, in kg
+    assert mass_row.count("<td>± ") == 2  # each route's interval, in kg
     for name in ("FRFs and the fits", "Mass line", "Stabilisation diagram", "Stiffness matrix at the CG"):
         assert f"<h2>{name}" in text
-    assert text.count("data:image/png;base64,") == 3
+    embedded = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", text)
+    assert len(embedded) == 3
     assert "http://" not in text and "https://" not in text  # self-contained
+    files = sorted(page.png.iterdir())
+    assert [f.name for f in files] == ["frf.png", "massline.png", "stabilisation.png"]
+    assert sorted(base64.b64decode(e) for e in embedded) == sorted(f.read_bytes() for f in files)
+    assert page.stderr.strip().splitlines()[-1] == f"rigidid: wrote 3 figures to {page.png}"
 
 
 def test_report_frf_refuses_options_of_other_routes(tmp_path: Path) -> None:
     out = tmp_path / "r.html"
-    cmd = [sys.executable, "-m", "rigidid", "report", str(SAMPLE / "layout.json"), "--frf", str(SAMPLE / "frf.csv"),
-           "--references", str(SAMPLE / "refs.json"), "--uncertainty", "50", "-o", str(out)]  # fmt: skip
-    run = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    assert run.returncode == 2
-    assert run.stderr.strip().splitlines() == [
+    done = run("report", SAMPLE / "layout.json", "--frf", SAMPLE / "frf.csv", "--references", SAMPLE / "refs.json",
+               "--uncertainty", "50", "-o", out)  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
         "rigidid: error: --uncertainty: applies to the modes and records routes, not to a report of FRFs (--frf)"
     ]
     assert not out.exists()
 
 
+def test_report_frf_refuses_references_that_contradict_the_uff_headers(tmp_path: Path) -> None:
+    """The references are resolved as identify resolves them: references.json against the UFF's headers,
+    one line naming both, nothing written."""
+    refs = json.loads((SAMPLE / "refs.json").read_text())
+    refs["references"][0]["position"] = [p + 50.0 for p in refs["references"][0]["position"]]
+    (tmp_path / "refs.json").write_text(json.dumps(refs))
+    out, png = tmp_path / "r.html", tmp_path / "png"
+    done = run("report", SAMPLE / "layout.json", "--frf", SAMPLE / "frf.uff", "--references", tmp_path / "refs.json",
+               "--png", png, "-o", out)  # fmt: skip
+    assert done.returncode == 2
+    line = done.stderr.strip()
+    assert "\n" not in line and "is at" in line and "refs.json" in line and "frf.uff's FRF headers" in line
+    assert not out.exists() and not png.exists()
+
+
 @pytest.mark.slow
-def test_routes_that_disagree_beyond_their_errors_are_flagged(measured: MeasuredFrfs, routes: list) -> None:
+def test_routes_that_disagree_beyond_their_errors_are_flagged(
+    measured: MeasuredFrfs, routes: list, page: SimpleNamespace
+) -> None:
     """The last column is the routes' difference over their combined standard error; beyond 3 the page says so,
     naming the entries (a route 5 SE off in mass is flagged, the same route agreeing is not)."""
     from dataclasses import replace
+
+    figures = {f.stem: f.read_bytes() for f in page.png.iterdir()}  # drawn once: this test is about the tables
 
     ml = routes[0].massline
     intervals = replace(ml.intervals, mass=replace(ml.intervals.mass, std=np.asarray(0.1)))  # 0.1 kg each
     residues = replace(routes[0], massline=replace(ml, intervals=intervals))
     twin = replace(residues, route="massline")  # same figures, same intervals: differ by 0 SE
-    text = render_frf_report(measured, [residues, twin], created="2026-01-01")
+    text = render_frf_report(measured, [residues, twin], created="2026-01-01", figures=figures)
     assert '<div class="warn">' not in text
     off = replace(twin, massline=replace(twin.massline, mass=twin.massline.mass + 5.0 * np.sqrt(2.0) * 0.1))
-    text = render_frf_report(measured, [residues, off], created="2026-01-01")
+    text = render_frf_report(measured, [residues, off], created="2026-01-01", figures=figures)
     mass_row = re.search(r"<tr><td class=\"label\">mass</td>(.*?)</tr>", text).group(1)
     assert mass_row.endswith("<td>5</td>")
     warning = re.search(r'<div class="warn">(.*?)</div>', text).group(1)

@@ -31,7 +31,7 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -392,6 +392,27 @@ def _supports_html(route: MassLineResult, length: str, mass_unit: str, force_uni
     return "\n".join(parts)
 
 
+def _tried_html(chosen: MassLineResult, mass_unit: str) -> str:
+    """Every route tried (``--method auto``, or compared): applies or not, its mass, the one chosen and why."""
+    if not chosen.routes:
+        return ""
+    rows = []
+    for answer in chosen.routes:
+        ml = answer.massline
+        interval = None if ml is None or ml.intervals is None else ml.intervals.mass
+        mass = "\u2013" if ml is None else f"{fmt_num(ml.mass)} {_interval_text(interval, ())}"
+        verdict = "chosen" if answer.route == chosen.route else ("applies" if answer.applies else "does not apply")
+        rows.append([esc(_ROUTE_NAMES.get(answer.route, answer.route)), verdict, mass, esc(answer.reason)])
+    return "\n".join([
+        "<h2>Routes tried</h2>",
+        table_html(
+            ["route", "verdict", f"mass [{mass_unit}]", "why"], rows,
+            caption="Every FRF route the data were tried with; the one chosen is tabled first below. "
+            + chosen.reason.split("; ")[0] + ".",
+        ),
+    ])  # fmt: skip
+
+
 def _head(
     title: str, data: MeasuredFrfs, routes: Sequence[MassLineResult], inputs: Sequence[str], created: str | None
 ) -> str:
@@ -426,6 +447,7 @@ def render_frf_report(
     test: TestInfo | None = None,
     created: str | None = None,
     progress: ProgressCallback | None = None,
+    figures: Mapping[str, bytes] | None = None,
 ) -> str:
     """One self-contained HTML document reporting the FRF routes side by side.
 
@@ -447,20 +469,27 @@ def render_frf_report(
         Date shown under the title (default: now, UTC).
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
+    figures : mapping of str to bytes, optional
+        The figures drawn already as PNG (:func:`frf_figures` through
+        :func:`rigidid.reporting.png_bytes`), e.g. to write them as files too.
 
     Returns
     -------
     str
-        The HTML text: the routes' mass, CG and inertia with their 95 % intervals side by side, how each
+        The HTML text: every route tried (whether it applies, the chosen one and why), the routes' mass,
+        CG and inertia with their 95 % intervals side by side, how each
         fitted, the scaled modes' stiffness and damping, and the figures (module documentation).
     """
     if not routes:
         raise InputError("an FRF report needs at least one route", source="routes")
     length, mass_unit = routes[0].units["length"], routes[0].units["mass"]
-    pngs = {name: png_bytes(fig) for name, fig in frf_figures(data, routes, mass_unit, progress).items()}
+    if figures is None:
+        figures = {name: png_bytes(fig) for name, fig in frf_figures(data, routes, mass_unit, progress).items()}
+    pngs = dict(figures)
     parts = [
         _head(title, data, routes, inputs, created),
         test_html(test),
+        _tried_html(routes[0], mass_unit),
         _routes_html(routes, length, mass_unit),
         *(_supports_html(r, length, mass_unit, force_unit) for r in routes[:1]),
         "<h2>FRFs and the fits</h2>",

@@ -186,6 +186,36 @@ def _identify_route(
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
 
 
+def identify_frf_route(
+    lay: LayoutFile,
+    refs: ReferencesFile,
+    data: FrfData,
+    *,
+    method: str,
+    mass: float | None = None,
+    band: tuple[float, float] | None = None,
+    modes: PathLike | None = None,
+    modes_used: tuple[int, ...] | None = None,
+) -> MassLineResult:
+    """One FRF route by name on a test loaded once (:func:`load_frf_test`), as :func:`identify_massline` runs it.
+
+    Parameters
+    ----------
+    lay, refs, data
+        The test (:func:`load_frf_test`).
+    method : {"massline", "residues"}
+    mass, band, modes, modes_used
+        As :func:`identify_massline`.
+
+    Returns
+    -------
+    MassLineResult
+    """
+    if method not in ("massline", "residues"):
+        raise InputError(f"an FRF route is massline or residues, not {method!r}", source="--method")
+    return _identify_route(lay, refs, data, mass=mass, band=band, modes=modes, modes_used=modes_used, method=method)
+
+
 def _mass_line(
     freqs: Arr, h: NDArray[np.complex128], pos: Arr, dirs: Arr, rpos: Arr, rdirs: Arr, band: tuple[float, float] | None
 ) -> MassLine:
@@ -517,28 +547,16 @@ def load_frf_test(
         sources.append((str(references), load_references_for(references, lay)))
     if lay.references:
         sources.append(("the layout's references", ReferencesFile(references=lay.references)))
-    is_uff = str(frf).lower().endswith((".uff", ".unv"))
-    if is_uff:
-        from rigidid.io.frf import references_from_headers
+    from rigidid.io.frf import load_frf_csv, read_frf_uff, reference_arrays
 
-        headers = references_from_headers(frf, lay, units={"length": lay.units.length, "mass": lay.units.mass})
-        if headers is not None:
-            sources.append((f"{Path(frf).name}'s FRF headers", headers))
+    lay_units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
+    uff = read_frf_uff(frf, lay, units=lay_units) if str(frf).lower().endswith((".uff", ".unv")) else None
+    if uff is not None and uff.references is not None:  # the file is read once: headers and FRFs
+        sources.append((f"{Path(frf).name}'s FRF headers", uff.references))
     refs = _agreed_references(sources, lay)
-    return lay, refs, _read_frf(lay, refs, frf, is_uff)
-
-
-def _read_frf(lay: LayoutFile, refs: ReferencesFile, frf: PathLike, is_uff: bool) -> FrfData:
-    """The FRF file (CSV or UFF) against the layout's sensors and the references."""
-    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
-
-    ids = tuple(s.id for s in lay.sensors)
-    rids = reference_arrays(refs)[0]
-    if is_uff:
-        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
-    else:
-        freqs, h = load_frf_csv(frf, ids, rids)
-    return FrfData(freqs, h, ids, rids)
+    ids, rids = tuple(s.id for s in lay.sensors), reference_arrays(refs)[0]
+    freqs, h = load_frf_csv(frf, ids, rids) if uff is None else uff.frf(ids, rids, units=lay_units)
+    return lay, refs, FrfData(freqs, h, ids, rids)
 
 
 def _reordered(data: FrfData, refs: ReferencesFile) -> FrfData:

@@ -149,10 +149,10 @@ FRF_ROUTES: tuple[str, ...] = ("massline", "residues")
 
 def frf_report(
     layout: LayoutFile | PathLike,
-    frf: PathLike,
-    references: ReferencesFile | PathLike,
+    frf: PathLike | None = None,
+    references: ReferencesFile | PathLike | None = None,
     *,
-    method: str = "massline",
+    method: str = "auto",
     compare: Sequence[str] = FRF_ROUTES,
     mass: float | None = None,
     band: tuple[float, float] | None = None,
@@ -162,17 +162,26 @@ def frf_report(
     inputs: Sequence[str] = (),
     force_unit: str | None = None,
     progress: ProgressCallback | None = None,
+    png: PathLike | None = None,
+    units: dict[str, str] | None = None,
+    geometry: PathLike | None = None,
 ) -> str:
-    """A self-contained HTML report of the FRF routes (``rigidid report LAYOUT --frf FRF --references REFS``).
+    """A self-contained HTML report of the FRF routes (``rigidid report LAYOUT --frf FRF``).
 
     Parameters
     ----------
     layout, frf, references
-        As :func:`rigidid.api.frf.identify_massline`.
-    method : {"massline", "residues"}
-        The route chosen: tabled first, its stiffness and damping (scaled modes) shown.
+        As :func:`rigidid.api.frf.identify_massline`: the references from
+        ``references.json``, the layout's ``references`` list or a UFF file's
+        FRF headers, which must agree (:func:`rigidid.api.frf.load_frf_test`);
+        `layout` may be a UFF file of geometry and FRFs (then `frf` is None).
+    method : {"auto", "massline", "residues"}
+        The route tabled first, its stiffness and damping (scaled modes) shown.
+        ``"auto"``: the one :func:`rigidid.api.frf.identify_frf_auto` chooses,
+        with every route it tried listed (the residues route when `modes` is given).
     compare : sequence of str
-        Routes to compute from the same FRFs and table beside it (the chosen one is always computed).
+        Routes to compute from the same FRFs and table beside it (the chosen
+        one is always computed; one the data do not allow is listed with why).
     mass, band, modes, modes_used
         As :func:`rigidid.api.frf.identify_massline` (`modes` and `modes_used` serve the residues route).
     title : str, optional
@@ -183,38 +192,96 @@ def frf_report(
         Force unit of stiffness and damping.
     progress : callable, optional
         ``progress(task, done, total)`` while the figures are drawn.
+    png : path-like, optional
+        A folder to write the same figures into as PNG files
+        (``<name>.png`` for each name of :data:`rigidid.frf_report.FRF_FIGURE_NAMES` drawn).
+    units, geometry
+        As for :func:`rigidid.api.load.load_uff` (UFF `layout` only).
 
     Returns
     -------
     str
         One HTML document (:func:`rigidid.frf_report.render_frf_report`); it needs no network to open.
     """
-    from rigidid.api.frf import identify_massline
-    from rigidid.api.load import load_references_for
+    from rigidid.api.frf import load_frf_test
     from rigidid.errors import InputError
-    from rigidid.frf_report import MeasuredFrfs, render_frf_report
+    from rigidid.frf_report import MeasuredFrfs, frf_figures, render_frf_report
     from rigidid.io import files
-    from rigidid.io.frf import load_frf_csv, load_frf_uff, reference_arrays
+    from rigidid.io.frf import reference_arrays
+    from rigidid.reporting import png_bytes
     from rigidid.results import TestInfo
 
-    unknown = [m for m in (method, *compare) if m not in FRF_ROUTES]
+    unknown = [m for m in (method, *compare) if m not in (*FRF_ROUTES, "auto") or (m == "auto" and m in compare)]
     if unknown:
-        raise InputError(f"FRF routes are {', '.join(FRF_ROUTES)}, not {unknown[0]!r}", source="--method")
-    lay = layout if isinstance(layout, LayoutFile) else files.load_layout(layout)
-    refs = load_references_for(references, lay)
+        raise InputError(f"FRF routes are auto, {', '.join(FRF_ROUTES)}, not {unknown[0]!r}", source="--method")
+    if mass is not None and not mass > 0.0:
+        raise InputError(f"mass must be positive, got {mass}", source="--mass")
+    lay, refs, test = load_frf_test(layout, frf, references, units=units, geometry=geometry)
+    routes = _frf_routes(lay, refs, test, method, compare, mass=mass, band=band, modes=modes, modes_used=modes_used)
     ids, pos, dirs = files.layout_arrays(lay)
-    rids, rpos, rdirs = reference_arrays(refs)
-    if str(frf).lower().endswith((".uff", ".unv")):
-        freqs, h = load_frf_uff(frf, ids, rids, units={"length": lay.units.length, "mass": lay.units.mass})
-    else:
-        freqs, h = load_frf_csv(frf, ids, rids)
-    routes = [
-        identify_massline(lay, frf, refs, mass=mass, band=band, modes=modes if m == "residues" else None,
-                          modes_used=modes_used, method=m)
-        for m in (method, *(m for m in dict.fromkeys(compare) if m != method))
-    ]  # fmt: skip
-    data = MeasuredFrfs(freqs, h, pos, dirs, rpos, rdirs, ids, rids)
+    _, rpos, rdirs = reference_arrays(refs)
+    data = MeasuredFrfs(test.frequencies, test.frf, pos, dirs, rpos, rdirs, ids, test.reference_ids)
+    pngs = {name: png_bytes(fig) for name, fig in frf_figures(data, routes, lay.units.mass, progress).items()}
+    if png is not None:
+        from rigidid.io.atomic import write_bytes_atomic
+
+        folder = Path(png)
+        folder.mkdir(parents=True, exist_ok=True)
+        for name, content in pngs.items():
+            write_bytes_atomic(folder / f"{name}.png", content)
     return render_frf_report(
         data, routes, title=title or lay.name or "rigidid report", inputs=inputs, force_unit=force_unit,
-        test=TestInfo.from_layout(lay), progress=progress,
+        test=TestInfo.from_layout(lay), figures=pngs,
     )  # fmt: skip
+
+
+def _frf_routes(
+    lay: LayoutFile,
+    refs: ReferencesFile,
+    test: Any,
+    method: str,
+    compare: Sequence[str],
+    **given: Any,
+) -> list[Any]:
+    """The chosen route first, then the others of `compare` the data allow; the chosen one's ``routes`` lists all.
+
+    A compared route the data do not allow (its one-line refusal) is listed in
+    the chosen one's ``routes``; its own warnings are not passed on (the
+    chosen route's are, as with ``identify --method auto``).
+    """
+    import dataclasses
+    import warnings
+
+    from rigidid.api.frf import identify_frf_auto, identify_frf_route
+    from rigidid.errors import IdentificationError
+    from rigidid.results import RouteAnswer
+
+    def run(name: str) -> Any:
+        modes = given["modes"] if name == "residues" else None
+        return identify_frf_route(lay, refs, test, method=name, **{**given, "modes": modes})
+
+    if method == "auto" and given["modes"] is None:
+        chosen = identify_frf_auto(lay, refs, test, mass=given["mass"], band=given["band"])
+    else:
+        chosen = run("residues" if method == "auto" else method)
+    answers = list(chosen.routes) or [RouteAnswer(chosen.route, True, "asked for", chosen.massline)]
+    out = [chosen]
+    for name in dict.fromkeys(compare):
+        if name == chosen.route:
+            continue
+        known = next((a for a in answers if a.route == name), None)
+        if known is not None and not known.applies:
+            continue
+        try:
+            with warnings.catch_warnings(record=True):  # only the chosen route's warnings are passed on
+                warnings.simplefilter("always")
+                other = run(name)
+        except IdentificationError as exc:
+            if known is None:
+                answers.append(RouteAnswer(name, False, str(exc)))
+            continue
+        if known is None:
+            answers.append(RouteAnswer(name, True, "compared", other.massline))
+        out.append(other)
+    out[0] = dataclasses.replace(chosen, routes=tuple(answers))
+    return out

@@ -187,6 +187,11 @@ def _uff_of_frfs(
 
     if records or inputs or layout.suffix.lower() not in UFF_SUFFIXES:
         return False
+    from rigidid.io.uff import uff_function_types
+
+    types = uff_function_types(layout) if layout.is_file() else None  # the headers: the file is read once, later
+    if types is not None:
+        return 4 in types
     return load_uff(layout, units=parse_units(units, layout), geometry=geometry).frf is not None
 
 

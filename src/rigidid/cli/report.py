@@ -98,27 +98,28 @@ def report(
 ) -> None:
     """Identify, then write one self-contained HTML report with tables and pictures.
 
-    With --frf (and --references) the report is of the FRF routes: the mass line and the scaled modes side by
-    side (--method chooses the one tabled first), the FRFs with the fits and bands, the stabilisation diagram.
+    With --frf (or a UFF file of FRFs as LAYOUT) the report is of the FRF routes: every route tried, the mass line
+    and the scaled modes side by side (--method chooses the one tabled first, auto as identify does), the FRFs with
+    the fits and bands, the mass line, the stabilisation diagram. References come from --references, the layout's
+    list or the UFF headers, as for identify.
     """
     with reported():
         from rigidid.io.files import load_body
         from rigidid.units import check_same_units
 
         force_unit = check_force_unit(force_unit)
-        if frf is not None or method in ("massline", "residues"):
+        if frf is not None or method in ("massline", "residues", "auto") or _uff_of_frfs(layout, inputs, records):
             _refuse_for_frf(
-                records=records, uncertainty=uncertainty > 0, png=png is not None, body=body is not None,
-                mounts=mounts is not None, torque_axis=torque_axis is not None, geometry=geometry is not None,
-                units=units is not None, resample=resample > 0, modal_method=modal_method is not None,
-                decimate=decimate is not None, max_order=max_order is not None,
+                records=records, uncertainty=uncertainty > 0, body=body is not None,
+                mounts=mounts is not None, torque_axis=torque_axis is not None, resample=resample > 0,
+                modal_method=modal_method is not None, decimate=decimate is not None, max_order=max_order is not None,
                 frequency_noise=frequency_noise is not None, damping_noise=damping_noise is not None,
                 shape_noise=shape_noise is not None, position_noise=position_noise is not None,
                 angle_noise=angle_noise is not None,
             )  # fmt: skip
             _write_frf_report(
-                layout, frf, references, inputs, output=output, method=method or "auto", mass=mass, band=band,
-                modes_used=modes_used, title=title, force_unit=force_unit,
+                layout, frf, references, inputs, output=output, png=png, method=method or "auto", mass=mass,
+                band=band, modes_used=modes_used, title=title, force_unit=force_unit, units=units, geometry=geometry,
             )  # fmt: skip
             return
         check_outputs({"--output": output}, {"--png": png})
@@ -179,6 +180,16 @@ def _write_report(
         sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
 
 
+def _uff_of_frfs(layout: Path, inputs: list[Path] | None, records: bool) -> bool:
+    """Whether LAYOUT is a UFF file of FRFs given alone (``rigidid report test.uff``), from its headers only."""
+    from rigidid.api.load import UFF_SUFFIXES
+    from rigidid.io.uff import uff_function_types
+
+    if records or inputs or layout.suffix.lower() not in UFF_SUFFIXES or not layout.is_file():
+        return False
+    return 4 in (uff_function_types(layout) or ())
+
+
 def _write_frf_report(
     layout: Path,
     frf: Path | None,
@@ -186,42 +197,49 @@ def _write_frf_report(
     inputs: list[Path] | None,
     *,
     output: Path,
+    png: Path | None,
     method: str,
     mass: float | None,
     band: tuple[float, float] | None,
     modes_used: str | None,
     title: str | None,
     force_unit: str | None,
+    units: str | None,
+    geometry: Path | None,
 ) -> None:
-    """``report --frf``: the FRF routes side by side (rigidid.api.reports.frf_report)."""
+    """``report --frf``: the FRF routes side by side (rigidid.api.reports.frf_report), with --png the figures."""
     from rigidid import api
-    from rigidid.cli.common import parse_modes
+    from rigidid.cli.common import parse_modes, parse_units
     from rigidid.errors import InputError
-    from rigidid.io.atomic import write_text_atomic
+    from rigidid.frf_report import FRF_FIGURE_NAMES
+    from rigidid.io.atomic import OutputSet, write_text_atomic
     from rigidid.progress import terminal_progress
 
     check_options(mass=mass, band=band)
-    check_outputs({"--output": output})
-    if frf is None:
-        raise InputError(f"--method {method} needs --frf FRF", source="--frf")
-    if references is None:
-        raise InputError("--frf needs --references REFS.json", source="--references")
+    check_outputs({"--output": output}, {"--png": png})
+    if method not in ("massline", "residues", "structured", "auto"):
+        raise InputError(
+            f"FRFs are reported with --method auto, massline or residues, not {method!r}", source="--method"
+        )
     if len(inputs or []) > 1:
         raise InputError("a report of FRFs takes one modes.csv (its rigid-body poles)", source="MODES")
-    chosen = method if method in ("massline", "residues") else "residues"
-    if method not in ("massline", "residues", "structured", "auto"):
-        raise InputError(f"FRFs are reported with --method massline or residues, not {method!r}", source="--method")
     modes = inputs[0] if inputs else None
     labels = parse_modes(modes_used) if modes_used is not None else None
-    named = [str(p) for p in (layout, frf, references, *(inputs or []))]
-    with terminal_progress() as progress:
-        text = api.frf_report(
-            layout, frf, references, method=chosen, mass=mass, band=band, modes=modes,
-            modes_used=None if labels is None else tuple(labels), title=title, inputs=named,
-            force_unit=force_unit, progress=progress,
-        )  # fmt: skip
-    write_text_atomic(output, text)
+    named = [str(p) for p in (layout, frf, references, *(inputs or [])) if p is not None]
+    with OutputSet() as outs:  # the page and the figures, or nothing
+        folder = None if png is None else outs.folder(png, option="--png")
+        with terminal_progress() as progress:
+            text = api.frf_report(
+                layout, frf, references, method="auto" if method == "structured" else method, mass=mass,
+                band=band, modes=modes, modes_used=None if labels is None else tuple(labels), title=title,
+                inputs=named, force_unit=force_unit, progress=progress, png=folder,
+                units=parse_units(units, layout), geometry=geometry,
+            )  # fmt: skip
+        write_text_atomic(output, text)
     sys.stderr.write(f"rigidid: wrote {output}\n")
+    if png is not None:
+        drawn = sum((png / f"{name}.png").is_file() for name in FRF_FIGURE_NAMES)
+        sys.stderr.write(f"rigidid: wrote {drawn} figures to {png}\n")
 
 
 def _refuse_for_frf(**given: bool) -> None:

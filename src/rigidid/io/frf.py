@@ -18,6 +18,7 @@ import io
 import math
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,7 @@ from rigidid.units import check_same_units
 __all__ = [
     "FRF_COLUMNS",
     "FRF_FORMATS",
+    "UffFrfFile",
     "frf_csv_text",
     "frf_format_from",
     "frf_from_datasets",
@@ -40,6 +42,7 @@ __all__ = [
     "load_frf_csv",
     "load_frf_uff",
     "load_references",
+    "read_frf_uff",
     "reference_arrays",
     "references_from_headers",
 ]
@@ -422,6 +425,66 @@ def frf_from_datasets(
     return freqs, frf
 
 
+@dataclass(frozen=True)
+class UffFrfFile:
+    """A UFF file of FRFs, read once: its datasets and the reference points its FRF headers name.
+
+    Attributes
+    ----------
+    source : str
+        The file, for messages.
+    datasets : tuple of dict
+        Every dataset as :func:`rigidid.io.uff.read_all` returns them (the
+        FRFs, datasets 58, and the units, 164, among them).
+    references : ReferencesFile or None
+        As :func:`references_from_headers` returns them.
+    """
+
+    source: str
+    datasets: tuple[dict[str, Any], ...]
+    references: ReferencesFile | None
+
+    def frf(
+        self, sensor_ids: Sequence[str], reference_ids: Sequence[str], *, units: dict[str, str] | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
+        """The FRFs (p, q, f) as accelerance against these ids (:func:`frf_from_datasets`; the file is not read)."""
+        return frf_from_datasets(self.datasets, sensor_ids, reference_ids, self.source, units=units)
+
+
+def read_frf_uff(
+    path: str | os.PathLike[str], layout: LayoutFile, *, units: dict[str, str] | None = None
+) -> UffFrfFile:
+    """Read a UFF file of FRFs once: the references its headers name, and the datasets its FRFs come from.
+
+    Parameters
+    ----------
+    path : path-like
+        A UFF file of FRFs (datasets 58, function type 4), ASCII or binary 58b.
+    layout : LayoutFile
+        The sensors (see :func:`references_from_headers`).
+    units : dict, optional
+        The layout's units, for a file without dataset 164.
+
+    Returns
+    -------
+    UffFrfFile
+        ``references`` from the headers (or None), and the datasets, from
+        which :meth:`UffFrfFile.frf` builds the FRF array for the references
+        chosen (:func:`rigidid.api.frf.load_frf_test` checks the headers'
+        references against the layout's and ``references.json``).
+
+    Raises
+    ------
+    InputError
+        What :func:`rigidid.io.uff.read_all` raises, and for a file with
+        geometry what :func:`rigidid.io.uff.read_uff` raises.
+    """
+    from rigidid.io.uff import read_all
+
+    sets = tuple(read_all(Path(path)))
+    return UffFrfFile(str(path), sets, _header_references(path, sets, layout, units))
+
+
 def references_from_headers(
     path: str | os.PathLike[str], layout: LayoutFile, *, units: dict[str, str] | None = None
 ) -> ReferencesFile | None:
@@ -446,14 +509,20 @@ def references_from_headers(
         positions and directions are read as for sensors
         (:func:`rigidid.io.uff.read_uff`). None when the headers name no
         reference node, or one whose position neither the file nor the layout
-        gives.
+        gives. To read the FRFs too, :func:`read_frf_uff` reads the file once.
     """
-    from rigidid.io.uff import read_all, read_uff
+    return read_frf_uff(path, layout, units=units).references
+
+
+def _header_references(
+    path: str | os.PathLike[str], sets: Sequence[dict[str, Any]], layout: LayoutFile, units: dict[str, str] | None
+) -> ReferencesFile | None:
+    """:func:`references_from_headers` from the file's datasets, read already."""
+    from rigidid.io.uff import read_uff
     from rigidid.io.uff_codes import ID_PATTERN
 
-    sets = read_all(Path(path))
     if any(d.get("type") in (15, 2411) for d in sets):
-        refs = read_uff(path, units=units).references
+        refs = read_uff(path, units=units, datasets=sets).references
         return ReferencesFile.model_validate({"references": refs}) if refs else None
     points: list[tuple[int, int]] = []
     for d in sets:

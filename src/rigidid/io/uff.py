@@ -116,6 +116,7 @@ __all__ = [
     "UffContents",
     "UffRecord",
     "read_uff",
+    "uff_function_types",
     "write_uff",
     "write_uff_test",
 ]
@@ -514,6 +515,35 @@ def read_all(path: Path) -> list[dict[str, Any]]:
     return _read_sets(uff, types, src)
 
 
+def uff_function_types(path: str | os.PathLike[str]) -> list[int] | None:
+    """The function types of a universal file's datasets 58 (1 time response, 4 FRF...), from their headers only.
+
+    The values are not read: this is how a command tells a file of FRFs from one of records or modes
+    before reading it once. None when the file does not follow the UFF layout
+    (:func:`rigidid.io.uff_scan.scan`) or a header cannot be read: then read it (:func:`read_uff`).
+    """
+    from rigidid.io.uff_scan import scan
+
+    try:
+        blocks = scan(path)
+        if blocks is None:
+            return None
+        types = []
+        with open(path, "rb") as fh:
+            for block in blocks:
+                if block.kind != 58:
+                    continue
+                if block.binary58:  # the ID line, ID lines 1-5, then record 6
+                    record6 = block.header[6]
+                else:  # delimiter, ID line, ID lines 1-5, record 6
+                    fh.seek(block.start)
+                    record6 = [fh.readline() for _ in range(8)][7]
+                types.append(int(record6[:5]))
+        return types
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 _WANTED = {15, 18, 55, 58, 151, 164, 2411, 2420}
 
 
@@ -624,10 +654,15 @@ def _function_type_refusal(reader: _Reader, dset: dict[str, Any], where: str) ->
     )
 
 
-def _read_into(reader: _Reader, path: Path, label: str, kinds: tuple[int, ...] | None) -> None:
-    """Read the datasets of `path` into `reader` (only `kinds` when given); `label` prefixes locations."""
+def _read_into(
+    reader: _Reader, path: Path, label: str, kinds: tuple[int, ...] | None, sets: Sequence[dict[str, Any]] | None = None
+) -> None:
+    """Read the datasets of `path` into `reader` (only `kinds` when given); `label` prefixes locations.
+
+    `sets`: the datasets of `path` read already (:func:`read_all`); the file is then not read again.
+    """
     counts: dict[int, int] = {}
-    for dset in read_all(path):
+    for dset in read_all(path) if sets is None else sets:
         kind = int(dset["type"])
         counts[kind] = counts.get(kind, 0) + 1
         where = f"{label}dataset {kind} #{counts[kind]}"
@@ -654,6 +689,7 @@ def read_uff(
     *,
     units: dict[str, str] | None = None,
     geometry: str | os.PathLike[str] | None = None,
+    datasets: Sequence[dict[str, Any]] | None = None,
 ) -> UffContents:
     """Read a test from a universal file: sensors, units, time records and modes.
 
@@ -669,6 +705,9 @@ def read_uff(
         (18/2420), units (164) and name (151) complete `path` (how several
         exporters write a test: geometry in one file, modes or records in
         another). Its 55 and 58 datasets are not read.
+    datasets : sequence of dict, optional
+        The datasets of `path` as :func:`read_all` returned them, when the
+        caller has read the file already: it is not read again.
 
     Returns
     -------
@@ -708,7 +747,7 @@ def read_uff(
     if geometry is not None:
         g = Path(geometry)
         _read_into(reader, g, f"{g.name}: ", _GEOMETRY_TYPES)
-    _read_into(reader, p, "", None)
+    _read_into(reader, p, "", None, datasets)
     nodes, no_position = reader.nodes()
 
     # sensors from the 58s
