@@ -51,16 +51,22 @@ def _free_free(seed: int = 2, elastic: tuple[Any, ...] = ()) -> tuple[LayoutFile
     return lay, refs, data, body
 
 
-def test_free_free_data_above_the_suspension_get_the_plateau_band() -> None:
-    """No resonance peak: the automatic band refuses; auto finds the plateau and says residues do not apply."""
+@pytest.fixture(scope="module")
+def free_free() -> tuple[LayoutFile, ReferencesFile, FrfData, Any, MassLineResult]:
+    """:func:`_free_free` and its answer by ``--method auto`` (run once for the tests that read it)."""
     lay, refs, data, body = _free_free()
+    return lay, refs, data, body, api_frf.identify_frf_auto(lay, refs, data)
+
+
+def test_free_free_data_above_the_suspension_get_the_plateau_band(free_free: tuple[Any, ...]) -> None:
+    """No resonance peak: the automatic band refuses; auto finds the plateau and says residues do not apply."""
+    lay, refs, data, body, result = free_free
     from rigidid.io.files import layout_arrays
 
     _, pos, dirs = layout_arrays(lay)
     rpos = np.array([r.position for r in refs.references])
     with pytest.raises(IdentificationError, match="no resonance peak"):
         mass_line(data.frequencies, data.frf, pos, dirs, rpos, np.eye(3))
-    result = api_frf.identify_frf_auto(lay, refs, data)
     routes = {a.route: a for a in result.routes}
     assert not routes["residues"].applies and "no rigid-body peak" in routes["residues"].reason
     assert routes["massline"].applies and result.route == "massline"
@@ -72,10 +78,9 @@ def test_free_free_data_above_the_suspension_get_the_plateau_band() -> None:
 
 
 def test_two_routes_apart_beyond_their_intervals_are_warned_about_naming_the_one_to_blame(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, free_free: tuple[Any, ...]
 ) -> None:
-    lay, refs, data, _ = _free_free()
-    real = api_frf.identify_frf_auto(lay, refs, data)
+    lay, refs, data, _, real = free_free
     ml = real.massline
     assert ml.intervals is not None
     std = float(ml.intervals.mass.std)
