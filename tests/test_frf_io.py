@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +13,7 @@ from rigidid.api import frf as api_frf
 from rigidid.errors import InputError
 from rigidid.io.frf import frf_csv_text, load_frf_csv, load_frf_uff, load_references, reference_arrays
 
+from . import cli_runner
 from .conftest import DATA, SAMPLES
 
 FOUR = SAMPLES / "four-mounts"
@@ -21,8 +21,8 @@ REFS = DATA / "frf" / "references.json"
 
 
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    cmd = [sys.executable, "-m", "rigidid", *map(str, args)]
-    return subprocess.run(cmd, capture_output=True, text=True, check=False)
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
+    return cli_runner.run(*args)
 
 
 def test_frf_csv_round_trip_is_exact(tmp_path: Path) -> None:
