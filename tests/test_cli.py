@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +11,7 @@ import pytest
 
 from rigidid.models import ResultFile
 
+from . import cli_runner
 from .conftest import DATA, PAPER, SAMPLES
 from .tolerances import CSV_DIGITS_REL, MOUNT_RATES_CSV_REL
 
@@ -19,9 +19,8 @@ ENGINE = SAMPLES / "engine-on-mounts"
 
 
 def run(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True, cwd=cwd, check=False
-    )
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
+    return cli_runner.run(*args, cwd=cwd)
 
 
 def test_identify_prints_tables() -> None:

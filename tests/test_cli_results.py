@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,18 +13,15 @@ import pytest
 from rigidid import __version__, api
 from rigidid.io.files import modes_csv_text
 
+from . import cli_runner
 from .conftest import PAPER, SAMPLES
 
 ENGINE = SAMPLES / "engine-on-mounts"
 
 
 def run(*args: str | Path, columns: int | None = None) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ)
-    if columns is not None:
-        env["COLUMNS"] = str(columns)
-    return subprocess.run(
-        [sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True, check=False, env=env
-    )
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`), `columns` wide."""
+    return cli_runner.run(*args, env=None if columns is None else {"COLUMNS": str(columns)})
 
 
 def test_paper_vertical_stiffness_in_lbf_per_inch_fits_80_columns(tmp_path: Path) -> None:

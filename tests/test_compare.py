@@ -5,7 +5,6 @@ from __future__ import annotations
 import copy
 import json
 import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -20,6 +19,7 @@ from rigidid.compare_render import comparison_junit
 from rigidid.errors import InputError
 from rigidid.jsonout import result_to_dict
 
+from . import cli_runner
 from .conftest import SAMPLES
 
 ENGINE = SAMPLES / "engine-on-mounts"
@@ -27,9 +27,8 @@ FOUR = SAMPLES / "four-mounts"
 
 
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True, check=False
-    )
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
+    return cli_runner.run(*args)
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from collections import defaultdict
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,6 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from . import cli_runner
 from .conftest import SAMPLES
 from .tolerances import CSV_DIGITS_REL, GOLDEN_REL, STANDARD_ERROR_REL
 
@@ -29,12 +28,7 @@ CASES = sorted(p.parent for p in SAMPLES.glob("*/expected.json") if (p.parent / 
 
 
 def identify_json(case: Path) -> dict[str, Any]:
-    out = subprocess.run(
-        [sys.executable, "-m", "rigidid", "identify", case / "layout.json", case / "modes.csv", "--json", "-"],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    out = cli_runner.run("identify", case / "layout.json", case / "modes.csv", "--json", "-")
     assert out.returncode == 0, out.stderr
     result: dict[str, Any] = json.loads(out.stdout)
     return result

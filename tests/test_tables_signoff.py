@@ -3,13 +3,13 @@ beside the test, and options that do not apply refused rather than ignored."""
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from . import cli_runner
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLE = ROOT / "samples" / "engine-test"
@@ -17,10 +17,8 @@ UNIT_OPENED = re.compile(r"\((kg|g|t|lb|slug|N|kN|lbf|mm|cm|m|in|ft)\b[^)]*$")
 
 
 def run(*args: object, columns: int = 80, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "COLUMNS": str(columns), "NO_COLOR": "1"}
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT / "src"), env.get("PYTHONPATH", "")) if p)
-    return subprocess.run([sys.executable, "-m", "rigidid", *map(str, args)], capture_output=True, text=True,
-                          env=env, cwd=cwd, check=False)  # fmt: skip
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`), `columns` wide, without colour."""
+    return cli_runner.run(*map(str, args), cwd=cwd, env={"COLUMNS": str(columns), "NO_COLOR": "1"})
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,7 @@ from rigidid.core.simulate import body_modes, system_matrices
 from rigidid.errors import InputError
 from rigidid.io.files import load_modes
 
+from .. import cli_runner
 from ..bodies import corner_references, frf_test_on_mounts, random_body, random_layout
 from ..conftest import DATA, SAMPLES
 from ..tolerances import FRF_EQ18_STRUCTURED, SCALED_MODES_CSV
@@ -122,8 +122,8 @@ def test_lsfd_with_residual_terms_and_bad_poles() -> None:
 
 
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    cmd = [sys.executable, "-m", "rigidid", *map(str, args)]
-    return subprocess.run(cmd, capture_output=True, text=True, check=False)
+    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
+    return cli_runner.run(*args)
 
 
 def test_modes_from_frfs_on_the_command_line_feed_identify(tmp_path: Path) -> None:
