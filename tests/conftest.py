@@ -40,3 +40,12 @@ def paper_arrays() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     modes = api.load_modes(PAPER / "modes.csv", layout)
     _, positions, directions = layout_arrays(layout)
     return positions, directions, poles_from_modal(modes.frequency_hz, modes.damping_ratio), modes.shapes
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The tests marked ``slow`` first, each group in its collected order.
+
+    Run in parallel (pytest-xdist), a long test handed out last keeps one worker busy
+    after the others have finished; handed out first, the short ones fill in around it.
+    """
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
