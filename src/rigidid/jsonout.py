@@ -222,6 +222,7 @@ def force_mass_to_dict(measured: ForceMass, mass_given: float | None) -> dict[st
             "relative_residual": float(measured.relative_residual),
             "misfit_noise_units": float(measured.misfit),
             "coherence": float(measured.coherence),
+            "estimator": measured.estimator,
         },
     }
 
