@@ -221,17 +221,25 @@ class _MassFit:
 
     def __call__(self, model: NDArray[np.complex128]) -> ForceMass:
         """The mass for `model` (:func:`per_mass_accelerance` at every line of the FRFs); after the first
-        call, one search from the first answer with its noise levels (for the perturbed models)."""
+        call, one search from the first answer with its noise levels (for the perturbed models). When the
+        errors-in-variables search fails, the H1 fit is the answer (a perturbed model's: no change)."""
         from rigidid.core.timedomain.force import fit_mass, fit_mass_eiv
 
+        failures = (RuntimeError, np.linalg.LinAlgError, FloatingPointError)
         try:
             if self.first is not None:
-                return fit_mass_eiv(self.spectra, model[self.lines], self.first,
-                                    sigma2=self.first.response_noise)  # fmt: skip
+                try:
+                    return fit_mass_eiv(self.spectra, model[self.lines], self.first,
+                                        sigma2=self.first.response_noise)  # fmt: skip
+                except failures:
+                    return self.first
             start = fit_mass(self.frf, model, self.band, sensitivity=self.bounds[0], force_sensitivity=self.bounds[1])
             if not (self.widen and np.isfinite(start.mass) and start.mass > 0 and self.spectra.frequency_hz.size >= 4):
                 return start
-            self.first = fit_mass_eiv(self.spectra, model[self.lines], start, coherence=start.coherence)
+            try:
+                self.first = fit_mass_eiv(self.spectra, model[self.lines], start, coherence=start.coherence)
+            except failures:
+                return start
             return self.first
         except ValueError as exc:
             raise InputError(str(exc), source="force") from None
