@@ -113,6 +113,14 @@ def test_plan_with_body_predicts_and_suggests(tmp_path: Path) -> None:
     assert len(data["prediction"]["center_of_gravity_std"]) == 3
     step = data["suggestions"]["steps"][0]
     assert step["figures"]["score"] <= data["suggestions"]["baseline"]["score"]
+    # the budget: the noise's part (the prediction's draws) beside each sensor tolerance's, in quadrature
+    budget = data["sensor_budget"]
+    assert list(budget) == ["noise", "sensitivity", "orientation", "transverse", "position", "combined"]
+    assert budget["noise"]["center_of_gravity"] == data["prediction"]["center_of_gravity_std"]
+    for key in ("center_of_gravity", "inertia_tensor", "stiffness_diagonal"):
+        parts = [np.asarray(budget[s][key]) for s in budget if s != "combined"]
+        np.testing.assert_allclose(budget["combined"][key], np.sqrt(sum(p**2 for p in parts)), rtol=1e-12)
+    assert data["tolerances"]["orientation_deg"] > 0
 
 
 def test_report_is_one_offline_html_file(tmp_path: Path) -> None:

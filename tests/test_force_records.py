@@ -69,6 +69,7 @@ def test_the_force_measures_the_mass(ran: tuple[Path, str]) -> None:
     assert data["mass"] == pytest.approx(MASS, rel=1e-3)
     assert data["mass_measured"] == data["mass"]
     assert data["mass_given"] == 140.0
+    assert data["force_mass"]["estimator"] == "errors-in-variables"  # the automatic band: up to the tip's limit
     budget = data["force_mass"]["budget"]
     assert budget["body"] > 0  # the per-mass body's standard errors reach the mass's
     assert data["force_mass"]["std"] == pytest.approx(np.sqrt(sum(v**2 for v in budget.values())))

@@ -222,6 +222,7 @@ def force_mass_to_dict(measured: ForceMass, mass_given: float | None) -> dict[st
             "relative_residual": float(measured.relative_residual),
             "misfit_noise_units": float(measured.misfit),
             "coherence": float(measured.coherence),
+            "estimator": measured.estimator,
         },
     }
 
@@ -581,7 +582,8 @@ def sensor_plan_to_dict(plan: SensorPlan, *, ranking: int = 5) -> dict[str, Any]
 
 
 def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
-    """JSON form of ``rigidid plan``: units, layout findings, prediction and suggestions (null when absent)."""
+    """JSON form of ``rigidid plan``: units, layout findings, prediction, the predicted budget per source
+    (``sensor_budget``, ``tolerances``) and suggestions (null when absent)."""
     return {
         "rigidid_version": __version__,
         "units": {**plan.units, "time": "s"},
@@ -589,6 +591,13 @@ def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
         "prediction": None if plan.prediction is None else prediction_to_dict(plan.prediction),
         "suggestions": None if plan.suggestions is None else sensor_plan_to_dict(plan.suggestions),
         "references": None if plan.references is None else reference_report_to_dict(plan.references),
+        "sensor_budget": None if plan.sensor_budget is None else {
+            source: {"center_of_gravity": _vec(parts["center_of_gravity"]),
+                     "inertia_tensor": _rows(parts["inertia_tensor"]),
+                     "stiffness_diagonal": _vec(parts["stiffness_diagonal"])}
+            for source, parts in plan.sensor_budget.items()
+        },
+        "tolerances": plan.tolerances,
         **({} if plan.mount_split is None else {"mount_split": {
             "unknowns": plan.mount_split[0], "rank": plan.mount_split[1],
             "unique": plan.mount_split[0] == plan.mount_split[1], "statement": plan.mount_split[2],

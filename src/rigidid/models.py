@@ -514,6 +514,11 @@ class ForceMassResult(_Strict):
         "fit; the responses' part of std is multiplied by max(1, misfit)"
     )
     coherence: float = Field(description="mean H1 coherence over the band and the sensors")
+    estimator: str = Field(
+        "H1",
+        description="how 1/m was fitted: errors-in-variables (the force's samples in their window and the "
+        "responses' spectra in one likelihood; the default) or H1 (the H1 FRFs by weighted least squares)",
+    )
 
 
 class ScaledModesResult(_Strict):

@@ -528,11 +528,38 @@ def plan_tables(plan: PlanResult) -> Group:
                 f"{_fmt(float(fig.principal_moments_std[k]))} ({100 * fig.principal_moments_rel_std[k]:.2g} %)",
             )
         parts.append(pred)
+    if plan.sensor_budget is not None:
+        parts.append(_budget_table(plan.sensor_budget, plan.tolerances or {}, length, mass))
     if plan.suggestions is not None:
         parts.append(_suggestions_table(plan.suggestions, length))
     if plan.references is not None:
         parts.append(_reference_table(plan.references))
     return Group(*parts)
+
+
+def _budget_table(budget: dict[str, dict[str, Any]], tolerances: dict[str, float], length: str, mass: str) -> Table:
+    """``plan`` with a body: the predicted standard deviation of each figure per source (noise, each tolerance)."""
+    from rich.table import Table
+
+    stated = ", ".join(f"{k} {v:g}" for k, v in tolerances.items())
+    table = Table(
+        title="Predicted budget (standard deviation per source)",
+        caption=f"tolerances (bounds): {stated}; combined: all sources in quadrature",
+        title_justify="left",
+        caption_justify="left",
+    )
+    table.add_column("quantity")
+    for source in budget:
+        table.add_column(source, justify="right")
+    rows: list[tuple[str, str, int]] = [(f"CG {a} ({length})", "center_of_gravity", i) for i, a in enumerate("xyz")]
+    rows += [(f"I{a}{a} ({mass}·{length}^2)", "inertia_tensor", i) for i, a in enumerate("xyz")]
+    units = [f"{mass}/s^2"] * 3 + [f"{mass}·{length}^2/s^2"] * 3
+    rows += [(f"K {name} ({unit})", "stiffness_diagonal", i)
+             for i, (name, unit) in enumerate(zip(("x", "y", "z", "rx", "ry", "rz"), units, strict=True))]  # fmt: skip
+    for label, key, i in rows:
+        values = [np.asarray(parts[key]) for parts in budget.values()]
+        table.add_row(label, *(_fmt(float(v[i, i] if v.ndim == 2 else v[i])) for v in values))
+    return table
 
 
 def _suggestions_table(suggestions: Any, length: str) -> Table:

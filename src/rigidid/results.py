@@ -236,6 +236,15 @@ class PlanResult:
     references : ReferenceReport or None
         Whether the reference (hammer) points of an FRF test excite all six
         rigid-body motions (needs ``references``).
+    sensor_budget : dict of str to dict of str to ndarray, or None
+        Predicted standard deviation per source (needs a body): ``"noise"`` (the
+        prediction's draws), then the sensors' tolerances
+        (:data:`rigidid.core.sensor_budget.SOURCES`, propagated as ``identify``
+        propagates them), then ``"combined"`` (all in quadrature); each with
+        ``"center_of_gravity"`` (3,), ``"inertia_tensor"`` (3, 3) and
+        ``"stiffness_diagonal"`` (6,), absolute units.
+    tolerances : dict of str to float or None
+        The bounds the budget used (the layout's ``tolerances``, defaults for the rest).
     """
 
     units: dict[str, str]
@@ -245,6 +254,8 @@ class PlanResult:
     references: ReferenceReport | None = None
     mount_split: tuple[int, int, str] | None = None
     mount_prediction: MountModelPrediction | None = None
+    sensor_budget: dict[str, dict[str, NDArray[np.float64]]] | None = None
+    tolerances: dict[str, float] | None = None
 
 
 @dataclass(frozen=True)

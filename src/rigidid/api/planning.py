@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
     from rigidid.core.noise import NoiseLevels
-    from rigidid.core.plan import ReferenceReport, SensorPlan
+    from rigidid.core.plan import Prediction, ReferenceReport, SensorPlan
     from rigidid.progress import ProgressCallback
 
 
@@ -138,7 +138,72 @@ def plan(
         )  # fmt: skip
         step("predicting the mount model", 1, 1)
     suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
-    return PlanResult(layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction)
+    budget = None if prediction is None else predicted_budget(core_body, lay, positions, directions, prediction)
+    return PlanResult(
+        layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction,
+        sensor_budget=None if budget is None else budget[0], tolerances=None if budget is None else budget[1],
+    )  # fmt: skip
+
+
+def predicted_budget(
+    body: Body,
+    layout: LayoutFile,
+    positions: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    prediction: Prediction,
+) -> tuple[dict[str, dict[str, NDArray[np.float64]]], dict[str, float]] | None:
+    """The predicted budget of CG, inertia and stiffness: the noise's part beside each sensor tolerance's.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate (its exact modes are what the sensors would read).
+    layout : LayoutFile
+        The planned sensors and their ``tolerances`` (defaults for the fields left out,
+        :func:`rigidid.api.records.sensor_bounds`).
+    positions, directions : ndarray, shape (p, 3)
+        The sensors, layout order.
+    prediction : Prediction
+        The noise's prediction (:func:`rigidid.core.plan.predict_uncertainty`): its standard
+        deviations are the ``noise`` part.
+
+    Returns
+    -------
+    (dict, dict) or None
+        Per source (``noise``, :data:`rigidid.core.sensor_budget.SOURCES`, ``combined``) the standard
+        deviations ``center_of_gravity`` (3,), ``inertia_tensor`` (3, 3) and ``stiffness_diagonal``
+        (6,) in absolute units, and the bounds used; None when the kernel cannot linearise the test.
+
+    Notes
+    -----
+    The type-B parts are :func:`rigidid.core.sensor_budget.sensor_budget` at the body's exact modes:
+    the propagation ``identify`` applies to the modes it identified (the records' intervals), so on a
+    test of this body the two agree to the modes' estimation error. The per-mass parts are scaled by
+    the body's mass.
+    """
+    import numpy as np
+
+    from rigidid.api.records import sensor_bounds
+    from rigidid.core.sensor_budget import sensor_budget
+    from rigidid.core.simulate import body_modes
+
+    bounds = sensor_bounds(layout)
+    modes = body_modes(body, positions, directions)
+    try:
+        type_b = sensor_budget(positions, directions, modes.poles, modes.shapes, bounds)
+    except ValueError:
+        return None
+    mass = float(body.mass)
+    noise = prediction.uncertainty
+    out = {"noise": {"center_of_gravity": np.asarray(noise.center_of_gravity.std, dtype=float),
+                     "inertia_tensor": np.asarray(noise.inertia.std, dtype=float),
+                     "stiffness_diagonal": np.asarray(noise.stiffness_diagonal.std, dtype=float)}}  # fmt: skip
+    for source, parts in type_b.std.items():
+        out[source] = {"center_of_gravity": parts["center_of_gravity"],
+                       "inertia_tensor": mass * parts["inertia_per_mass"],
+                       "stiffness_diagonal": mass * np.diag(parts["stiffness_per_mass"])}  # fmt: skip
+    out["combined"] = {key: np.sqrt(sum(part[key] ** 2 for part in out.values())) for key in out["noise"]}
+    return out, dict(vars(bounds))
 
 
 def _plan_references(

@@ -286,6 +286,10 @@ class ForceMass:
         stays there, a smooth lack of fit vanishes): about 1 when the per-mass body explains the
         FRFs to their noise. The responses' part of the standard error is multiplied by
         ``max(1, misfit)``.
+    estimator : str
+        ``"H1"`` (:func:`fit_mass`) or ``"errors-in-variables"`` (:func:`fit_mass_eiv`).
+    response_noise : ndarray, shape (p,), or None
+        The responses' noise variance per line and sensor the errors-in-variables fit weighted by.
     """
 
     mass: float
@@ -297,6 +301,8 @@ class ForceMass:
     relative_residual: float
     coherence: float
     misfit: float = 1.0
+    estimator: str = "H1"
+    response_noise: Array | None = None
 
 
 def tip_limit(frf: ForceFrf) -> float:
@@ -407,3 +413,247 @@ def fit_mass(
         misfit=misfit,
         coherence=float(np.mean(frf.coherence[keep])),
     )
+
+
+@dataclass(frozen=True)
+class ImpactSpectra:
+    """Per impact, the responses' spectra over the fitted band and the force inside its window.
+
+    What the errors-in-variables fit (:func:`fit_mass_eiv`) needs: the force is kept in the time
+    domain, where its noise is white and limited to the force window's samples.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray, shape (l,)
+        The lines of the band (Hz).
+    responses : ndarray of complex, shape (i, l, p)
+        Per impact, the windowed responses' FFT (``rfft`` over the longest record) at those lines.
+    forces : tuple of ndarray, shape (n_i,)
+        Per impact, the windowed force's samples inside its force window.
+    samples : tuple of ndarray of int, shape (n_i,)
+        Their indices in the record.
+    force_sigma : tuple of ndarray, shape (n_i,)
+        The force noise's standard deviation at those samples (the channel's noise outside the
+        window times the exponential window there).
+    dt : float
+        Sample interval (s).
+    noise_factor : float
+        :attr:`ForceFrf.noise_factor`.
+    transforms : tuple of ndarray of complex, shape (l, n_i)
+        Per impact, ``D``: the window samples' Fourier transform at the lines,
+        ``exp(-2 pi i f_l k dt)`` (the ``rfft`` convention), so the force's spectrum is ``D phi``.
+    """
+
+    frequency_hz: Array
+    responses: CArray
+    forces: tuple[Array, ...]
+    samples: tuple[NDArray[np.intp], ...]
+    force_sigma: tuple[Array, ...]
+    dt: float
+    noise_factor: float = 1.0
+    transforms: tuple[CArray, ...] = ()
+
+
+def impact_spectra(
+    responses: Sequence[Array], forces: Sequence[Array], dt: float, frf: ForceFrf, band: tuple[float, float]
+) -> ImpactSpectra:
+    """The per-impact spectra of :func:`h1_frf`'s windowed records at the lines of `band`.
+
+    Parameters
+    ----------
+    responses, forces, dt
+        As for :func:`h1_frf`.
+    frf : ForceFrf
+        :func:`h1_frf` of the same records (its force windows and exponential rate are used).
+    band : (float, float)
+        Lines kept (Hz).
+
+    Returns
+    -------
+    ImpactSpectra
+    """
+    n = max(r.shape[0] for r in responses)
+    lines = np.asarray(np.fft.rfftfreq(n, dt), dtype=float)
+    keep = (lines >= band[0]) & (lines <= band[1])
+    spectra, kept, where, sigmas = [], [], [], []
+    floor = 1e-9 * max(float(np.max(np.abs(f))) for f in forces)
+    for y, f, (first, last) in zip(responses, forces, frf.pulses, strict=True):
+        k = np.arange(y.shape[0])
+        w = np.exp(-frf.decay_rate * np.clip(k - first, 0, None) * dt)
+        spectra.append(np.fft.rfft(np.asarray(y, dtype=float) * w[:, None], n, axis=0)[keep])
+        idx = np.arange(first, last + 1)
+        force = np.asarray(f, dtype=float)
+        kept.append(force[idx] * w[idx])
+        where.append(idx)
+        sigmas.append(max(float(np.sqrt(_outside_noise(force, first, last))), floor) * w[idx])
+    transforms = tuple(np.exp(-2j * np.pi * np.outer(lines[keep], idx * dt)) for idx in where)
+    return ImpactSpectra(
+        lines[keep], np.asarray(spectra), tuple(kept), tuple(where), tuple(sigmas), float(dt), frf.noise_factor,
+        transforms,
+    )  # fmt: skip
+
+
+def _eiv_terms(spectra: ImpactSpectra, model: CArray, sigma2: Array) -> list[tuple[Array, Array, CArray]]:
+    """Per impact: ``Q = Re(D^H diag(g) D)``, ``r = Re(D^H h)`` and ``D`` (lines x window samples).
+
+    ``g_l = sum_c 2 |G_lc|^2 / (nu sigma_c^2)`` and ``h_l = sum_c 2 conj(G_lc) Y_lc / (nu sigma_c^2)``:
+    the responses' term of the chi-square is ``x^2 phi' Q phi - 2 x phi' r + const`` for a window force
+    ``phi`` (complex circular noise of variance ``sigma_c^2`` per line, ``nu`` the window's noise factor).
+    """
+    weight = 2.0 / (spectra.noise_factor * sigma2)
+    g = np.sum(np.abs(model) ** 2 * weight, axis=1)
+    out = []
+    for y, d in zip(spectra.responses, spectra.transforms, strict=True):
+        h = np.sum(np.conj(model) * y * weight, axis=1)
+        q = np.real(np.conj(d).T @ (g[:, None] * d))
+        out.append((q, np.real(np.conj(d).T @ h), d))
+    return out
+
+
+def _eiv_forces(x: float, terms: list[tuple[Array, Array, CArray]], spectra: ImpactSpectra) -> list[Array]:
+    """The window forces minimising the chi-square for a given ``x = 1 / m``."""
+    out = []
+    for (q, r, _), f, s in zip(terms, spectra.forces, spectra.force_sigma, strict=True):
+        prec = 1.0 / s**2
+        out.append(np.asarray(np.linalg.solve(x * x * q + np.diag(prec), x * r + prec * f), dtype=float))
+    return out
+
+
+def _eiv_cost(x: float, terms: list[tuple[Array, Array, CArray]], spectra: ImpactSpectra) -> float:
+    """The chi-square minimised over the window forces, less the constant ``sum w |Y|^2``."""
+    total = 0.0
+    for (q, r, _), f, s, phi in zip(terms, spectra.forces, spectra.force_sigma, _eiv_forces(x, terms, spectra),
+                                    strict=True):  # fmt: skip
+        total += x * x * float(phi @ q @ phi) - 2.0 * x * float(phi @ r) + float(np.sum(((f - phi) / s) ** 2))
+    return total
+
+
+def _eiv_residuals(x: float, spectra: ImpactSpectra, model: CArray, forces: list[Array],
+                   terms: list[tuple[Array, Array, CArray]]) -> CArray:  # fmt: skip
+    """The responses' residuals ``Y - x G D phi`` per impact, shape (i, l, p)."""
+    return np.asarray([y - x * model * (t[2] @ phi)[:, None]
+                       for y, phi, t in zip(spectra.responses, forces, terms, strict=True)])  # fmt: skip
+
+
+def _eiv_minimise(x0: float, terms: list[tuple[Array, Array, CArray]], spectra: ImpactSpectra) -> float:
+    """``x = 1 / m`` minimising :func:`_eiv_cost`, bracketed about `x0`."""
+    from scipy.optimize import minimize_scalar
+
+    found = minimize_scalar(
+        lambda v: _eiv_cost(float(v), terms, spectra), bracket=(0.98 * x0, x0), method="brent",
+        options={"xtol": 1e-10},
+    )  # fmt: skip
+    return float(found.x)
+
+
+def _eiv_information(x: float, terms: list[tuple[Array, Array, CArray]], spectra: ImpactSpectra) -> tuple[float, float]:
+    """Fisher information of ``x``, the window forces profiled out, and the force channel's share of it.
+
+    Per impact ``phi' Q phi - x^2 phi' Q (x^2 Q + S)^-1 Q phi`` (the Schur complement of the
+    Gauss-Newton information, ``S`` the force samples' precision); with noise-free responses it
+    becomes ``phi' S phi / x^2``, the force's own information.
+    """
+    total, force_only = 0.0, 0.0
+    for (q, _, _), s, phi in zip(terms, spectra.force_sigma, _eiv_forces(x, terms, spectra), strict=True):
+        prec = 1.0 / s**2
+        qp = q @ phi
+        total += float(phi @ qp) - x * x * float(qp @ np.linalg.solve(x * x * q + np.diag(prec), qp))
+        force_only += float(np.sum(prec * phi**2)) / (x * x)
+    return total, force_only
+
+
+def fit_mass_eiv(
+    spectra: ImpactSpectra,
+    model: CArray,
+    start: ForceMass,
+    *,
+    coherence: float = 1.0,
+    sigma2: Array | None = None,
+) -> ForceMass:
+    """``1 / m`` by errors in variables: the force's noise and the responses' both in the likelihood.
+
+    Parameters
+    ----------
+    spectra : ImpactSpectra
+        The responses' spectra over the band and the forces in their windows (:func:`impact_spectra`).
+    model : ndarray of complex, shape (l, p)
+        :func:`per_mass_accelerance` at ``s = i w + a`` for the lines of `spectra`.
+    start : ForceMass
+        The H1 fit (:func:`fit_mass`) on the same band: its ``1 / m`` starts the search, and its
+        type-B parts (the gains' tolerances) are kept.
+    coherence : float
+        Reported as it is (the H1 FRFs' mean coherence over the band).
+    sigma2 : ndarray, shape (p,), optional
+        The responses' noise variance per line and sensor (:attr:`ForceMass.response_noise` of a
+        previous fit): one search from `start`, no re-estimation (for perturbed models).
+
+    Returns
+    -------
+    ForceMass
+        ``noise_std`` from the profile's Fisher information, split into ``force_noise`` (the
+        force channel's, ``m / sqrt(sum_i phi_i' S_i phi_i)``) and ``noise`` (the rest).
+
+    Notes
+    -----
+    The model, per impact ``i``: the window's force samples ``f_i = phi_i + e`` (white, of the
+    channel's noise level ``s_i`` measured outside the window), the responses
+    ``Y_i(w) = x G(w) D(w) phi_i + E`` with ``D`` the window samples' Fourier transform and ``G``
+    the per-mass accelerance (eq. (19) of [1]). The chi-square
+    ``sum_i |f_i - phi_i|^2 / s_i^2 + 2 |Y_i - x G D phi_i|^2 / (nu sigma^2)`` is quadratic in
+    ``phi_i``: they are solved for in closed form, and ``x`` found by a one-dimensional search.
+    Unlike H1 (``S_fy / S_ff``, which takes the measured force as exact and sees its noise only
+    in the pulse's area), the true pulse is estimated from both channels, and the force's
+    information becomes ``sum phi^2 / s^2`` (its energy over its noise) rather than
+    ``(sum phi)^2 / (n s^2)``. The responses' noise ``sigma_c`` per sensor comes from the fit's
+    residuals (twice).
+    """
+    x = 1.0 / start.mass
+    forces = [f.copy() for f in spectra.forces]
+    given = sigma2 is not None
+    noise2 = np.ones(model.shape[1]) if sigma2 is None else np.asarray(sigma2, dtype=float)
+    terms = _eiv_terms(spectra, model, noise2)
+    for _ in range(1 if given else 3):
+        if not given:
+            resid = _eiv_residuals(x, spectra, model, forces, terms)
+            noise2 = np.maximum(np.mean(np.abs(resid) ** 2, axis=(0, 1)), 1e-300)
+            terms = _eiv_terms(spectra, model, noise2)
+        x = _eiv_minimise(x, terms, spectra)
+        forces = _eiv_forces(x, terms, spectra)
+    info, force_info = _eiv_information(x, terms, spectra)
+    resid = _eiv_residuals(x, spectra, model, forces, terms)
+    misfit = _eiv_misfit(resid, noise2)
+    mass = 1.0 / x
+    noise = mass * float(np.sqrt(1.0 / (x * x * info))) * max(1.0, misfit) if info > 0 else np.inf
+    force_part = min(noise, mass / float(np.sqrt(force_info * x * x))) if force_info > 0 else 0.0
+    budget = {
+        **start.budget,
+        "noise": float(np.sqrt(max(noise**2 - force_part**2, 0.0))),
+        "force_noise": float(force_part),
+        "sensitivity": start.budget["sensitivity"] * mass / start.mass,
+        "force_sensitivity": start.budget["force_sensitivity"] * mass / start.mass,
+    }
+    w = 1.0 / noise2
+    fitted = np.asarray([y - r for y, r in zip(spectra.responses, resid, strict=True)])
+    relative = float(np.sqrt(np.sum(np.abs(resid) ** 2 * w) / np.sum(np.abs(fitted) ** 2 * w)))
+    return ForceMass(
+        mass=mass,
+        std=float(np.sqrt(sum(v**2 for v in budget.values()))),
+        noise_std=float(noise),
+        budget=budget,
+        band_hz=(float(spectra.frequency_hz[0]), float(spectra.frequency_hz[-1])),
+        lines=int(spectra.frequency_hz.size),
+        relative_residual=relative,
+        coherence=coherence,
+        misfit=misfit,
+        estimator="errors-in-variables",
+        response_noise=noise2,
+    )
+
+
+def _eiv_misfit(resid: CArray, sigma2: Array) -> float:
+    """RMS of the residual over its noise level from third differences along frequency (see :func:`_misfit`)."""
+    z = resid / np.sqrt(sigma2)
+    if z.shape[1] < 8:
+        return 1.0
+    noise = float(np.mean(np.abs(np.diff(z, n=3, axis=1)) ** 2)) / 20.0
+    return float(np.sqrt(float(np.mean(np.abs(z) ** 2)) / noise)) if noise > 0 else 1.0
