@@ -37,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from frf_sim import Rig, add_elastic, make_rig, truth_errors
 from rigidid.core.frfmodes import fit_frf_modes, rigid_band
 from rigidid.core.frfstats import verdict
-from rigidid.core.massline import MassLine, mass_from_residues, mass_line
+from rigidid.core.massline import MassLine, mass_from_residues, mass_line, peak_notice
 from rigidid.errors import ElasticNearBandWarning, FrfMisfitWarning, FrfRoutesDisagreeWarning, RigididError, emit
 
 BASE: dict[str, Any] = {
@@ -112,7 +112,7 @@ def judged(rig: Rig, run: Any) -> dict[str, Any]:
             warnings.simplefilter("always")
             ml: MassLine = run()
             notice = verdict(ml.inertia_tensor, ml.residual, ml.misfit_noise_units, ml.misfit_where, "fit")
-            emit([notice] if notice is not None else [])
+            emit([n for n in (notice, peak_notice(ml, "fit")) if n is not None])
     except (RigididError, np.linalg.LinAlgError) as exc:
         return {**out, "status": "refused", "line": str(exc).splitlines()[0][:150]}
     out["err"] = truth_errors(rig, ml.mass, ml.center_of_gravity, ml.inertia_tensor)

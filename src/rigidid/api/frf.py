@@ -434,12 +434,17 @@ def _beyond(a: MassLine, b: MassLine) -> str | None:
 
 
 def _frf_verdict(result: MassLine, route: str) -> None:
-    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says."""
+    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says.
+
+    Also warn (FrfPeakBiasWarning) when the FRFs fall short of the fit at the peaks
+    (:func:`rigidid.core.massline.peak_notice`).
+    """
     from rigidid.core.frfstats import verdict
+    from rigidid.core.massline import peak_notice
     from rigidid.errors import emit
 
     notice = verdict(result.inertia_tensor, result.residual, result.misfit_noise_units, result.misfit_where, route)
-    emit([notice] if notice is not None else [], stacklevel=3)
+    emit([n for n in (notice, peak_notice(result, route)) if n is not None], stacklevel=3)
 
 
 def _load_frf(

@@ -28,13 +28,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigidid.core.frfmodes import peak_split, residue_limit, scaled_frame
+from rigidid.core.frfmodes import PEAK_SHORTFALL_Z, PeakShortfall, peak_split, residue_limit, scaled_frame
 from rigidid.core.frfstats import BodyIntervals, body_intervals, misfit_units
 from rigidid.core.geometry import sensor_matrix, skew
 from rigidid.core.rigidfrf import RigidFrfFit, mass_matrix_from_parameters
-from rigidid.errors import IdentificationError, InputError
+from rigidid.errors import FrfPeakBiasWarning, IdentificationError, InputError, Notice
 
-__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line"]
+__all__ = ["MIN_BAND_RATIO", "MassLine", "auto_band", "mass_from_residues", "mass_line", "peak_notice"]
 
 Array = NDArray[np.float64]
 
@@ -82,6 +82,8 @@ class MassLine:
         (:func:`rigidid.core.frfstats.misfit_units`): about 1 when the model explains the FRFs.
     misfit_where : str
         Where the misfit is largest (e.g. ``"response 3, reference 1"``), for messages.
+    peak_shortfall : rigidid.core.frfmodes.PeakShortfall or None
+        How far the FRFs fall short of the fit at the resonance peaks (residues only).
     """
 
     mass: float
@@ -97,6 +99,36 @@ class MassLine:
     intervals: BodyIntervals | None = None
     misfit_noise_units: float | None = None
     misfit_where: str = ""
+    peak_shortfall: PeakShortfall | None = None
+
+
+def peak_notice(result: MassLine, route: str) -> Notice | None:
+    """A :class:`~rigidid.errors.FrfPeakBiasWarning` when the FRFs fall short of the fit at the peaks.
+
+    Parameters
+    ----------
+    result : MassLine
+        An FRF route's answer.
+    route : str
+        Its name (for the message).
+
+    Returns
+    -------
+    Notice or None
+        When ``|z|`` of :attr:`MassLine.peak_shortfall` exceeds
+        :data:`rigidid.core.frfmodes.PEAK_SHORTFALL_Z`.
+    """
+    short = result.peak_shortfall
+    if short is None or not abs(short.z) > PEAK_SHORTFALL_Z:
+        return None
+    how = "fall short of" if short.fraction > 0.0 else "exceed"
+    return Notice(
+        FrfPeakBiasWarning,
+        f"the FRFs {how} the {route} fit at the resonance peaks by {100 * abs(short.fraction):.2g} % of the "
+        f"summed power's shape ({abs(short.z):.3g} standard errors, strongest at {short.frequency:.4g} Hz), "
+        "beyond their noise: the bias of an H1 estimate there (leakage, low coherence); the answer may be off "
+        "beyond its interval: finer line spacing, more averages, or an H2/Hv estimate",
+    )
 
 
 def auto_band(frequencies: ArrayLike, frf: ArrayLike) -> tuple[float, float]:
@@ -655,4 +687,5 @@ def mass_from_residues(
         intervals=intervals,
         misfit_noise_units=fit.misfit_units,
         misfit_where=f"response {fit.worst[0] + 1}, reference {fit.worst[1] + 1} ({fit.worst_units:.3g} noise units)",
+        peak_shortfall=fit.peak_shortfall,
     )
