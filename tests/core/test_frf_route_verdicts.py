@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
-from rigidid.core.frfmodes import PEAK_SHORTFALL_Z, residue_limit, summed_power
+from rigidid.api import frf as api_frf
+from rigidid.core.frfmodes import PEAK_SHORTFALL_Z, FrfModes, residue_limit, rigid_six, summed_power
+from rigidid.core.geometry import sensor_matrix
 from rigidid.core.massline import MassLine, peak_notice
 from rigidid.core.simulate import body_modes
-from rigidid.errors import FrfPeakBiasWarning
+from rigidid.errors import FrfPeakBiasWarning, IdentificationError
 from tests.bodies import frf_test_on_mounts
 
 
@@ -56,3 +60,88 @@ def test_the_peak_shortfall_warning_names_what_and_where() -> None:
         )
         is None
     )
+
+
+def _modes(hz: list[float], elastic: list[float], pos: np.ndarray, dirs: np.ndarray, noise: float = 1e-3) -> FrfModes:
+    """Fitted modes as the modal fit would give them: rigid ones with shapes ``T u`` (`noise` relative), elastic
+    ones with random shapes, each residue a shape times a random participation of three references."""
+    rng = np.random.default_rng(7)
+    t = sensor_matrix(pos, dirs)
+    freqs = sorted([(f, False) for f in hz] + [(f, True) for f in elastic])
+    res = []
+    for _, is_elastic in freqs:
+        shape = rng.standard_normal(8) if is_elastic else t @ rng.standard_normal(6)
+        shape = shape * (1.0 + noise * rng.standard_normal(8))
+        res.append(np.outer(shape, rng.standard_normal(3)) + 0j)
+    w = 2.0 * np.pi * np.array([f for f, _ in freqs])
+    lam = w * (-0.02 + 1j * np.sqrt(1.0 - 0.02**2))
+    n = lam.size
+    z = np.zeros((8, 3), dtype=complex)
+    return FrfModes(lam, np.array(res), np.zeros((8, n), complex), np.zeros((3, n), complex), np.zeros(n, bool),
+                    np.ones(n, int), (), (1.0, 60.0), (1.0, 60.0), z, z, 0.01)  # fmt: skip
+
+
+RIGID = [5.6, 5.8, 7.9, 12.0, 13.1, 14.3]
+
+
+def _route(monkeypatch: pytest.MonkeyPatch, six: FrfModes, seven: FrfModes | None) -> tuple[Any, list[int]]:
+    """``_rigid_poles`` with the modal fit stubbed: `six` for six modes asked, `seven` (None: refused) for seven."""
+    from rigidid.core import frfmodes
+
+    asked: list[int] = []
+
+    def fake(*args: Any, n_modes: int, **kwargs: Any) -> FrfModes:
+        asked.append(n_modes)
+        if n_modes == 6:
+            return six
+        if seven is None:
+            raise IdentificationError("6 stable mode(s) in 1-60 Hz at orders up to 64 (raised from 16), 7 asked")
+        return seven
+
+    monkeypatch.setattr(frfmodes, "fit_frf_modes", fake)
+    pos, dirs = _geometry()
+    return (np.arange(1.0, 60.0, 0.1), np.zeros((8, 3, 590), complex), (pos, dirs, pos[:3], np.eye(3))), asked
+
+
+def _geometry() -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(1)
+    return rng.uniform(-0.5, 0.5, (8, 3)), np.eye(3)[np.arange(8) % 3]
+
+
+def test_six_rigid_modes_are_taken_as_they_are(monkeypatch: pytest.MonkeyPatch) -> None:
+    pos, dirs = _geometry()
+    (f, h, geometry), asked = _route(monkeypatch, _modes(RIGID, [], pos, dirs), None)
+    _, poles, cut, note = api_frf._rigid_poles(f, h, geometry, None)
+    assert asked == [6] and cut is None and note == "" and poles.size == 6
+
+
+def test_an_elastic_mode_among_the_six_is_replaced_and_the_band_cut_below_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two close rigid modes fitted as one, the elastic mode at 3x taken as the sixth (regime matrix,
+    elastic_in seed 1: mass 24 % off at exit 0 before): seven modes leave six rigid ones below it."""
+    pos, dirs = _geometry()
+    six = _modes([5.7, *RIGID[2:]], [43.0], pos, dirs, noise=0.2)  # noisy: the elastic one does not stand out
+    assert rigid_six(six, pos, dirs)[0] is not None
+    (f, h, geometry), asked = _route(monkeypatch, six, _modes(RIGID, [43.0], pos, dirs))
+    _, poles, cut, note = api_frf._rigid_poles(f, h, geometry, None)
+    assert asked == [6, 7]
+    np.testing.assert_allclose(np.sort(np.abs(poles)) / (2 * np.pi), RIGID, rtol=1e-9)
+    assert cut == (1.0, pytest.approx(21.5))
+    assert "a 7th mode at 43 Hz in the band, its shape not a rigid-body motion" in note and "left out" in note
+
+
+def test_an_elastic_mode_too_close_above_the_rigid_ones_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    pos, dirs = _geometry()
+    six = _modes([5.7, *RIGID[2:]], [28.6], pos, dirs)
+    (f, h, geometry), _ = _route(monkeypatch, six, _modes(RIGID, [28.6], pos, dirs))
+    with pytest.raises(IdentificationError, match=r"^the FRFs hold a 7th mode at 28.6 Hz inside the band, 2x the "
+                       r"highest rigid-body mode \(14.3 Hz\), its shape not a rigid-body motion") as info:  # fmt: skip
+        api_frf._rigid_poles(f, h, geometry, None)
+    assert "\n" not in str(info.value) and "half its frequency" in str(info.value)
+
+
+def test_an_elastic_mode_with_no_seventh_to_replace_it_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    pos, dirs = _geometry()
+    (f, h, geometry), _ = _route(monkeypatch, _modes(RIGID[:5], [43.0], pos, dirs), None)
+    with pytest.raises(IdentificationError, match=r"^the FRFs hold a mode at 43 Hz whose shape is not a rigid-body "
+                       r"motion .*no seventh stable mode to take its place"):  # fmt: skip
+        api_frf._rigid_poles(f, h, geometry, None)

@@ -144,6 +144,8 @@ def _identify_route(
     method: str,
 ) -> MassLineResult:
     """One FRF route by name (``massline`` or ``residues``, the latter from `modes` if given), with its verdict."""
+    import dataclasses
+
     from rigidid.io.frf import reference_arrays
 
     ids, pos, dirs = files.layout_arrays(lay)
@@ -151,17 +153,17 @@ def _identify_route(
     freqs, h = data.frequencies, data.frf
     fitted = None
     if modes is None and method == "residues":
-        from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
 
-        fitted = fit_frf_modes(freqs, h, pos, dirs, rpos, rdirs, band=band, n_modes=6)
-        poles = fitted.poles
-        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
+        fitted, poles, cut, left_out = _rigid_poles(freqs, h, (pos, dirs, rpos, rdirs), band)
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=cut or band)
+        if cut is not None and band is None:
+            result = dataclasses.replace(result, band_source="automatic")
         reason = (
             "method residues: residues of the FRFs fitted with the six rigid-body poles found in the FRFs "
             "(pLSCF, stabilisation diagram, refined on the FRFs); their high-frequency limit is T M^-1 T_f^T, "
             "so the mass is measured through the force"
-        )
+        ) + (f"; {left_out}" if left_out else "")
     elif modes is None:
         poles = None
         result = _mass_line(freqs, h, pos, dirs, rpos, rdirs, band)
@@ -181,9 +183,72 @@ def _identify_route(
     route = "massline" if modes is None and method != "residues" else "residues"
     _frf_verdict(result, "mass line" if route == "massline" else "residues")
     _elastic_near(data, result.band)
-    scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
+    scaled = (
+        None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, result.band if fitted else band)
+    )
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
+
+
+def _rigid_poles(
+    freqs: Arr, h: NDArray[np.complex128], geometry: tuple[Arr, Arr, Arr, Arr], band: tuple[float, float] | None
+) -> tuple[FrfModes, NDArray[np.complex128], tuple[float, float] | None, str]:
+    """The six rigid-body poles fitted to the FRFs, an elastic mode among them fitted and left out.
+
+    Returns the modes fitted, the six rigid-body poles, the residues' band when it must stop below an
+    elastic mode (half its frequency; else None) and a phrase saying so (else empty).
+
+    A shape fitting rigid motion worse than ``SUSPECT_RESIDUAL`` (:mod:`rigidid.core.selection`) asks for a
+    seventh mode: when seven leave six rigid ones below a clearly elastic one, the six are taken.
+
+    Raises
+    ------
+    IdentificationError
+        A fitted mode stands out as elastic (``elastic_suspect``) and no seventh mode leaves six rigid ones
+        below it, or the elastic mode lies too close above the rigid ones for a band between them (naming it).
+    """
+    from rigidid.core.frfmodes import fit_frf_modes, rigid_six
+    from rigidid.core.massline import RESIDUES_BAND_RATIO
+    from rigidid.core.selection import SUSPECT_RESIDUAL
+    from rigidid.errors import IdentificationError
+
+    pos, dirs = geometry[0], geometry[1]
+    fitted = fit_frf_modes(freqs, h, *geometry, band=band, n_modes=6)
+    six, residuals = rigid_six(fitted, pos, dirs)
+    if six is not None and not residuals.max() > SUSPECT_RESIDUAL:
+        return fitted, fitted.poles, None, ""
+    bad = int(np.argmax(residuals))
+    what = (
+        f"the FRFs hold a mode at {fitted.frequency_hz[bad]:.4g} Hz whose shape is not a rigid-body motion "
+        f"(rigid-fit residual {residuals[bad]:.2g}, the others' at most {np.sort(residuals)[-2]:.2g})"
+    )
+    try:  # a seventh mode: the elastic one fitted with the six rigid ones (or a rigid one it hid)
+        seven = fit_frf_modes(freqs, h, *geometry, band=band, n_modes=7)
+        six7, res7 = rigid_six(seven, pos, dirs)
+    except IdentificationError as exc:
+        if six is None:
+            raise IdentificationError(f"{what}, and no seventh stable mode to take its place ({exc})") from exc
+        return fitted, fitted.poles, None, ""
+    if six7 is None or float(seven.frequency_hz[np.setdiff1d(np.arange(7), six7)[0]]) < max(seven.frequency_hz[six7]):
+        if six is None:
+            raise IdentificationError(f"{what}, and seven modes do not leave six rigid ones below it: give the band")
+        return fitted, fitted.poles, None, ""
+    out = int(np.setdiff1d(np.arange(7), six7)[0])
+    f_el, top = float(seven.frequency_hz[out]), float(np.max(seven.frequency_hz[six7]))
+    hi = 0.5 * f_el if band is None else min(0.5 * f_el, band[1])
+    if hi < RESIDUES_BAND_RATIO * top:
+        raise IdentificationError(
+            f"the FRFs hold a 7th mode at {f_el:.4g} Hz inside the band, {f_el / top:.2g}x the highest rigid-body "
+            f"mode ({top:.4g} Hz), its shape not a rigid-body motion (rigid-fit residual {res7[out]:.2g}): the "
+            f"residues need a band clear of it (to half its frequency) reaching {RESIDUES_BAND_RATIO:g}x the highest "
+            "rigid-body mode, and the mass line a band from 3x that mode below it"
+        )
+    lo = float(freqs[0]) if band is None else band[0]
+    note = (
+        f"a 7th mode at {f_el:.4g} Hz in the band, its shape not a rigid-body motion (rigid-fit residual "
+        f"{res7[out]:.2g}), fitted with the six and left out: residues fitted up to half its frequency"
+    )
+    return seven, seven.poles[six7], (lo, hi), note
 
 
 def _mass_line(

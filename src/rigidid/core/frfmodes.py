@@ -65,6 +65,7 @@ __all__ = [
     "residues_lsfd",
     "rigid_band",
     "rigid_shapes",
+    "rigid_six",
     "summed_power",
     "with_nonrigid_residual",
 ]
@@ -882,6 +883,49 @@ def refine_poles(
     if float(fit.fun @ fit.fun) >= float(start @ start):
         return lam0
     return to_poles(fit.x)
+
+
+def rigid_six(fitted: FrfModes, positions: ArrayLike, directions: ArrayLike) -> tuple[NDArray[np.intp] | None, Array]:
+    """Which six of the fitted modes are the rigid-body ones, by how well their shapes fit rigid motion.
+
+    Parameters
+    ----------
+    fitted : FrfModes
+        Modes fitted to the FRFs (:func:`fit_frf_modes`), six or more.
+    positions, directions : array_like, shape (p, 3)
+        Sensors (length, unit axes), ``p > 6``.
+
+    Returns
+    -------
+    six : ndarray of int, shape (6,), or None
+        Indices of the six rigid-body modes: all six when six are fitted and none
+        stands out as elastic (:func:`rigidid.core.selection.elastic_suspect`); with
+        seven, the six left when the seventh is clearly elastic
+        (:func:`rigidid.core.selection.separate_elastic`); else None.
+    residuals : ndarray, shape (n,)
+        Each mode's rigid-fit residual: the left factor of its residue matrix (the
+        shape before any projection) fitted by rigid-body motion, relative.
+
+    Notes
+    -----
+    The records route leaves an elastic mode out the same way (``ElasticModeWarning``):
+    rigid-body shapes measured with noise fit rigid motion to about the noise, an
+    elastic shape to 0.1-1. With six sensors or fewer every shape fits, and nothing
+    is told: the six fitted modes are returned as they are.
+    """
+    from rigidid.core.selection import elastic_suspect, rigid_fit_residuals, separate_elastic
+
+    t = sensor_matrix(np.asarray(positions, dtype=float), np.asarray(directions, dtype=float))
+    shapes = _rank_one_shapes(fitted.residues)[0]
+    n = shapes.shape[1]
+    if t.shape[0] <= 6:
+        return (np.arange(6) if n >= 6 else None), np.zeros(n)
+    residuals = rigid_fit_residuals(t, shapes)
+    if n == 6:
+        return (np.arange(6) if elastic_suspect(residuals) is None else None), residuals
+    if n == 7:
+        return separate_elastic(t, shapes), residuals
+    return None, residuals
 
 
 def scaled_frame(positions: Array, directions: Array) -> tuple[Array, float, Array]:

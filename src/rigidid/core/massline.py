@@ -175,9 +175,16 @@ def _auto_band(f: Array, h: NDArray[np.complex128]) -> tuple[tuple[float, float]
         low, high = 3.0 * fp[-1], float(f[-1])
         elastic = None
     if not high > low or np.count_nonzero((f >= low) & (f <= high)) < MIN_LINES:
+        if elastic is None:
+            raise IdentificationError(
+                f"no room for a mass-line band: the FRFs end at {f[-1]:.4g} Hz, {f[-1] / fp[-1]:.2g}x the highest "
+                f"peak ({fp[-1]:.4g} Hz), and the mass line needs lines from 3x it up (a band of a factor "
+                f"{MIN_BAND_RATIO:g}): measure further up, or give the band"
+            )
         raise IdentificationError(
-            f"no room for a mass-line band between the rigid-body peaks (up to {fp.max():.4g} Hz) "
-            "and the elastic ones: give the band"
+            f"no room for a mass-line band between the rigid-body peaks (up to {fp[split]:.4g} Hz) and the first "
+            f"elastic one at {elastic:.4g} Hz: the mass line needs lines from 3x the one to half the other; "
+            "give the band"
         )
     return (float(low), float(high)), elastic
 
@@ -576,6 +583,13 @@ def _body_from_parameters(theta: Array, origin: Array, span: float) -> tuple[flo
     return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
 
 
+RESIDUES_BAND_RATIO = 1.2
+"""The residues route's band must reach this factor above the highest rigid-body mode (its resonance
+and the fall beyond it). It was 2 before issue 21; on the regime matrix's bands ending at 1.5x and 2x
+the highest mode (benchmarks/frf_regimes.py top1.5x, top2x) the residues are as accurate as with a
+band to 4x."""
+
+
 def mass_from_residues(
     frequencies: ArrayLike,
     frf: ArrayLike,
@@ -653,8 +667,11 @@ def mass_from_residues(
     if n_f < 3 * MIN_LINES:
         raise InputError(f"band {lo:g}-{hi:g} Hz holds {n_f} frequency lines, need at least {3 * MIN_LINES}")
     top = float(np.abs(lam).max()) / (2.0 * np.pi)
-    if hi < 2.0 * top:
-        raise IdentificationError(f"the band must reach beyond the rigid-body modes (up to {top:.4g} Hz)")
+    if hi < RESIDUES_BAND_RATIO * top:
+        raise IdentificationError(
+            f"the band ends at {hi:.4g} Hz, {hi / top:.2g}x the highest rigid-body mode ({top:.4g} Hz): the residues "
+            f"need it to reach {RESIDUES_BAND_RATIO:g}x, past that mode's resonance"
+        )
     origin, span, t = scaled_frame(pos, dirs)
     tf = sensor_matrix((rpos - origin) / span, np.asarray(reference_directions, dtype=float))
     fit = residue_limit(f, h, lam, band=(lo, hi), upper=2, weighting=weighting)
