@@ -9,10 +9,12 @@ import pytest
 
 from rigidid.api import frf as api_frf
 from rigidid.core.frfmodes import PEAK_SHORTFALL_Z, FrfModes, residue_limit, rigid_six, summed_power
+from rigidid.core.frfstats import body_intervals
 from rigidid.core.geometry import sensor_matrix
 from rigidid.core.massline import MassLine, peak_notice
 from rigidid.core.simulate import body_modes
-from rigidid.errors import FrfPeakBiasWarning, IdentificationError
+from rigidid.errors import FrfPeakBiasWarning, FrfRoutesDisagreeWarning, IdentificationError
+from rigidid.results import MassLineResult
 from tests.bodies import frf_test_on_mounts
 
 
@@ -145,3 +147,31 @@ def test_an_elastic_mode_with_no_seventh_to_replace_it_is_refused(monkeypatch: p
     with pytest.raises(IdentificationError, match=r"^the FRFs hold a mode at 43 Hz whose shape is not a rigid-body "
                        r"motion .*no seventh stable mode to take its place"):  # fmt: skip
         api_frf._rigid_poles(f, h, geometry, None)
+
+
+def _answer(route: str, mass: float, std: float, units: float) -> MassLineResult:
+    """A route's answer: `mass` (+-`std`), CG at 0 and unit inertia (+-1e-3), misfit `units` noise units."""
+
+    def extract(y: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        return float(y[0]), y[1:4], np.diag(y[4:7])
+
+    y = np.array([mass, 0, 0, 0, 1, 1, 1])
+    iv = body_intervals(extract, y, np.diag([std**2, *[1e-6] * 6]), "test")
+    ml = MassLine(mass, np.zeros(3), np.eye(3), (1.0, 2.0), "automatic", 100, 0.01, (), intervals=iv,
+                  misfit_noise_units=units)  # fmt: skip
+    return MassLineResult(ml, {"length": "m", "mass": "kg"}, None, route, route)
+
+
+def test_auto_prefers_the_route_with_clean_diagnostics_and_says_why() -> None:
+    ran = {"residues": _answer("residues", 10.0, 0.01, 1.0), "massline": _answer("massline", 10.0, 0.05, 1.0)}
+    assert api_frf._choose_route(ran, {"residues": [], "massline": []})[0] == "residues"  # narrower
+    chosen, why = api_frf._choose_route(ran, {"residues": ["FrfPeakBiasWarning"], "massline": []})
+    assert chosen == "massline" and "residues (FrfPeakBiasWarning) warned about" in why
+
+
+def test_two_routes_apart_blame_the_one_with_a_warning_when_the_misfits_do_not_tell() -> None:
+    ran = {"residues": _answer("residues", 10.0, 0.01, 1.0), "massline": _answer("massline", 10.5, 0.01, 1.05)}
+    with pytest.warns(FrfRoutesDisagreeWarning, match=r"blame residues \(FrfPeakBiasWarning; the misfits do not"):
+        api_frf._disagreement(ran, {"residues": ["FrfPeakBiasWarning"], "massline": []})
+    with pytest.warns(FrfRoutesDisagreeWarning, match="the misfits do not tell which"):
+        api_frf._disagreement(ran, {"residues": [], "massline": []})

@@ -351,7 +351,8 @@ def identify_frf_auto(
     MassLineResult
         The chosen route's answer; ``routes`` lists every route tried. The
         choice: among routes whose misfit the noise explains (at most 1.5
-        noise units), the one with the narrowest 95 % mass interval (a route
+        noise units) and that raised no warning of their own (clean
+        diagnostics), the one with the narrowest 95 % mass interval (a route
         without intervals last); the reason is in ``reason``.
 
     Raises
@@ -363,12 +364,13 @@ def identify_frf_auto(
     -----
     FrfRoutesDisagreeWarning
         Two routes with intervals whose mass, CG or inertia diagonal differ by
-        more than the sum of their 95 % half-widths, naming the route the diagnostics (misfit in
-        noise units) blame. The chosen route's own warnings are passed on.
+        more than the sum of their 95 % half-widths, naming the route the diagnostics blame (the larger
+        misfit in noise units; else the one that raised a warning). The chosen route's own warnings are
+        passed on.
     """
     import warnings
 
-    from rigidid.errors import IdentificationError
+    from rigidid.errors import IdentificationError, RigididWarning
 
     answers: list[RouteAnswer] = []
     ran: dict[str, tuple[MassLineResult, list[warnings.WarningMessage]]] = {}
@@ -390,11 +392,14 @@ def identify_frf_auto(
         answers.append(RouteAnswer(route, True, _applies_because(result), result.massline))
     if not ran:
         raise IdentificationError("no FRF route applies: " + "; ".join(f"{a.route}: {a.reason}" for a in answers))
-    chosen, why = _choose_route({k: v[0] for k, v in ran.items()})
+    flags = {
+        k: sorted({w.category.__name__ for w in v[1] if issubclass(w.category, RigididWarning)}) for k, v in ran.items()
+    }
+    chosen, why = _choose_route({k: v[0] for k, v in ran.items()}, flags)
     result, caught = ran[chosen]
     for w in caught:
         warnings.warn(w.message, w.category, stacklevel=2)
-    _disagreement({k: v[0] for k, v in ran.items()})
+    _disagreement({k: v[0] for k, v in ran.items()}, flags)
     reason = f"method auto: {chosen} chosen ({why}); {result.reason}"
     return MassLineResult(
         result.massline,
@@ -425,28 +430,37 @@ def _mass_halfwidth(result: MassLineResult) -> float:
     return float((iv.mass.high - iv.mass.low) / 2.0 / abs(result.massline.mass))
 
 
-def _choose_route(ran: dict[str, MassLineResult]) -> tuple[str, str]:
-    """The route to report and why (one phrase)."""
+def _choose_route(ran: dict[str, MassLineResult], flags: dict[str, list[str]] | None = None) -> tuple[str, str]:
+    """The route to report and why (one phrase).
+
+    Preferred: routes whose misfit the noise explains (at most 1.5 noise units) and whose diagnostics are
+    clean (no warning of their own, `flags`: the warning categories per route); among them the narrowest
+    95 % mass interval.
+    """
     if len(ran) == 1:
         only = next(iter(ran))
         return only, "the only route the data allow"
+    flags = flags or {}
 
     def explained(r: MassLineResult) -> bool:
         units = r.massline.misfit_noise_units
         return units is None or units <= 1.5
 
     fits = [k for k, r in ran.items() if explained(r)] or list(ran)
-    best = min(fits, key=lambda k: _mass_halfwidth(ran[k]))
+    clean = [k for k in fits if not flags.get(k)] or fits
+    best = min(clean, key=lambda k: _mass_halfwidth(ran[k]))
     widths = ", ".join(
         f"{k} +-{100 * _mass_halfwidth(r):.2g} %" if np.isfinite(_mass_halfwidth(r)) else f"{k} none"
         for k, r in ran.items()
     )
     left = [k for k in ran if k not in fits]
     tail = f"; {', '.join(left)} misfit beyond the noise" if left else ""
+    warned = [f"{k} ({', '.join(flags[k])})" for k in fits if k not in clean]
+    tail += f"; {', '.join(warned)} warned about" if warned else ""
     return best, f"narrowest 95 % mass interval: {widths}{tail}"
 
 
-def _disagreement(ran: dict[str, MassLineResult]) -> None:
+def _disagreement(ran: dict[str, MassLineResult], flags: dict[str, list[str]] | None = None) -> None:
     """Warn (FrfRoutesDisagreeWarning) when two routes differ beyond the sum of their 95 % half-widths."""
     import warnings
 
@@ -463,6 +477,9 @@ def _disagreement(ran: dict[str, MassLineResult]) -> None:
                 blame = f"the diagnostics blame {a if ua > ub else b} (misfit {max(ua, ub):.3g} noise units " + (
                     f"against {min(ua, ub):.3g})"
                 )
+            elif flags and bool(flags.get(a)) != bool(flags.get(b)):
+                bad = a if flags.get(a) else b
+                blame = f"the diagnostics blame {bad} ({', '.join(flags[bad])}; the misfits do not tell)"
             else:
                 blame = "the misfits do not tell which (both explained by the noise)"
             warnings.warn(
