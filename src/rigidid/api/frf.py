@@ -152,11 +152,13 @@ def _identify_route(
     _, rpos, rdirs = reference_arrays(refs)
     freqs, h = data.frequencies, data.frf
     fitted = None
+    scaled_band = band  # the scaled modes' band: below an elastic mode left out, else as asked
     if modes is None and method == "residues":
         from rigidid.core.massline import mass_from_residues
 
         fitted, poles, cut, left_out = _rigid_poles(freqs, h, (pos, dirs, rpos, rdirs), band)
         result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=cut or band)
+        scaled_band = cut or band
         if cut is not None and band is None:
             result = dataclasses.replace(result, band_source="automatic")
         reason = (
@@ -183,9 +185,7 @@ def _identify_route(
     route = "massline" if modes is None and method != "residues" else "residues"
     _frf_verdict(result, "mass line" if route == "massline" else "residues")
     _elastic_near(data, result.band)
-    scaled = (
-        None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, result.band if fitted else band)
-    )
+    scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, scaled_band)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
 
