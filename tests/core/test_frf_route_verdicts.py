@@ -175,3 +175,12 @@ def test_two_routes_apart_blame_the_one_with_a_warning_when_the_misfits_do_not_t
         api_frf._disagreement(ran, {"residues": ["FrfPeakBiasWarning"], "massline": []})
     with pytest.warns(FrfRoutesDisagreeWarning, match="the misfits do not tell which"):
         api_frf._disagreement(ran, {"residues": [], "massline": []})
+
+
+def test_a_blurred_shape_among_close_rigid_modes_is_no_elastic_mode(monkeypatch: pytest.MonkeyPatch) -> None:
+    """10 % mount damping: the two highest rigid modes' fitted shapes fit rigid motion to 0.27 and 0.67; the
+    mode is not 1.5x above the others, so it stays (before: refused as an elastic mode)."""
+    pos, dirs = _geometry()
+    (f, h, geometry), asked = _route(monkeypatch, _modes(RIGID[:5], [14.3], pos, dirs), None)
+    _, poles, cut, note = api_frf._rigid_poles(f, h, geometry, None)
+    assert asked == [6, 7] and cut is None and note == "" and poles.size == 6

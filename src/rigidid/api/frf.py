@@ -190,6 +190,12 @@ def _identify_route(
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
 
 
+ELASTIC_APART = 1.5
+"""A mode is left out as elastic only when it lies this factor above the highest rigid-body one: close
+and heavily damped rigid modes blur each other's fitted shapes (regime matrix, 10 % mount damping: the
+two highest rigid modes' shapes fitted rigid motion to 0.27 and 0.67)."""
+
+
 def _rigid_poles(
     freqs: Arr, h: NDArray[np.complex128], geometry: tuple[Arr, Arr, Arr, Arr], band: tuple[float, float] | None
 ) -> tuple[FrfModes, NDArray[np.complex128], tuple[float, float] | None, str]:
@@ -199,7 +205,8 @@ def _rigid_poles(
     elastic mode (half its frequency; else None) and a phrase saying so (else empty).
 
     A shape fitting rigid motion worse than ``SUSPECT_RESIDUAL`` (:mod:`rigidid.core.selection`) asks for a
-    seventh mode: when seven leave six rigid ones below a clearly elastic one, the six are taken.
+    seventh mode: when seven leave six rigid ones below a clearly elastic one (:data:`ELASTIC_APART` above
+    them), the six are taken.
 
     Raises
     ------
@@ -215,9 +222,12 @@ def _rigid_poles(
     pos, dirs = geometry[0], geometry[1]
     fitted = fit_frf_modes(freqs, h, *geometry, band=band, n_modes=6)
     six, residuals = rigid_six(fitted, pos, dirs)
+    bad = int(np.argmax(residuals))
+    hz = np.sort(fitted.frequency_hz)
+    if six is None and not (bad == 5 and hz[5] >= ELASTIC_APART * hz[4]):
+        six = np.arange(6)  # close, damped rigid modes blur each other's shapes: no elastic mode among them
     if six is not None and not residuals.max() > SUSPECT_RESIDUAL:
         return fitted, fitted.poles, None, ""
-    bad = int(np.argmax(residuals))
     what = (
         f"the FRFs hold a mode at {fitted.frequency_hz[bad]:.4g} Hz whose shape is not a rigid-body motion "
         f"(rigid-fit residual {residuals[bad]:.2g}, the others' at most {np.sort(residuals)[-2]:.2g})"
@@ -229,7 +239,9 @@ def _rigid_poles(
         if six is None:
             raise IdentificationError(f"{what}, and no seventh stable mode to take its place ({exc})") from exc
         return fitted, fitted.poles, None, ""
-    if six7 is None or float(seven.frequency_hz[np.setdiff1d(np.arange(7), six7)[0]]) < max(seven.frequency_hz[six7]):
+    if six7 is None or seven.frequency_hz[np.setdiff1d(np.arange(7), six7)[0]] < ELASTIC_APART * max(
+        seven.frequency_hz[six7]
+    ):
         if six is None:
             raise IdentificationError(f"{what}, and seven modes do not leave six rigid ones below it: give the band")
         return fitted, fitted.poles, None, ""
