@@ -12,6 +12,8 @@ mounts, elastic modes as modal sums; no rigidid code). Noise: half relative to e
 half a floor relative to each FRF's RMS (the floor is what a lab's anti-resonances show).
 Default cell: mount damping 2 %, band 0.3x lowest to 4x highest rigid mode, 0.1 Hz lines,
 1 % noise, 3 references, 8 sensors, an elastic mode at 8x the highest rigid mode.
+Cells added after issue 21's closing note: top1.25x and top1.1x (the residues need 1.2x),
+elastic_in2x (an elastic mode at 2x, too close for a band between), h1_bias1% and h1_bias5%.
 
 Per cell and seed and route (as ``identify --frf --method residues`` and ``--method
 massline`` call the core): finished, warned (FrfMisfitWarning), refused (one line), and
