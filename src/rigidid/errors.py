@@ -136,6 +136,11 @@ class FrfMisfitWarning(RigididWarning):
     """An FRF route's model misfits the FRFs by more than their noise explains (its answer may be off)."""
 
 
+class FrfPeakBiasWarning(FrfMisfitWarning):
+    """The FRFs fall short of (or exceed) the modal fit at the resonance peaks beyond their noise (an H1
+    estimate's leakage or coherence bias): the answer may be off beyond its interval."""
+
+
 class ElasticNearBandWarning(RigididWarning):
     """The FRFs rise towards the top of the band: an elastic mode just above it biases the FRF routes."""
 

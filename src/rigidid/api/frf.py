@@ -144,24 +144,28 @@ def _identify_route(
     method: str,
 ) -> MassLineResult:
     """One FRF route by name (``massline`` or ``residues``, the latter from `modes` if given), with its verdict."""
+    import dataclasses
+
     from rigidid.io.frf import reference_arrays
 
     ids, pos, dirs = files.layout_arrays(lay)
     _, rpos, rdirs = reference_arrays(refs)
     freqs, h = data.frequencies, data.frf
     fitted = None
+    scaled_band = band  # the scaled modes' band: below an elastic mode left out, else as asked
     if modes is None and method == "residues":
-        from rigidid.core.frfmodes import fit_frf_modes
         from rigidid.core.massline import mass_from_residues
 
-        fitted = fit_frf_modes(freqs, h, pos, dirs, rpos, rdirs, band=band, n_modes=6)
-        poles = fitted.poles
-        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=band)
+        fitted, poles, cut, left_out = _rigid_poles(freqs, h, (pos, dirs, rpos, rdirs), band)
+        result = mass_from_residues(freqs, h, pos, dirs, rpos, rdirs, poles, band=cut or band)
+        scaled_band = cut or band
+        if cut is not None and band is None:
+            result = dataclasses.replace(result, band_source="automatic")
         reason = (
             "method residues: residues of the FRFs fitted with the six rigid-body poles found in the FRFs "
             "(pLSCF, stabilisation diagram, refined on the FRFs); their high-frequency limit is T M^-1 T_f^T, "
             "so the mass is measured through the force"
-        )
+        ) + (f"; {left_out}" if left_out else "")
     elif modes is None:
         poles = None
         result = _mass_line(freqs, h, pos, dirs, rpos, rdirs, band)
@@ -181,7 +185,7 @@ def _identify_route(
     route = "massline" if modes is None and method != "residues" else "residues"
     _frf_verdict(result, "mass line" if route == "massline" else "residues")
     _elastic_near(data, result.band)
-    scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, band)
+    scaled = None if poles is None else _scaled_body(data, pos, dirs, rpos, rdirs, poles, scaled_band)
     units: dict[str, str] = {"length": lay.units.length, "mass": lay.units.mass}
     return MassLineResult(result, units, mass if mass is not None else lay.mass, reason, route, scaled, fitted=fitted)
 
@@ -214,6 +218,79 @@ def identify_frf_route(
     if method not in ("massline", "residues"):
         raise InputError(f"an FRF route is massline or residues, not {method!r}", source="--method")
     return _identify_route(lay, refs, data, mass=mass, band=band, modes=modes, modes_used=modes_used, method=method)
+
+
+ELASTIC_APART = 1.5
+"""A mode is left out as elastic only when it lies this factor above the highest rigid-body one: close
+and heavily damped rigid modes blur each other's fitted shapes (regime matrix, 10 % mount damping: the
+two highest rigid modes' shapes fitted rigid motion to 0.27 and 0.67)."""
+
+
+def _rigid_poles(
+    freqs: Arr, h: NDArray[np.complex128], geometry: tuple[Arr, Arr, Arr, Arr], band: tuple[float, float] | None
+) -> tuple[FrfModes, NDArray[np.complex128], tuple[float, float] | None, str]:
+    """The six rigid-body poles fitted to the FRFs, an elastic mode among them fitted and left out.
+
+    Returns the modes fitted, the six rigid-body poles, the residues' band when it must stop below an
+    elastic mode (half its frequency; else None) and a phrase saying so (else empty).
+
+    A shape fitting rigid motion worse than ``SUSPECT_RESIDUAL`` (:mod:`rigidid.core.selection`) asks for a
+    seventh mode: when seven leave six rigid ones below a clearly elastic one (:data:`ELASTIC_APART` above
+    them), the six are taken.
+
+    Raises
+    ------
+    IdentificationError
+        A fitted mode stands out as elastic (``elastic_suspect``) and no seventh mode leaves six rigid ones
+        below it, or the elastic mode lies too close above the rigid ones for a band between them (naming it).
+    """
+    from rigidid.core.frfmodes import fit_frf_modes, rigid_six
+    from rigidid.core.massline import RESIDUES_BAND_RATIO
+    from rigidid.core.selection import SUSPECT_RESIDUAL
+    from rigidid.errors import IdentificationError
+
+    pos, dirs = geometry[0], geometry[1]
+    fitted = fit_frf_modes(freqs, h, *geometry, band=band, n_modes=6)
+    six, residuals = rigid_six(fitted, pos, dirs)
+    bad = int(np.argmax(residuals))
+    hz = np.sort(fitted.frequency_hz)
+    if six is None and not (bad == 5 and hz[5] >= ELASTIC_APART * hz[4]):
+        six = np.arange(6)  # close, damped rigid modes blur each other's shapes: no elastic mode among them
+    if six is not None and not residuals.max() > SUSPECT_RESIDUAL:
+        return fitted, fitted.poles, None, ""
+    what = (
+        f"the FRFs hold a mode at {fitted.frequency_hz[bad]:.4g} Hz whose shape is not a rigid-body motion "
+        f"(rigid-fit residual {residuals[bad]:.2g}, the others' at most {np.sort(residuals)[-2]:.2g})"
+    )
+    try:  # a seventh mode: the elastic one fitted with the six rigid ones (or a rigid one it hid)
+        seven = fit_frf_modes(freqs, h, *geometry, band=band, n_modes=7)
+        six7, res7 = rigid_six(seven, pos, dirs)
+    except IdentificationError as exc:
+        if six is None:
+            raise IdentificationError(f"{what}, and no seventh stable mode to take its place ({exc})") from exc
+        return fitted, fitted.poles, None, ""
+    if six7 is None or seven.frequency_hz[np.setdiff1d(np.arange(7), six7)[0]] < ELASTIC_APART * max(
+        seven.frequency_hz[six7]
+    ):
+        if six is None:
+            raise IdentificationError(f"{what}, and seven modes do not leave six rigid ones below it: give the band")
+        return fitted, fitted.poles, None, ""
+    out = int(np.setdiff1d(np.arange(7), six7)[0])
+    f_el, top = float(seven.frequency_hz[out]), float(np.max(seven.frequency_hz[six7]))
+    hi = 0.5 * f_el if band is None else min(0.5 * f_el, band[1])
+    if hi < RESIDUES_BAND_RATIO * top:
+        raise IdentificationError(
+            f"the FRFs hold a 7th mode at {f_el:.4g} Hz inside the band, {f_el / top:.2g}x the highest rigid-body "
+            f"mode ({top:.4g} Hz), its shape not a rigid-body motion (rigid-fit residual {res7[out]:.2g}): the "
+            f"residues need a band clear of it (to half its frequency) reaching {RESIDUES_BAND_RATIO:g}x the highest "
+            "rigid-body mode, and the mass line a band from 3x that mode below it"
+        )
+    lo = float(freqs[0]) if band is None else band[0]
+    note = (
+        f"a 7th mode at {f_el:.4g} Hz in the band, its shape not a rigid-body motion (rigid-fit residual "
+        f"{res7[out]:.2g}), fitted with the six and left out: residues fitted up to half its frequency"
+    )
+    return seven, seven.poles[six7], (lo, hi), note
 
 
 def _mass_line(
@@ -316,7 +393,8 @@ def identify_frf_auto(
     MassLineResult
         The chosen route's answer; ``routes`` lists every route tried. The
         choice: among routes whose misfit the noise explains (at most 1.5
-        noise units), the one with the narrowest 95 % mass interval (a route
+        noise units) and that raised no warning of their own (clean
+        diagnostics), the one with the narrowest 95 % mass interval (a route
         without intervals last); the reason is in ``reason``.
 
     Raises
@@ -328,12 +406,13 @@ def identify_frf_auto(
     -----
     FrfRoutesDisagreeWarning
         Two routes with intervals whose mass, CG or inertia diagonal differ by
-        more than the sum of their 95 % half-widths, naming the route the diagnostics (misfit in
-        noise units) blame. The chosen route's own warnings are passed on.
+        more than the sum of their 95 % half-widths, naming the route the diagnostics blame (the larger
+        misfit in noise units; else the one that raised a warning). The chosen route's own warnings are
+        passed on.
     """
     import warnings
 
-    from rigidid.errors import IdentificationError
+    from rigidid.errors import IdentificationError, RigididWarning
 
     answers: list[RouteAnswer] = []
     ran: dict[str, tuple[MassLineResult, list[warnings.WarningMessage]]] = {}
@@ -355,11 +434,14 @@ def identify_frf_auto(
         answers.append(RouteAnswer(route, True, _applies_because(result), result.massline))
     if not ran:
         raise IdentificationError("no FRF route applies: " + "; ".join(f"{a.route}: {a.reason}" for a in answers))
-    chosen, why = _choose_route({k: v[0] for k, v in ran.items()})
+    flags = {
+        k: sorted({w.category.__name__ for w in v[1] if issubclass(w.category, RigididWarning)}) for k, v in ran.items()
+    }
+    chosen, why = _choose_route({k: v[0] for k, v in ran.items()}, flags)
     result, caught = ran[chosen]
     for w in caught:
         warnings.warn(w.message, w.category, stacklevel=2)
-    _disagreement({k: v[0] for k, v in ran.items()})
+    _disagreement({k: v[0] for k, v in ran.items()}, flags)
     reason = f"method auto: {chosen} chosen ({why}); {result.reason}"
     return MassLineResult(
         result.massline,
@@ -390,28 +472,37 @@ def _mass_halfwidth(result: MassLineResult) -> float:
     return float((iv.mass.high - iv.mass.low) / 2.0 / abs(result.massline.mass))
 
 
-def _choose_route(ran: dict[str, MassLineResult]) -> tuple[str, str]:
-    """The route to report and why (one phrase)."""
+def _choose_route(ran: dict[str, MassLineResult], flags: dict[str, list[str]] | None = None) -> tuple[str, str]:
+    """The route to report and why (one phrase).
+
+    Preferred: routes whose misfit the noise explains (at most 1.5 noise units) and whose diagnostics are
+    clean (no warning of their own, `flags`: the warning categories per route); among them the narrowest
+    95 % mass interval.
+    """
     if len(ran) == 1:
         only = next(iter(ran))
         return only, "the only route the data allow"
+    flags = flags or {}
 
     def explained(r: MassLineResult) -> bool:
         units = r.massline.misfit_noise_units
         return units is None or units <= 1.5
 
     fits = [k for k, r in ran.items() if explained(r)] or list(ran)
-    best = min(fits, key=lambda k: _mass_halfwidth(ran[k]))
+    clean = [k for k in fits if not flags.get(k)] or fits
+    best = min(clean, key=lambda k: _mass_halfwidth(ran[k]))
     widths = ", ".join(
         f"{k} +-{100 * _mass_halfwidth(r):.2g} %" if np.isfinite(_mass_halfwidth(r)) else f"{k} none"
         for k, r in ran.items()
     )
     left = [k for k in ran if k not in fits]
     tail = f"; {', '.join(left)} misfit beyond the noise" if left else ""
+    warned = [f"{k} ({', '.join(flags[k])})" for k in fits if k not in clean]
+    tail += f"; {', '.join(warned)} warned about" if warned else ""
     return best, f"narrowest 95 % mass interval: {widths}{tail}"
 
 
-def _disagreement(ran: dict[str, MassLineResult]) -> None:
+def _disagreement(ran: dict[str, MassLineResult], flags: dict[str, list[str]] | None = None) -> None:
     """Warn (FrfRoutesDisagreeWarning) when two routes differ beyond the sum of their 95 % half-widths."""
     import warnings
 
@@ -428,6 +519,9 @@ def _disagreement(ran: dict[str, MassLineResult]) -> None:
                 blame = f"the diagnostics blame {a if ua > ub else b} (misfit {max(ua, ub):.3g} noise units " + (
                     f"against {min(ua, ub):.3g})"
                 )
+            elif flags and bool(flags.get(a)) != bool(flags.get(b)):
+                bad = a if flags.get(a) else b
+                blame = f"the diagnostics blame {bad} ({', '.join(flags[bad])}; the misfits do not tell)"
             else:
                 blame = "the misfits do not tell which (both explained by the noise)"
             warnings.warn(
@@ -464,12 +558,17 @@ def _beyond(a: MassLine, b: MassLine) -> str | None:
 
 
 def _frf_verdict(result: MassLine, route: str) -> None:
-    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says."""
+    """Refuse (IdentificationError) or warn (FrfMisfitWarning) as :func:`rigidid.core.frfstats.verdict` says.
+
+    Also warn (FrfPeakBiasWarning) when the FRFs fall short of the fit at the peaks
+    (:func:`rigidid.core.massline.peak_notice`).
+    """
     from rigidid.core.frfstats import verdict
+    from rigidid.core.massline import peak_notice
     from rigidid.errors import emit
 
     notice = verdict(result.inertia_tensor, result.residual, result.misfit_noise_units, result.misfit_where, route)
-    emit([notice] if notice is not None else [], stacklevel=3)
+    emit([n for n in (notice, peak_notice(result, route)) if n is not None], stacklevel=3)
 
 
 def _load_frf(
