@@ -378,21 +378,22 @@ def _output_error(problem: _Problem, theta: Array, kv: Array, cv: Array) -> tupl
 
     The first start is the equation-error fit. The output-error cost has local minima: on mounted bodies
     measured above their support modes (benchmarks/frf_coverage.py, mounted) one draw in six ended
-    where the fitted ``K`` and ``C`` put a spurious mode in or above the band to fit the noise
-    (a damping eigenvalue -400 to -800 times the true ones), its mass and inertia 3-11 of their standard
-    errors off while the true basin had a lower cost. Where the minimum found has such a mode
-    (:func:`_spurious`), the fit is run again from the same inertia with ``K = C = 0`` (the
-    free body: the mass line) and the lower cost kept; from there every one of those draws reached the
-    true basin. Returns ``theta``, ``K`` and ``C`` (per ``w0``) and whether it moved from the
-    equation-error start (kept where the model cannot be evaluated or no step lowers the misfit).
+    where the fitted ``K`` and ``C`` put a spurious mode in or above the band to fit the noise (a damping
+    eigenvalue -400 to -800 times the true ones), its mass and inertia 3-11 of their standard errors off
+    while the true basin had a lower cost. Where the fit converged to a minimum with such a mode
+    (:func:`_spurious`; an unconverged fit is not a local minimum), it is run again from the same inertia
+    with ``K = C = 0`` (the free body: the mass line) and the lower cost kept; from there every one of
+    those draws reached the true basin. Returns ``theta``, ``K`` and ``C`` (per ``w0``) and whether it
+    moved from the equation-error start (kept where the model cannot be evaluated or no step lowers the
+    misfit).
     """
     p0 = problem.pack(theta, kv, cv)
     c0 = _cost(problem, p0)
     if not np.isfinite(c0):
         return theta, kv, cv, False
-    x, c = _minimise(problem, p0)
-    if _spurious(problem.u, *problem.unpack(x)[:2]):
-        x2, c2 = _minimise(problem, problem.pack(theta, np.zeros_like(kv), np.zeros_like(cv)))
+    x, c, converged = _minimise(problem, p0)
+    if converged and _spurious(problem.u, *problem.unpack(x)[:2]):
+        x2, c2, _ = _minimise(problem, problem.pack(theta, np.zeros_like(kv), np.zeros_like(cv)))
         if c2 < c:
             x, c = x2, c2
     if not c < c0:
@@ -427,8 +428,9 @@ def _cost(problem: _Problem, pv: Array) -> float:
     return c if np.isfinite(c) else np.inf
 
 
-def _minimise(problem: _Problem, p0: Array) -> tuple[Array, float]:
-    """The output-error cost minimised from `p0` (:func:`rigidid.core.optimize.levenberg_marquardt`)."""
+def _minimise(problem: _Problem, p0: Array) -> tuple[Array, float, bool]:
+    """The output-error cost minimised from `p0` (:func:`rigidid.core.optimize.levenberg_marquardt`): where, the
+    cost there and whether a convergence test fired."""
     from rigidid.core.optimize import levenberg_marquardt
 
     def normal(x: Array, index: Any) -> tuple[Array, Array, Array]:
@@ -441,4 +443,4 @@ def _minimise(problem: _Problem, p0: Array) -> tuple[Array, float]:
             max_evaluations=OUTPUT_ERROR_EVALUATIONS, residuals=problem.n_residuals, decrement=_DECREMENT,
         )  # fmt: skip
     c = float(best.cost[0])
-    return best.x[0], (c if np.isfinite(c) else np.inf)
+    return best.x[0], (c if np.isfinite(c) else np.inf), bool(best.converged[0])
