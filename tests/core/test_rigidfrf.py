@@ -194,3 +194,50 @@ def test_supports_near_the_band_without_errors_in_variables_bias(seed):
     exact = mass_line(*data, band=(6.0, 15.0))
     assert abs(exact.mass / mass - 1.0) < RIGIDFRF_EXACT_REL
     np.testing.assert_allclose(exact.inertia_tensor, inertia, atol=RIGIDFRF_EXACT_REL)
+
+
+def _box_on_four_mounts():
+    """A 30 kg body on four mounts, its M, K and C about the origin written afresh (translations first)."""
+    m, c = 30.0, np.array([0.1, -0.05, 0.08])
+    inertia = np.diag([2.0, 3.0, 4.0]) + 0.2 * np.array([[0.0, 1.0, 0.5], [1.0, 0.0, -0.3], [0.5, -0.3, 0.0]])
+
+    def cross(v):
+        return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+    mm = np.zeros((6, 6))
+    mm[:3, :3] = m * np.eye(3)
+    mm[:3, 3:], mm[3:, :3] = -m * cross(c), m * cross(c)
+    mm[3:, 3:] = inertia - m * cross(c) @ cross(c)
+    kk = np.zeros((6, 6))
+    feet = ([-0.5, -0.3, -0.3], [0.5, -0.3, -0.3], [-0.5, 0.3, -0.3], [0.5, 0.3, -0.3])
+    rates = ([3e4, 2e4, 9e4], [2e4, 3e4, 8e4], [2.5e4, 2e4, 1e5], [3e4, 2.5e4, 9e4])
+    for p, k in zip(feet, rates, strict=True):
+        b = np.hstack([np.eye(3), -cross(np.array(p))])
+        kk += b.T @ np.diag(k) @ b
+    return m, mm, kk, 0.04 / (2 * np.pi * 8.0) * kk
+
+
+def test_mass_standard_error_matches_the_spread_over_noise_draws_above_the_mounts():
+    """12 draws of 1 % noise on one body measured from 1.5x to 6x its highest mount mode.
+
+    The reported standard error of the mass is the spread's: the RMS of (estimate - truth) / SE over 12
+    draws lies within the chi-square(12) 0.1-99.9 % range (0.5-1.66), the sample spread over the mean SE
+    within 0.5-1.6 (its own relative SE over 11 degrees of freedom is 0.21). Without the second start
+    past a spurious mode (rigidfrf._spurious) draw 20 stops in a local minimum 3.7 SE off: RMS 2.0.
+    """
+    m, mm, kk, cc = _box_on_four_mounts()
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(mm, kk)).real)) / (2 * np.pi)
+    w = 2 * np.pi * np.linspace(1.5 * top, 6.0 * top, 40)
+    rp, rd = np.array([[0.5, 0.3, 0.3], [-0.5, 0.3, -0.3], [0.5, -0.3, -0.3]]), np.eye(3)
+    tft = np.hstack([rd, np.cross(rp, rd)]).T
+    x = np.stack([-(wi**2) * np.linalg.solve(kk - wi**2 * mm + 1j * wi * cc, tft) for wi in w], axis=2)
+    est, se = [], []
+    for draw in range(15, 27):
+        g = np.random.default_rng(draw)
+        e = (g.standard_normal(x.shape) + 1j * g.standard_normal(x.shape)) / np.sqrt(2.0)
+        fit = rigid_frf_fit(w, x + 0.01 * np.abs(x) * e, tft)
+        est.append(fit.parameters[0])
+        se.append(np.sqrt(fit.covariance[0, 0]))
+    est, se = np.array(est), np.array(se)
+    assert 0.5 < np.sqrt(np.mean(((est - m) / se) ** 2)) < 1.66
+    assert 0.5 < np.std(est, ddof=1) / np.mean(se) < 1.6
