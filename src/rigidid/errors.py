@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 __all__ = [
+    "ChainWarning",
     "ClippedChannelWarning",
     "DampingUnitWarning",
     "DoubleHitWarning",
@@ -142,6 +143,10 @@ class ElasticNearBandWarning(RigididWarning):
 
 class FrfRoutesDisagreeWarning(RigididWarning):
     """Two FRF routes (``--method auto``) give answers further apart than their 95 % intervals allow."""
+
+
+class ChainWarning(RigididWarning):
+    """A channel's delay or filter shows in the records: an unmodelled skew, or an implausible estimated delay."""
 
 
 class RefinementWarning(RigididWarning):

@@ -29,6 +29,7 @@ from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
+from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -107,6 +108,15 @@ class Refinement:
         stalled at the boundary of positive definite J, K, C with the decrement below 4)
         rather than stopping at its evaluation budget; False when the start was only
         evaluated.
+    misfit : MisfitTest or None
+        The acceptance test of the residual against the pre-trigger.
+    delays, delays_std : ndarray, shape (p,), or None
+        With ``estimate_delays``: each channel's delay (s) beyond the stated chain's,
+        relative to the reference channel (0 there), and its standard error.
+    delay_score : ndarray, shape (2, p), or None
+        Without ``estimate_delays``, when the fit was not accepted: the one Gauss-Newton
+        step's delay of each channel (s) and its z score (delay over standard error), the
+        test for an unmodelled skew (:func:`delay_step`).
     """
 
     center_of_gravity: Array
@@ -121,6 +131,9 @@ class Refinement:
     evaluations: int
     converged: bool = False
     misfit: MisfitTest | None = None
+    delays: Array | None = None
+    delays_std: Array | None = None
+    delay_score: Array | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -259,6 +272,46 @@ def _modes(theta: Array, pos: Array, dirs: Array, with_derivatives: bool) -> tup
         dlam[j] = dl
         dphi[j] = t_g @ (dv[:6] * lam_k + vec[:6, keep] * dl)
     return lam_k, phi, dlam, dphi
+
+
+# --- the acquisition chain -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Link:
+    """The chain in the refit's model: ``phi_ck H_c(s_k)``, and the fitted delays' parameters.
+
+    ``free`` lists the channels whose delays are ``theta[N_PARAMETERS:]`` (local time units,
+    seconds times `omega`); the other channels' delays are the stated ones only.
+    """
+
+    chain: ChainModel
+    omega: float
+    free: tuple[int, ...] = ()
+
+    def apply(
+        self, theta: Array, lam: CArray, phi: CArray, dlam: CArray, dphi: CArray
+    ) -> tuple[CArray, CArray, CArray]:
+        """Shapes through the chain and their derivatives (delay rows appended when delays are fitted).
+
+        ``d(phi H)/dtheta = dphi H + phi H'(s) omega dlam``; a delay ``tau_c`` multiplies channel c by
+        ``e^{-s tau_c}``, so ``d(phi_ck H_ck)/d(omega tau_c) = -lambda_k phi_ck H_ck`` (local units).
+        """
+        extra = np.zeros(phi.shape[0])
+        extra[list(self.free)] = theta[N_PARAMETERS:] / self.omega
+        h, dh = self.chain.transfer(lam * self.omega, extra)
+        out = phi * h
+        if dphi.shape[0] == 0:
+            return out, dlam, dphi
+        d = dphi * h[None] + phi[None] * dh[None] * self.omega * dlam[:, None, :]
+        dd = np.zeros((len(self.free), *phi.shape), complex)
+        for i, c in enumerate(self.free):
+            dd[i, c] = -lam * out[c]
+        return out, np.vstack([dlam, np.zeros((len(self.free), lam.size), complex)]), np.concatenate([d, dd])
+
+    def extra_columns(self) -> int:
+        """Linear unknowns per impact the chain adds (the AC coupling's transients, per channel)."""
+        return int(sum(int(np.sum(mask)) for _, _, mask in self.chain.highpass_modes()))
 
 
 # --- data preparation -------------------------------------------------------------------
@@ -450,17 +503,26 @@ _fit_factor = fit_factor
 # --- variable projection ----------------------------------------------------------------
 
 
-def _design(lam: CArray, phi: CArray, t: Array, drift: bool = False) -> tuple[Array, CArray]:
-    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6)."""
+def _design(
+    lam: CArray, phi: CArray, t: Array, drift: bool = False, extra: Array | None = None
+) -> tuple[Array, CArray]:
+    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6).
+
+    `extra` (n, p, m): per-channel nuisance functions (the chain's AC-coupling transients), each a column
+    per channel where it is not zero.
+    """
     n, p = t.shape[0], phi.shape[0]
     ex = np.exp(np.outer(t, lam))  # (n, 6)
     u = ex[:, None, :] * phi[None, :, :]  # (n, p, 6)
     cols = np.concatenate([u.real, -u.imag], axis=2).reshape(n * p, 12)
     offs = np.tile(np.eye(p), (n, 1))
-    if not drift:
-        return np.hstack([cols, offs]), ex
-    ramp = offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None]
-    return np.hstack([cols, offs, ramp]), ex
+    blocks = [cols, offs]
+    if drift:
+        blocks.append(offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None])
+    for m in range(0 if extra is None else extra.shape[2]):
+        f = offs * extra[:, :, m].reshape(-1)[:, None]  # type: ignore[index]
+        blocks.append(f[:, np.any(f != 0.0, axis=0)])
+    return np.hstack(blocks), ex
 
 
 def _projector(design: Array) -> Any:
@@ -574,7 +636,7 @@ def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray,
     e1 = res.T @ ex  # (p, 6): sum_n r_nc e^{lambda_k t_n}
     e2 = res.T @ (ex * t[:, None])
     s = np.einsum("ck,jck->jk", e1, dphiw) + dlam * np.einsum("ck,ck->k", phiw, e2)[None, :]
-    z = np.zeros((N_PARAMETERS, design.shape[1]))
+    z = np.zeros((dphiw.shape[0], design.shape[1]))
     z[:, :6], z[:, 6:12] = s.real, -s.imag
     coef = np.linalg.lstsq(design.T @ design, z.T, rcond=None)[0]  # (A^T A)^-1 z^T
     out: Array = design @ coef
@@ -587,25 +649,30 @@ def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
     The complex product ``[E, t E] [G1; G2]`` has real part ``[Re, Im] [Re G; -Im G]``: one BLAS
     call on (n, 24) by (24, 51 p), and no (n, 51, p) complex temporaries.
     """
-    n, p = t.shape[0], g1.shape[1]
+    n, p, n_theta = t.shape[0], g1.shape[1], g1.shape[0]
     e = np.hstack([ex, ex * t[:, None]])  # (n, 12)
-    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * N_PARAMETERS)  # (12, p 51)
+    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * n_theta)  # (12, p 51)
     left = np.hstack([e.real, e.imag])
     right = np.vstack([g.real, -g.imag])
-    out: Array = (left @ right).reshape(n, p, N_PARAMETERS)
+    out: Array = (left @ right).reshape(n, p, n_theta)
     return out
 
 
-def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
+def _evaluate(
+    theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool, link: _Link | None = None
+) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
+    if link is not None:
+        phi, dlam, dphi = link.apply(theta, lam, phi, dlam, dphi)
     w = 1.0 / data.sigma
     res_parts = []
-    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, N_PARAMETERS))
+    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, theta.size))
     row = 0
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        design, ex = _design(lam, phi * w[:, None], t, data.drift)
+        extra = None if link is None else link.chain.nuisance(t, omega)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift, extra)
         yw = (y * w).reshape(-1)
         project = _projector(design)
         beta, r = project(yw)
@@ -616,7 +683,7 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             wd = dphi * w[None, :, None]  # (51, p, 6)
             g1 = wd * amp  # (51, p, 6)
             g2 = (phi * w[:, None])[None, :, :] * (dlam * amp)[:, None, :]
-            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, N_PARAMETERS)  # d model / d theta
+            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, theta.size)  # d model / d theta
             jp = project(dm, j_all[row : row + n * p])[1]  # minus the projected derivative, in place
             del dm
             if _GOLUB_PEREYRA:
@@ -641,6 +708,8 @@ def refine_body(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool = False,
+    chain: ChainModel | None = None,
+    estimate_delays: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -669,6 +738,9 @@ def refine_body(
     drift : bool
         Fit a linear drift per channel and impact beside the offset
         (:attr:`PreparedDecays.drift`).
+    chain, estimate_delays
+        The acquisition chain and whether to fit the channels' delays
+        (:func:`refine_prepared`).
 
     Returns
     -------
@@ -714,6 +786,7 @@ def refine_body(
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
+        chain=chain, estimate_delays=estimate_delays,
     )  # fmt: skip
 
 
@@ -729,6 +802,8 @@ def refine_prepared(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool | None = None,
+    chain: ChainModel | None = None,
+    estimate_delays: bool = False,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -743,6 +818,13 @@ def refine_prepared(
         As for :func:`refine_body`.
     drift : bool, optional
         Overrides ``data.drift``.
+    chain : ChainModel, optional
+        The channels' acquisition chain (:mod:`rigidid.core.timedomain.chain`): each mode's
+        contribution to channel c is multiplied by ``H_c(s_k)``, the AC coupling's transients are
+        nuisance columns, the fit starts after the anti-alias filter's settling time.
+    estimate_delays : bool
+        Fit a delay per channel beside the body, relative to the first channel (whose delay a
+        common shift of every channel's would absorb in the modal amplitudes).
 
     Returns
     -------
@@ -759,6 +841,7 @@ def refine_prepared(
     """
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
+    data = _settled(data, chain)
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -775,17 +858,19 @@ def refine_prepared(
         np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
         np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
     )  # fmt: skip
+    p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
+    theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     if data.noise_from == "residual":
-        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
+        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
         data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
     def both(theta: Array) -> tuple[Array, Array]:
-        return _evaluate(theta, data, pos_l, dirs, omega, True)
+        return _evaluate(theta, data, pos_l, dirs, omega, True, link)
 
     def fun(theta: Array) -> Array:
-        return _evaluate(theta, data, pos_l, dirs, omega, False)[0]
+        return _evaluate(theta, data, pos_l, dirs, omega, False, link)[0]
 
     if max_evaluations > 0:
         n_res, scale = sum(d.size for d in data.decays), sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
@@ -794,14 +879,17 @@ def refine_prepared(
         theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)
     n_res = r.size
-    dof = max(n_res - N_PARAMETERS - len(data.decays) * _linear_per_impact(pos.shape[0], data.drift), 1)
+    n_linear = _linear_per_impact(p, data.drift) + (0 if link is None else link.extra_columns())
+    dof = max(n_res - theta.size - len(data.decays) * n_linear, 1)
     cost = float(r @ r) / dof if data.noise_from == "pretrigger" else 1.0
     s2 = float(r @ r) / dof
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, n_linear)
     misfit = _misfit(r, data, dof / n_res, q_fit)
+    rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
+    delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -815,7 +903,84 @@ def refine_prepared(
         evaluations=nfev,
         converged=converged,
         misfit=misfit,
+        delays=delays,
+        delays_std=delays_std,
+        delay_score=score,
     )
+
+
+def _delay_results(
+    theta: Array, std: dict[str, Array], link: _Link | None, rejected: bool, fit: tuple[Any, ...]
+) -> tuple[Array | None, Array | None, Array | None]:
+    """The fitted delays and their std (s), or, for a rejected fit without them, the delay score (:func:`delay_step`).
+
+    `fit` is ``(data, pos_l, dirs, omega, chain, s2)``; ``std``'s ``"delay"`` entry is taken out.
+    """
+    data, pos_l, dirs, omega, chain, s2 = fit
+    p = pos_l.shape[0]
+    if link is not None and link.free:
+        delays, delays_std = np.zeros(p), np.zeros(p)
+        delays[list(link.free)] = theta[N_PARAMETERS:] / omega
+        delays_std[list(link.free)] = std.pop("delay") / omega
+        return delays, delays_std, None
+    if not rejected or p < 2:
+        return None, None, None
+    wide = _link(chain, omega, p, True)
+    r_d, j_d = _evaluate(np.concatenate([theta, np.zeros(p - 1)]), data, pos_l, dirs, omega, True, wide)
+    return None, None, delay_step(r_d, j_d, p - 1, s2) / np.array([[omega], [1.0]])
+
+
+def _link(chain: ChainModel | None, omega: float, p: int, estimate_delays: bool) -> _Link | None:
+    """The chain's link into the refit (None: nothing to model and no delays fitted)."""
+    if chain is None and not estimate_delays:
+        return None
+    model = chain if chain is not None else ChainModel(tuple(ChannelChain() for _ in range(p)))
+    if model.identity and not estimate_delays:
+        return None
+    return _Link(model, omega, tuple(range(1, p)) if estimate_delays else ())
+
+
+def _settled(data: PreparedDecays, chain: ChainModel | None) -> PreparedDecays:
+    """`data` with the first samples of each decay dropped while the anti-alias filters settle."""
+    skip = 0 if chain is None else math.ceil(chain.settle_time() / data.dt)
+    if skip == 0:
+        return data
+    return replace(data, decays=[d[skip:] for d in data.decays])
+
+
+def delay_step(r: Array, jm: Array, n_delays: int, s2: float) -> Array:
+    """The delays' part of one Gauss-Newton step from a fit without them, and its z scores.
+
+    A score test for unmodelled channel delays: at the fitted body, the step
+    ``-(J^T J)^-1 J^T r`` of the fit with delays freed (the body's parameters and the
+    delays together, `jm`'s last `n_delays` columns the delays of channels 1..p-1) and its
+    standard errors ``sqrt(s2 diag (J^T J)^-1)``.
+
+    Parameters
+    ----------
+    r : ndarray, shape (n,)
+        The residual at the fit (whitened).
+    jm : ndarray, shape (n, n_theta)
+        Its Jacobian with the delays' columns last.
+    n_delays : int
+        Number of delay columns.
+    s2 : float
+        Residual variance.
+
+    Returns
+    -------
+    ndarray, shape (2, n_delays + 1)
+        Row 0: each channel's delay step (local time units; 0 for the reference, channel 0);
+        row 1: its z score.
+    """
+    info = jm.T @ jm
+    cov = pseudo_inverse(info, symmetric=True)[0]
+    step = -cov @ (jm.T @ r)
+    sd = np.sqrt(np.maximum(np.diag(cov)[-n_delays:] * s2, 1e-300))
+    out = np.zeros((2, n_delays + 1))
+    out[0, 1:] = step[-n_delays:]
+    out[1, 1:] = step[-n_delays:] / sd
+    return out
 
 
 def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
@@ -831,7 +996,7 @@ def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) ->
     return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
 
 
-def _linear_per_impact(p: int, drift: bool) -> int:
+def _linear_per_impact(p: int, drift: bool | int) -> int:
     """Linear unknowns per impact: 12 modal amplitudes, an offset per channel (and a drift)."""
     return 12 + (2 if drift else 1) * p
 
@@ -853,7 +1018,7 @@ def _bound(
     residual: Array | None = None,
     lengths: Sequence[int] | None = None,
     factor: int = 1,
-    drift: bool = False,
+    n_linear: int | None = None,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -861,17 +1026,18 @@ def _bound(
     covariance of :func:`rigidid.core.timedomain.intervals.parameter_covariance`
     (sandwich from the residual per impact and channel, the decimation filter's
     correlation, the remaining Gauss-Newton step). Without: the textbook bound
-    ``s2 (J^T J)^+``.
+    ``s2 (J^T J)^+``. `n_linear`: linear unknowns per impact (default: 12 and an offset per channel).
+    Parameters beyond the body's (the channels' delays) get the key ``"delay"``.
     """
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
 
-        n_linear = len(lengths) * _linear_per_impact(pos_l.shape[0], drift)
-        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
+        per = _linear_per_impact(pos_l.shape[0], False) if n_linear is None else n_linear
+        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, len(lengths) * per).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
     base = _outputs(theta, frame, pos_l, dirs)
-    grad = np.zeros((base.size, N_PARAMETERS))
+    grad = np.zeros((base.size, theta.size))
     for i in range(N_PARAMETERS):
         h = 1e-6 * max(1.0, abs(theta[i]))
         step = theta.copy()
@@ -888,7 +1054,7 @@ def _bound(
         "damping_per_mass": sd[48:84].reshape(6, 6),
         "frequency_hz": sd[84:90],
         "damping_ratio": sd[90:96],
-    }
+    } | ({"delay": np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:], 0.0))} if theta.size > N_PARAMETERS else {})
 
 
 def good_fit(refinement: Refinement) -> bool:
@@ -927,6 +1093,9 @@ class RecordBound:
         See :func:`record_bound`.
     misfit : MisfitTest or None
         The refit's acceptance test (:class:`Refinement`).
+    delays : dict of str to (float, float), or None
+        With the delays estimated: per channel id, its delay (s) relative to the reference
+        channel and its standard error (:attr:`Refinement.delays`).
     """
 
     center_of_gravity: Any
@@ -943,6 +1112,7 @@ class RecordBound:
     sensor_budget: dict[str, dict[str, Array]] | None = None
     tolerances: dict[str, float] | None = None
     misfit: MisfitTest | None = None
+    delays: dict[str, tuple[float, float]] | None = None
 
 
 def record_bound(
