@@ -212,13 +212,16 @@ class ChainModel:
         return out
 
     def settle_time(self) -> float:
-        """Time (s) after which the anti-alias filters' own transients are below 1e-6 of their start.
+        """Time (s) after which every channel reads the free decay: delays passed, anti-alias transients below 1e-6.
 
+        The largest delay (a delayed channel still reads the impact at the decay's start) plus
         :data:`_SETTLE` time constants of the slowest anti-alias pole (``1 / min |Re p_j|``); 0 without
-        anti-alias filters. The AC coupling's transient is modelled instead (:meth:`highpass_modes`).
+        delays and anti-alias filters. The AC coupling's transient is modelled instead
+        (:meth:`highpass_modes`).
         """
         slowest = [float(np.min(np.abs(c.antialias.poles().real))) for c in self.channels if c.antialias is not None]
-        return _SETTLE / min(slowest) if slowest else 0.0
+        late = max(max(c.delay for c in self.channels), 0.0)
+        return late + (_SETTLE / min(slowest) if slowest else 0.0)
 
     def highpass_modes(self) -> list[tuple[float, int, NDArray[np.bool_]]]:
         """The AC coupling's natural modes: ``(w_c, power j, channels)`` for ``t^j e^{-w_c t}``, ``j < order``."""

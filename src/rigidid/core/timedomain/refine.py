@@ -69,6 +69,7 @@ _DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual 
 _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
 _STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
 _GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
+_DELAY_SKIP = 2  # samples (at the fit's rate) dropped from each decay when the delays are fitted
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
 
 
@@ -841,7 +842,7 @@ def refine_prepared(
     """
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
-    data = _settled(data, chain)
+    data = _settled(data, chain, estimate_delays)
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -940,9 +941,12 @@ def _link(chain: ChainModel | None, omega: float, p: int, estimate_delays: bool)
     return _Link(model, omega, tuple(range(1, p)) if estimate_delays else ())
 
 
-def _settled(data: PreparedDecays, chain: ChainModel | None) -> PreparedDecays:
-    """`data` with the first samples of each decay dropped while the anti-alias filters settle."""
-    skip = 0 if chain is None else math.ceil(chain.settle_time() / data.dt)
+def _settled(data: PreparedDecays, chain: ChainModel | None, estimate_delays: bool = False) -> PreparedDecays:
+    """`data` with the first samples of each decay dropped while the chain settles (:meth:`ChainModel.settle_time`).
+
+    With the delays estimated, :data:`_DELAY_SKIP` more samples (a late channel reads the impact's end there).
+    """
+    skip = (0 if chain is None else math.ceil(chain.settle_time() / data.dt)) + (_DELAY_SKIP if estimate_delays else 0)
     if skip == 0:
         return data
     return replace(data, decays=[d[skip:] for d in data.decays])
