@@ -18,7 +18,8 @@ single-axis accelerometers, three impacts, 2048 Hz, 6 s, 0.25 s pre-trigger, whi
 - ``skew``: one channel one sample late;             ``ac``: 2 Hz first-order high-pass (AC coupling);
 - ``stamps``: time columns starting elsewhere, written with 7 decimals;
 - ``aa``: an analog 8th-order Butterworth anti-alias filter at 0.4 fs (its state space discretised with a
-  first-order hold, so the samples carry no hold delay);
+  first-order hold, so the samples carry no hold delay); the noise (1 % of the RMS in the filter's band)
+  through the filter's magnitude (a bilinear Butterworth, |H|^2 as the analog one's below 0.4 fs);
 - ``hum``: a 50 Hz sinusoid of 2 % of each channel's peak, random phase per channel.
 
 ``--metadata`` states the chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
@@ -175,14 +176,19 @@ def _pulse(t: np.ndarray, width: float) -> np.ndarray:
 def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
     peak = np.abs(acc).max(axis=0)
     rms = np.sqrt(np.mean(acc**2, axis=0))
-    y = acc + NOISE * rms * rng.standard_normal(acc.shape)
+    noise = NOISE * rms * rng.standard_normal(acc.shape)
+    if "aa" in effects:  # the sensor's noise through the filter too (its spectrum |H|^2 of the analog filter)
+        from scipy.signal import butter, sosfilt
+
+        sos = butter(AA_ORDER, AA_CORNER, fs=RATE, output="sos")
+        noise = sosfilt(sos, noise, axis=0) / np.sqrt(np.mean(np.abs(_gain(sos)) ** 2))
+        acc = _antialias(acc)
+    y = acc + noise
     if "ac" in effects:
         from scipy.signal import bilinear, lfilter
 
         b, a = bilinear([1.0, 0.0], [1.0, 2 * np.pi * 2.0], RATE)
         y = lfilter(b, a, y, axis=0)
-    if "aa" in effects:
-        y = _antialias(y)
     if "skew" in effects:
         y[1:, SKEWED] = y[:-1, SKEWED].copy()
     if "hum" in effects:
@@ -199,11 +205,18 @@ def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.n
     return y
 
 
+def _gain(sos: np.ndarray) -> np.ndarray:
+    """The digital filter's response on a fine grid (its mean square: the filtered white noise's variance)."""
+    from scipy.signal import sosfreqz
+
+    return np.asarray(sosfreqz(sos, worN=8192)[1])
+
+
 def _antialias(y: np.ndarray) -> np.ndarray:
     """The analog Butterworth anti-alias filter, exact for signals linear between samples (first-order hold)."""
-    from scipy.signal import butter, cont2discrete, dlsim
+    from scipy.signal import butter, cont2discrete, dlsim, zpk2ss
 
-    a, b, c, d = butter(AA_ORDER, 2 * np.pi * AA_CORNER, analog=True, output="ss")
+    a, b, c, d = zpk2ss(*butter(AA_ORDER, 2 * np.pi * AA_CORNER, analog=True, output="zpk"))
     ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), 1.0 / RATE, method="foh")
     return np.column_stack([dlsim((ad, bd, cd, dd, 1.0 / RATE), y[:, i])[1][:, 0] for i in range(y.shape[1])])
 

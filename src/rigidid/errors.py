@@ -20,6 +20,7 @@ __all__ = [
     "DoubleHitWarning",
     "ElasticModeWarning",
     "FrfMisfitWarning",
+    "HumWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -147,6 +148,10 @@ class FrfRoutesDisagreeWarning(RigididWarning):
 
 class ChainWarning(RigididWarning):
     """A channel's delay or filter shows in the records: an unmodelled skew, or an implausible estimated delay."""
+
+
+class HumWarning(RigididWarning):
+    """Mains hum (50 or 60 Hz or a harmonic) found in the records: modelled in the refit, named."""
 
 
 class RefinementWarning(RigididWarning):

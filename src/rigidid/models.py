@@ -540,6 +540,9 @@ class RecordBoundResult(BaseModel):
         description="--estimate-delays: per channel id, delay_s (its delay beyond the layout's chain, relative to "
         "the first channel fitted) and std_s (its standard error)",
     )
+    mains_hum_hz: list[float] | None = Field(
+        default=None, description="mains hum frequencies found in the records and modelled in the refit (Hz)"
+    )
 
 
 class ForceMassResult(_Strict):

@@ -175,3 +175,29 @@ def test_layout_chain_is_validated(tmp_path: Path) -> None:
         (tmp_path / "layout.json").write_text(json.dumps(base))
         with pytest.raises(InputError, match=where.replace(".", r"\.")):
             load(tmp_path / "layout.json")
+
+
+def test_mains_hum_is_found_modelled_and_left_out_of_the_modes(rig) -> None:  # type: ignore[no-untyped-def]
+    from rigidid.core.timedomain.hum import find_hum
+    from rigidid.core.timedomain.stabilisation import _physical
+
+    body, pos, dirs = rig
+    rng = np.random.default_rng(5)
+    white = [rng.standard_normal((300, 4)) for _ in range(2)]
+    assert find_hum(white, 1.0 / RATE) == []
+    t = np.arange(300) / RATE
+    hummed = [w + 0.5 * np.sin(2 * np.pi * 50.0 * t + k)[:, None] for k, w in enumerate(white)]
+    (hz, _, amplitude), *rest = find_hum(hummed, 1.0 / RATE)
+    assert hz == 50.0 and not rest and 0.4 < amplitude < 0.6
+    # a sweep's pole at 50 Hz with no damping is hum, not a mode; a damped one is a mode
+    poles = 2 * np.pi * 50.0 * np.array([-1e-4 + 1j, -0.02 + 1j])
+    assert list(_physical(poles, (1.0, 60.0), 0.3)) == [False, True]
+    # the refit with hum of 3 % of the peak: found, modelled, the body as exact as without it
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=2.0, pretrigger=0.3, noise=0.0)
+    t = np.arange(clean[0].shape[0]) / RATE
+    peak = np.max(np.abs(clean[0]), axis=0)
+    phase = 0.3 * np.arange(pos.shape[0])
+    records = [r + 0.03 * peak * np.sin(2 * np.pi * 50.0 * t[:, None] + phase) for r in clean]
+    ref = _refit(rig, records, None, onset=38)
+    assert [h for h, _, _ in ref.hum] == [50.0]
+    assert np.max(np.abs(ref.center_of_gravity - body.center_of_gravity)) < 1e-6

@@ -600,7 +600,8 @@ _SKEW_Z = 5.0  # a delay step this many standard errors from zero: an unmodelled
 
 
 def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any) -> None:
-    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score."""
+    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score;
+    a HumWarning naming the mains hum the refit modelled."""
     import warnings
 
     from rigidid.errors import ChainWarning
@@ -615,6 +616,16 @@ def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any) -> None
                     ChainWarning,
                     stacklevel=3,
                 )
+    if refinement.hum:
+        from rigidid.errors import HumWarning
+
+        warnings.warn(
+            "mains hum in the records at "
+            + ", ".join(f"{hz:g} Hz (amplitude {amp:.3g} noise std, z = {z:.0f})" for hz, z, amp in refinement.hum)
+            + ": modelled in the refit as a sinusoid per channel and impact",
+            HumWarning,
+            stacklevel=3,
+        )
     if refinement.delay_score is not None:
         step, z = refinement.delay_score
         late = [f"{name} ({d:.3g} s, z = {zz:.1f})" for name, d, zz in zip(ids, step, z, strict=False)
@@ -707,6 +718,8 @@ def _accept_refinement(
     if refinement.delays is not None:
         pairs = zip(ids, refinement.delays, refinement.delays_std, strict=False)
         bound = replace(bound, delays={name: (float(d), float(sd)) for name, d, sd in pairs})
+    if refinement.hum:
+        bound = replace(bound, hum_hz=tuple(hz for hz, _, _ in refinement.hum))
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
 
 

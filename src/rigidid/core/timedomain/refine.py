@@ -118,6 +118,10 @@ class Refinement:
         Without ``estimate_delays``, when the fit was not accepted: the one Gauss-Newton
         step's delay of each channel (s) and its z score (delay over standard error), the
         test for an unmodelled skew (:func:`delay_step`).
+    hum : tuple of (float, float, float)
+        Mains hum found in the start's residual and modelled (nuisance sinusoids per channel and
+        impact): frequency (Hz), z score and RMS amplitude in noise standard deviations
+        (:func:`rigidid.core.timedomain.hum.find_hum`).
     """
 
     center_of_gravity: Array
@@ -135,6 +139,7 @@ class Refinement:
     delays: Array | None = None
     delays_std: Array | None = None
     delay_score: Array | None = None
+    hum: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def frequency_hz(self) -> Array:
@@ -289,6 +294,7 @@ class _Link:
     chain: ChainModel
     omega: float
     free: tuple[int, ...] = ()
+    hum: tuple[float, ...] = ()
 
     def apply(
         self, theta: Array, lam: CArray, phi: CArray, dlam: CArray, dphi: CArray
@@ -311,8 +317,18 @@ class _Link:
         return out, np.vstack([dlam, np.zeros((len(self.free), lam.size), complex)]), np.concatenate([d, dd])
 
     def extra_columns(self) -> int:
-        """Linear unknowns per impact the chain adds (the AC coupling's transients, per channel)."""
-        return int(sum(int(np.sum(mask)) for _, _, mask in self.chain.highpass_modes()))
+        """Linear unknowns per impact the chain adds (the AC coupling's transients, per channel) and the hum."""
+        hum = 2 * len(self.hum) * len(self.chain.channels)
+        return hum + int(sum(int(np.sum(mask)) for _, _, mask in self.chain.highpass_modes()))
+
+    def nuisance(self, t: Array) -> Array | None:
+        """Nuisance columns (n, p, m): the AC coupling's transients and the hum's sinusoids (None: none)."""
+        parts = [x for x in (self.chain.nuisance(t, self.omega),) if x is not None]
+        if self.hum:
+            from rigidid.core.timedomain.hum import hum_columns
+
+            parts.append(hum_columns(t, self.omega, self.hum, len(self.chain.channels)))
+        return np.concatenate(parts, axis=2) if parts else None
 
 
 # --- data preparation -------------------------------------------------------------------
@@ -672,7 +688,7 @@ def _evaluate(
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        extra = None if link is None else link.chain.nuisance(t, omega)
+        extra = None if link is None else link.nuisance(t)
         design, ex = _design(lam, phi * w[:, None], t, data.drift, extra)
         yw = (y * w).reshape(-1)
         project = _projector(design)
@@ -842,7 +858,7 @@ def refine_prepared(
     """
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
-    data = _settled(data, chain, estimate_delays)
+    data = _settled(data, chain, estimate_delays, float(dt))
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -861,6 +877,7 @@ def refine_prepared(
     )  # fmt: skip
     p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
+    link, hum = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays))
     if data.noise_from == "residual":
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
         per = r0.reshape(-1, pos.shape[0])
@@ -882,8 +899,8 @@ def refine_prepared(
     n_res = r.size
     n_linear = _linear_per_impact(p, data.drift) + (0 if link is None else link.extra_columns())
     dof = max(n_res - theta.size - len(data.decays) * n_linear, 1)
-    cost = float(r @ r) / dof if data.noise_from == "pretrigger" else 1.0
     s2 = float(r @ r) / dof
+    cost = s2 if data.noise_from == "pretrigger" else 1.0
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
@@ -892,22 +909,10 @@ def refine_prepared(
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
     delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
     return Refinement(
-        center_of_gravity=g,
-        inertia_per_mass=j,
-        stiffness_per_mass=k,
-        damping_per_mass=c,
-        poles=lam * omega,
-        std=std,
-        normalised_cost=cost,
-        noise_from=data.noise_from,
-        residuals=n_res,
-        evaluations=nfev,
-        converged=converged,
-        misfit=misfit,
-        delays=delays,
-        delays_std=delays_std,
-        delay_score=score,
-    )
+        center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega, std=std,
+        normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev, converged=converged,
+        misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
+    )  # fmt: skip
 
 
 def _delay_results(
@@ -926,26 +931,56 @@ def _delay_results(
         return delays, delays_std, None
     if not rejected or p < 2:
         return None, None, None
-    wide = _link(chain, omega, p, True)
+    wide = _link(chain, omega, p, True, () if link is None else link.hum)
     r_d, j_d = _evaluate(np.concatenate([theta, np.zeros(p - 1)]), data, pos_l, dirs, omega, True, wide)
     return None, None, delay_step(r_d, j_d, p - 1, s2) / np.array([[omega], [1.0]])
 
 
-def _link(chain: ChainModel | None, omega: float, p: int, estimate_delays: bool) -> _Link | None:
-    """The chain's link into the refit (None: nothing to model and no delays fitted)."""
-    if chain is None and not estimate_delays:
-        return None
+def _link(
+    chain: ChainModel | None, omega: float, p: int, estimate_delays: bool, hum: Sequence[float] = ()
+) -> _Link | None:
+    """The chain's link into the refit (None: nothing to model, no delays fitted, no hum)."""
     model = chain if chain is not None else ChainModel(tuple(ChannelChain() for _ in range(p)))
-    if model.identity and not estimate_delays:
+    if model.identity and not estimate_delays and not hum:
         return None
-    return _Link(model, omega, tuple(range(1, p)) if estimate_delays else ())
+    return _Link(model, omega, tuple(range(1, p)) if estimate_delays else (), tuple(hum))
 
 
-def _settled(data: PreparedDecays, chain: ChainModel | None, estimate_delays: bool = False) -> PreparedDecays:
+def _with_hum(
+    link: _Link | None, theta0: Array, data: PreparedDecays, model: tuple[Any, ...]
+) -> tuple[_Link | None, tuple[tuple[float, float, float], ...]]:
+    """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual.
+
+    `model` is ``(pos_l, dirs, omega, chain, estimate_delays)``. Returns the link and the hum found.
+    """
+    from rigidid.core.timedomain.hum import find_hum
+
+    pos_l, dirs, omega, chain, estimate_delays = model
+    r0 = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0]
+    parts, row, p = [], 0, pos_l.shape[0]
+    for d in data.decays:
+        parts.append(r0[row : row + d.size].reshape(-1, p))
+        row += d.size
+    found = tuple(find_hum(parts, data.dt))
+    if not found:
+        return link, ()
+    return _link(chain, omega, p, estimate_delays, [f for f, _, _ in found]), found
+
+
+def _settled(
+    data: PreparedDecays, chain: ChainModel | None, estimate_delays: bool = False, dt: float = 0.0
+) -> PreparedDecays:
     """`data` with the first samples of each decay dropped while the chain settles (:meth:`ChainModel.settle_time`).
 
     With the delays estimated, :data:`_DELAY_SKIP` more samples (a late channel reads the impact's end there).
+    With an anti-alias filter and a decimated fit, the pre-trigger's noise levels (and squares) are scaled
+    for the noise's colour (:meth:`ChainModel.decimated_noise_ratio`; `dt` the raw sample interval).
     """
+    q = max(1, round(data.dt / dt)) if dt > 0.0 else 1
+    if chain is not None and q > 1 and data.noise_from == "pretrigger":
+        ratio = chain.decimated_noise_ratio(dt, fir_taps(q))
+        m2 = None if data.pre_m2 is None else data.pre_m2 * ratio[None, :]
+        data = replace(data, sigma=data.sigma * np.sqrt(ratio), pre_m2=m2)
     skip = (0 if chain is None else math.ceil(chain.settle_time() / data.dt)) + (_DELAY_SKIP if estimate_delays else 0)
     if skip == 0:
         return data
@@ -1100,6 +1135,8 @@ class RecordBound:
     delays : dict of str to (float, float), or None
         With the delays estimated: per channel id, its delay (s) relative to the reference
         channel and its standard error (:attr:`Refinement.delays`).
+    hum_hz : tuple of float
+        Mains hum frequencies modelled (:attr:`Refinement.hum`).
     """
 
     center_of_gravity: Any
@@ -1117,6 +1154,7 @@ class RecordBound:
     tolerances: dict[str, float] | None = None
     misfit: MisfitTest | None = None
     delays: dict[str, tuple[float, float]] | None = None
+    hum_hz: tuple[float, ...] = ()
 
 
 def record_bound(
