@@ -120,7 +120,7 @@ def identify(
         if frf_out is not None and not records:
             raise InputError("--frf-out needs impact records with a force channel (--records)", source="--frf-out")
         if estimate_delays and not (records and refine):
-            raise InputError("--estimate-delays needs impact records and the refit (--records, --refine)",
+            raise InputError("needs impact records and the refit (--records, without --no-refine)",
                              source="--estimate-delays")  # fmt: skip
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
