@@ -22,7 +22,9 @@ single-axis accelerometers, three impacts, 2048 Hz, 6 s, 0.25 s pre-trigger, whi
   through the filter's magnitude (a bilinear Butterworth, |H|^2 as the analog one's below 0.4 fs);
 - ``hum``: a 50 Hz sinusoid of 2 % of each channel's peak, random phase per channel.
 
-``--metadata`` states the chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
+``--paired`` also runs each draw's clean twin (the same noise, no effect) and prints its errors and the
+largest ratio of the cell's errors to its twin's (1: the effect costs nothing). ``--metadata`` states the
+chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
 channel's delay); ``--estimate-delays`` passes that option (the delays then fitted, not stated).
 
 Printed per cell: runs finished (exit 0) of all; the median and worst CG error (% of the sensor
@@ -345,8 +347,12 @@ def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float
     return float(np.mean(hits)), float(np.median(ratios)), float(np.median(j_errs))
 
 
-def run_cell(cell: str, seed: int, metadata: bool = False, estimate_delays: bool = False) -> dict[str, object]:
+def run_cell(
+    cell: str, seed: int, metadata: bool = False, estimate_delays: bool = False, twin: bool = False
+) -> dict[str, object]:
+    """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin."""
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
+    effects = set() if twin else effects
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
     sensors = sensor_errors(effects, rng)
     records = simulate(effects, rng, sensors)
@@ -388,6 +394,7 @@ def main() -> None:
     parser.add_argument("--floor-draws", type=int, default=200, help="draws of the type-B coverage table (0: none)")
     parser.add_argument("--metadata", action="store_true", help="state the chain in the layout's chain block")
     parser.add_argument("--estimate-delays", action="store_true", help="pass --estimate-delays")
+    parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
     args = parser.parse_args()
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
@@ -411,6 +418,14 @@ def main() -> None:
         note = next((str(r.get("error") or (r["warnings"][0] if r["warnings"] else "")) for r in rows  # type: ignore[index]
                      if r.get("error") or r["warnings"]), "")  # fmt: skip
         note = note.replace("rigidid: ", "")[:110]
+        if args.paired:
+            twins = [run_cell(cell, s, twin=True) for s in range(args.seeds)]
+            ratio = [np.array(r["errors"]) / np.array(t["errors"]) for r, t in zip(rows, twins, strict=True)
+                     if r["exit"] == 0 and t["exit"] == 0]  # fmt: skip
+            twin_errs = np.array([t["errors"] for t in twins if t["exit"] == 0])
+            top = np.max(ratio, axis=0)
+            note = (f"clean twin CG/J med {np.median(twin_errs[:, 0]):.3f}/{np.median(twin_errs[:, 1]):.2f}, "
+                    f"cell/twin max {top[0]:.2f}/{top[1]:.2f}  " + note)[:150]  # fmt: skip
         med, worst = np.median(errs, axis=0), np.max(errs, axis=0)
         print(f"{cell:<11} {len(done):>4}/{len(rows):<3} {med[0]:>8.3f}/{worst[0]:<8.3f} "
               f"{med[1]:>6.2f}/{worst[1]:<6.2f} "
