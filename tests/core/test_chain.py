@@ -168,6 +168,18 @@ def test_layout_chain_is_validated(tmp_path: Path) -> None:
     assert model is not None
     assert model.channels[0] == ChannelChain(0.0, 1, AntiAlias("bessel", 4, 200.0), 0.001)
     assert model.channels[1].highpass_hz == 0.5 and model.channels[1].delay == 0.0
+    # the modal routes' shapes with the chain divided out, sensor by sensor
+    from rigidid.api.records import chain_corrected
+    from rigidid.io.files import ModeTable
+
+    lay = load(tmp_path / "layout.json")
+    ids = [x.id for x in lay.sensors][::-1]  # any order of the layout's sensors
+    seen = np.ones((len(ids), 2), dtype=complex)
+    table = chain_corrected(ModeTable.numbered(np.array([8.0, 20.0]), np.array([0.02, 0.05]), ids, seen), lay)
+    w = 2 * np.pi * np.array([8.0, 20.0])
+    poles = -np.array([0.02, 0.05]) * w + 1j * w * np.sqrt(1 - np.array([0.02, 0.05]) ** 2)
+    np.testing.assert_allclose(table.shapes[-1], 1 / model.channels[0].transfer(poles)[0], rtol=1e-12)
+    np.testing.assert_allclose(table.shapes[0], 1 / model.channels[len(ids) - 1].transfer(poles)[0], rtol=1e-12)
     for bad, where in (({"sensors": {"nope": {"delay_s": 0.0}}}, "chain.sensors.nope"),
                        ({"antialias": {"type": "cheby", "order": 4, "corner_hz": 1.0}}, "chain.antialias.type"),
                        ({"highpass_hz": -1.0}, "chain.highpass_hz")):  # fmt: skip

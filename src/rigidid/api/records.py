@@ -71,7 +71,8 @@ def estimate_modes(
     Returns
     -------
     modes : ModeTable
-        Modes labelled 1..n_modes in ascending frequency.
+        Modes labelled 1..n_modes in ascending frequency; with the layout's ``chain``, the
+        shapes with the chain divided out (:func:`chain_corrected`).
     estimate : ModalEstimate
         Everything the estimator found, the stabilisation diagram included.
 
@@ -124,7 +125,7 @@ def estimate_modes(
     _warn_hits(result.impacts, [str(p) for p in paths] if not records_given else
                [f"record {k + 1}" for k in range(len(arrays))], dts[0])  # fmt: skip
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
-    return table, result
+    return chain_corrected(table, lay), result
 
 
 def _warn_hits(impacts: Sequence[Any], names: Sequence[str], dt: float) -> None:
@@ -385,7 +386,7 @@ def _estimate_streamed(
     if any(r.trend is not None for r in streamed):
         result = replace(result, trends=tuple(r.trend for r in streamed))
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
-    return table, result
+    return chain_corrected(table, lay), result
 
 
 def with_record_spread(
@@ -1134,7 +1135,6 @@ def _identify_test(
         if records:
             rigid_six = identify_options.get("modes_used") is None
             modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six, progress=progress)
-            modes = chain_corrected(modes, data.layout)
     assert modes is not None
     summed = None
     if spectrum and paths:  # after the estimation, which checked the files
