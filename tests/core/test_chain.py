@@ -112,7 +112,7 @@ def _refit(rig, records, chain, estimate_delays=False, evaluations=40, onset=26)
 
 def test_a_stated_chain_makes_the_refit_exact_and_its_delay_is_estimated(rig) -> None:  # type: ignore[no-untyped-def]
     body, pos, dirs = rig
-    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=2.0, pretrigger=0.2, noise=0.0)
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=1.2, pretrigger=0.2, noise=0.0)
     records = _through_chain(clean, 1.0)
     p = pos.shape[0]
     stated = ChainModel(tuple(ChannelChain(highpass_hz=1.0, delay=1 / RATE if i == SKEWED else 0.0) for i in range(p)))
@@ -132,7 +132,7 @@ def test_a_stated_chain_makes_the_refit_exact_and_its_delay_is_estimated(rig) ->
 
 def test_an_unmodelled_skew_is_named_by_its_delay_score(rig) -> None:  # type: ignore[no-untyped-def]
     body, pos, dirs = rig
-    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=2.0, pretrigger=0.3, noise=0.002,
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=1.2, pretrigger=0.3, noise=0.002,
                             seed=3)  # fmt: skip
     records = _through_chain(clean, 1.0)
     hp = ChainModel(tuple(ChannelChain(highpass_hz=1.0) for _ in range(pos.shape[0])))
@@ -205,7 +205,7 @@ def test_mains_hum_is_found_modelled_and_left_out_of_the_modes(rig) -> None:  # 
     poles = 2 * np.pi * 50.0 * np.array([-1e-4 + 1j, -0.02 + 1j])
     assert list(_physical(poles, (1.0, 60.0), 0.3)) == [False, True]
     # the refit with hum of 3 % of the peak: found, modelled, the body as exact as without it
-    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=2.0, pretrigger=0.3, noise=0.0)
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=1.2, pretrigger=0.3, noise=0.0)
     t = np.arange(clean[0].shape[0]) / RATE
     peak = np.max(np.abs(clean[0]), axis=0)
     phase = 0.3 * np.arange(pos.shape[0])

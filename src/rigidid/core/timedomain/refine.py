@@ -41,6 +41,7 @@ __all__ = [
     "Refinement",
     "columns_of",
     "cut_decays",
+    "delay_step",
     "fit_factor",
     "good_fit",
     "prepare_decays",
