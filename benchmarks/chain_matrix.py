@@ -183,7 +183,8 @@ def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.n
         from scipy.signal import butter, sosfilt
 
         sos = butter(AA_ORDER, AA_CORNER, fs=RATE, output="sos")
-        noise = sosfilt(sos, noise, axis=0) / np.sqrt(np.mean(np.abs(_gain(sos)) ** 2))
+        lead = NOISE * rms * rng.standard_normal((256, acc.shape[1]))  # the filter's start-up outside the record
+        noise = sosfilt(sos, np.vstack([lead, noise]), axis=0)[256:] / np.sqrt(np.mean(np.abs(_gain(sos)) ** 2))
         acc = _antialias(acc)
     y = acc + noise
     if "ac" in effects:
