@@ -63,25 +63,27 @@ def find_hum(residuals: Sequence[Array], dt: float, candidates: Sequence[float] 
         Each frequency found: its z score and the hum's RMS amplitude over channels and impacts
         (in units of the residual's standard deviation).
     """
-    found: list[HumFound] = []
-    total = sum(float(np.sum(r**2)) for r in residuals)
-    count = sum(r.size for r in residuals)
-    if count == 0 or total <= 0.0:
-        return found
-    s2 = total / count
-    for hz in candidates:
-        if hz >= 0.45 / dt:
-            continue
-        q, k, power = 0.0, 0, 0.0
-        for r in residuals:
-            proj = _pair(r.shape[0], dt, hz).T @ r  # (2, p)
-            q += float(np.sum(proj**2))
-            k += proj.size
-            power += float(np.sum(proj**2)) * 2.0 / r.shape[0]  # amplitude^2 of each channel's sinusoid
-        z = (q / s2 - k) / math.sqrt(2.0 * k)
-        if z > HUM_Z:
-            found.append((float(hz), float(z), math.sqrt(power / (k // 2) / s2)))
-    return found
+    res = [np.array(r, dtype=float) for r in residuals]
+    count = sum(r.size for r in res)
+    left = [float(hz) for hz in candidates if hz < 0.45 / dt]
+    found: list[tuple[float, float, float]] = []  # (hz, z, mean square amplitude)
+    while left and count:
+        total = sum(float(np.sum(r**2)) for r in res)
+        scores = []
+        for hz in left:
+            proj = [_pair(r.shape[0], dt, hz).T @ r for r in res]  # (2, p) each
+            q, k = sum(float(np.sum(x**2)) for x in proj), sum(x.size for x in proj)
+            s2 = (total - q) / max(count - k, 1)  # the noise's variance without this line
+            amp2 = sum(float(np.sum(x**2)) * 2.0 / r.shape[0] for x, r in zip(proj, res, strict=True)) / (k // 2)
+            scores.append(((q / s2 - k) / math.sqrt(2.0 * k) if s2 > 0.0 else math.inf, hz, amp2))
+        z, hz, amp2 = max(scores)
+        if not z > HUM_Z:
+            break
+        found.append((hz, z, amp2))
+        left.remove(hz)
+        res = [r - (b := _pair(r.shape[0], dt, hz)) @ (b.T @ r) for r in res]  # the strongest line out, then the next
+    s2 = sum(float(np.sum(r**2)) for r in res) / max(count, 1)
+    return [(hz, z, math.sqrt(amp2 / s2) if s2 > 0.0 else math.inf) for hz, z, amp2 in found]
 
 
 def hum_columns(t: Array, omega: float, frequencies: Sequence[float], p: int) -> Array:

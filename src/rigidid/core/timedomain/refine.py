@@ -878,7 +878,7 @@ def refine_prepared(
     )  # fmt: skip
     p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
-    link, hum = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays))
+    link, hum, data = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays))
     if data.noise_from == "residual":
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
         per = r0.reshape(-1, pos.shape[0])
@@ -949,10 +949,13 @@ def _link(
 
 def _with_hum(
     link: _Link | None, theta0: Array, data: PreparedDecays, model: tuple[Any, ...]
-) -> tuple[_Link | None, tuple[tuple[float, float, float], ...]]:
+) -> tuple[_Link | None, tuple[tuple[float, float, float], ...], PreparedDecays]:
     """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual.
 
-    `model` is ``(pos_l, dirs, omega, chain, estimate_delays)``. Returns the link and the hum found.
+    `model` is ``(pos_l, dirs, omega, chain, estimate_delays)``. Returns the link, the hum found and
+    the data: with hum, the pre-trigger's noise levels hold the hum too, so they are dropped
+    (``noise_from`` ``"residual"``: the levels from the start's residual with the hum modelled, no
+    misfit test).
     """
     from rigidid.core.timedomain.hum import find_hum
 
@@ -964,8 +967,9 @@ def _with_hum(
         row += d.size
     found = tuple(find_hum(parts, data.dt))
     if not found:
-        return link, ()
-    return _link(chain, omega, p, estimate_delays, [f for f, _, _ in found]), found
+        return link, (), data
+    data = replace(data, sigma=np.ones(p), noise_from="residual")
+    return _link(chain, omega, p, estimate_delays, [f for f, _, _ in found]), found, data
 
 
 def _settled(
