@@ -70,6 +70,7 @@ _DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual 
 _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
 _STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
 _GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
+_PILOT = 30  # residual evaluations of the pilot fit whose residual gives the noise levels when hum is found
 _DELAY_SKIP = 2  # samples (at the fit's rate) dropped from each decay when the delays are fitted
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
 
@@ -878,7 +879,7 @@ def refine_prepared(
     )  # fmt: skip
     p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
-    link, hum, data = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays))
+    link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
     if data.noise_from == "residual":
         r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
         per = r0.reshape(-1, pos.shape[0])
@@ -949,17 +950,20 @@ def _link(
 
 def _with_hum(
     link: _Link | None, theta0: Array, data: PreparedDecays, model: tuple[Any, ...]
-) -> tuple[_Link | None, tuple[tuple[float, float, float], ...], PreparedDecays]:
+) -> tuple[_Link | None, tuple[tuple[float, float, float], ...], PreparedDecays, Array]:
     """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual.
 
-    `model` is ``(pos_l, dirs, omega, chain, estimate_delays)``. Returns the link, the hum found and
-    the data: with hum, the pre-trigger's noise levels hold the hum too, so they are dropped
-    (``noise_from`` ``"residual"``: the levels from the start's residual with the hum modelled, no
-    misfit test).
+    `model` is ``(pos_l, dirs, omega, chain, estimate_delays, dt)`` (`dt` the raw sample interval).
+    Returns the link, the hum found, the data and the start. With hum, the pre-trigger's noise levels
+    hold the hum too (its power, far above the noise's, cannot be subtracted from them to the noise's
+    precision), so the levels come from the residual (``noise_from`` ``"residual"``, no misfit test):
+    of a pilot fit (:data:`_PILOT` evaluations) with the hum modelled and the levels of the start's
+    residual, whose end is the start returned (the start's own residual holds its misfit and would
+    weight the channels by it).
     """
     from rigidid.core.timedomain.hum import find_hum
 
-    pos_l, dirs, omega, chain, estimate_delays = model
+    pos_l, dirs, omega, chain, estimate_delays, _ = model
     r0 = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0]
     parts, row, p = [], 0, pos_l.shape[0]
     for d in data.decays:
@@ -967,9 +971,20 @@ def _with_hum(
         row += d.size
     found = tuple(find_hum(parts, data.dt))
     if not found:
-        return link, (), data
+        return link, (), data, theta0
+    link = _link(chain, omega, p, estimate_delays, [f for f, _, _ in found])
     data = replace(data, sigma=np.ones(p), noise_from="residual")
-    return _link(chain, omega, p, estimate_delays, [f for f, _, _ in found]), found, data
+    per = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0].reshape(-1, p)
+    pilot = replace(data, sigma=np.sqrt(np.mean(per**2, axis=0)) + 1e-300)
+
+    def both(theta: Array) -> tuple[Array, Array]:
+        return _evaluate(theta, pilot, pos_l, dirs, omega, True, link)
+
+    def fun(theta: Array) -> Array:
+        return _evaluate(theta, pilot, pos_l, dirs, omega, False, link)[0]
+
+    theta = _levenberg_marquardt(fun, both, theta0, _PILOT, per.size)[0]
+    return link, found, data, theta
 
 
 def _settled(
