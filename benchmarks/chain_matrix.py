@@ -16,7 +16,16 @@ single-axis accelerometers, three impacts, 2048 Hz, 6 s, 0.25 s pre-trigger, whi
 - ``double``: a second hit 60 ms after the first, 40 % of its amplitude;
 - ``offset``: DC offset 5 % and a linear drift of 2 % of each channel's peak over the record;
 - ``skew``: one channel one sample late;             ``ac``: 2 Hz first-order high-pass (AC coupling);
-- ``stamps``: time columns starting elsewhere, written with 7 decimals.
+- ``stamps``: time columns starting elsewhere, written with 7 decimals;
+- ``aa``: an analog 8th-order Butterworth anti-alias filter at 0.4 fs (its state space discretised with a
+  first-order hold, so the samples carry no hold delay); the noise (1 % of the RMS in the filter's band)
+  through the filter's magnitude (a bilinear Butterworth, |H|^2 as the analog one's below 0.4 fs);
+- ``hum``: a 50 Hz sinusoid of 2 % of each channel's peak, random phase per channel.
+
+``--paired`` also runs each draw's clean twin (the same noise, no effect) and prints its errors and the
+largest ratio of the cell's errors to its twin's (1: the effect costs nothing). ``--metadata`` states the
+chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
+channel's delay); ``--estimate-delays`` passes that option (the delays then fitted, not stated).
 
 Printed per cell: runs finished (exit 0) of all; the median and worst CG error (% of the sensor
 span, largest coordinate) and inertia error (largest relative error of the diagonal, %); runs
@@ -65,7 +74,10 @@ IMPACTS = [
     ((0.2, -0.4, 0.0), (0.3, 1.0, -0.4)),
 ]
 CELLS = ["clean", "sens", "orient", "transverse", "position", "clip80", "clip30", "double", "offset", "skew", "ac",
-         "stamps", "all"]  # fmt: skip
+         "stamps", "aa", "hum", "all"]  # fmt: skip
+AA_ORDER, AA_CORNER = 8, 0.4 * RATE
+HP_CORNER = 2.0
+SKEWED = 4  # the channel one sample late
 SENSOR_EFFECTS = {"sens", "orient", "transverse", "position"}
 
 
@@ -166,14 +178,25 @@ def _pulse(t: np.ndarray, width: float) -> np.ndarray:
 def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
     peak = np.abs(acc).max(axis=0)
     rms = np.sqrt(np.mean(acc**2, axis=0))
-    y = acc + NOISE * rms * rng.standard_normal(acc.shape)
+    noise = NOISE * rms * rng.standard_normal(acc.shape)
+    if "aa" in effects:  # the sensor's noise through the filter too (its spectrum |H|^2 of the analog filter)
+        from scipy.signal import butter, sosfilt
+
+        sos = butter(AA_ORDER, AA_CORNER, fs=RATE, output="sos")
+        lead = NOISE * rms * rng.standard_normal((256, acc.shape[1]))  # the filter's start-up outside the record
+        noise = sosfilt(sos, np.vstack([lead, noise]), axis=0)[256:] / np.sqrt(np.mean(np.abs(_gain(sos)) ** 2))
+        acc = _antialias(acc)
+    y = acc + noise
     if "ac" in effects:
         from scipy.signal import bilinear, lfilter
 
         b, a = bilinear([1.0, 0.0], [1.0, 2 * np.pi * 2.0], RATE)
         y = lfilter(b, a, y, axis=0)
     if "skew" in effects:
-        y[1:, 4] = y[:-1, 4].copy()
+        y[1:, SKEWED] = y[:-1, SKEWED].copy()
+    if "hum" in effects:
+        phase = rng.uniform(0.0, 2 * np.pi, acc.shape[1])
+        y = y + 0.02 * peak * np.sin(2 * np.pi * 50.0 * t[:, None] + phase)
     if "offset" in effects:
         y = y + peak * (0.05 + 0.02 * t[:, None] / t[-1])
     for level, cols in (("clip80", (2, 7)), ("clip30", (2, 7))):
@@ -183,6 +206,34 @@ def _chain(acc: np.ndarray, effects: set[str], rng: np.random.Generator, t: np.n
                 lim = frac * peak[c]
                 y[:, c] = np.clip(y[:, c], -lim, lim)
     return y
+
+
+def _gain(sos: np.ndarray) -> np.ndarray:
+    """The digital filter's response on a fine grid (its mean square: the filtered white noise's variance)."""
+    from scipy.signal import sosfreqz
+
+    return np.asarray(sosfreqz(sos, worN=8192)[1])
+
+
+def _antialias(y: np.ndarray) -> np.ndarray:
+    """The analog Butterworth anti-alias filter, exact for signals linear between samples (first-order hold)."""
+    from scipy.signal import butter, cont2discrete, dlsim, zpk2ss
+
+    a, b, c, d = zpk2ss(*butter(AA_ORDER, 2 * np.pi * AA_CORNER, analog=True, output="zpk"))
+    ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), 1.0 / RATE, method="foh")
+    return np.column_stack([dlsim((ad, bd, cd, dd, 1.0 / RATE), y[:, i])[1][:, 0] for i in range(y.shape[1])])
+
+
+def stated_chain(effects: set[str]) -> dict[str, object] | None:
+    """The layout's ``chain`` block stating the simulated chain (None when there is none to state)."""
+    block: dict[str, object] = {}
+    if "ac" in effects:
+        block["highpass_hz"] = HP_CORNER
+    if "aa" in effects:
+        block["antialias"] = {"type": "butterworth", "order": AA_ORDER, "corner_hz": AA_CORNER}
+    if "skew" in effects:
+        block["sensors"] = {f"s{SKEWED + 1}": {"delay_s": 1.0 / RATE}}
+    return block or None
 
 
 def stated_tolerances(effects: set[str]) -> dict[str, float]:
@@ -196,7 +247,11 @@ def stated_tolerances(effects: set[str]) -> dict[str, float]:
 
 
 def write_case(
-    folder: Path, records: list[np.ndarray], stamps: bool, tolerances: dict[str, float] | None = None
+    folder: Path,
+    records: list[np.ndarray],
+    stamps: bool,
+    tolerances: dict[str, float] | None = None,
+    chain: dict[str, object] | None = None,
 ) -> list[Path]:
     layout: dict[str, object] = {
         "name": "150 kg body, ten single-axis accelerometers (chain_matrix benchmark)",
@@ -209,6 +264,8 @@ def write_case(
     }
     if tolerances is not None:
         layout["tolerances"] = tolerances
+    if chain is not None:
+        layout["chain"] = chain
     (folder / "layout.json").write_text(json.dumps(layout))
     paths = []
     header = "time," + ",".join(f"s{i + 1}" for i in range(SENSORS.shape[0]))
@@ -291,18 +348,24 @@ def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float
     return float(np.mean(hits)), float(np.median(ratios)), float(np.median(j_errs))
 
 
-def run_cell(cell: str, seed: int) -> dict[str, object]:
+def run_cell(
+    cell: str, seed: int, metadata: bool = False, estimate_delays: bool = False, twin: bool = False
+) -> dict[str, object]:
+    """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin."""
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
+    effects = set() if twin else effects
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
     sensors = sensor_errors(effects, rng)
     records = simulate(effects, rng, sensors)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects))
+        chain = stated_chain(effects) if metadata else None
+        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects), chain)
         env = dict(os.environ)
+        extra = ["--estimate-delays"] if estimate_delays else []
         out = subprocess.run(
             [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
-             "--mass", str(MASS), "--json", "-"],
+             "--mass", str(MASS), "--json", "-", *extra],
             capture_output=True, text=True, env=env, check=False,
         )  # fmt: skip
     row: dict[str, object] = {"cell": cell, "seed": seed, "exit": out.returncode, "floor": floor(sensors)}
@@ -330,6 +393,9 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--cells", default=",".join(CELLS))
     parser.add_argument("--floor-draws", type=int, default=200, help="draws of the type-B coverage table (0: none)")
+    parser.add_argument("--metadata", action="store_true", help="state the chain in the layout's chain block")
+    parser.add_argument("--estimate-delays", action="store_true", help="pass --estimate-delays")
+    parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
     args = parser.parse_args()
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
@@ -343,7 +409,7 @@ def main() -> None:
     print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
           f"{'refit':>5} {'cover':>6} {'silent':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
-        rows = [run_cell(cell, s) for s in range(args.seeds)]
+        rows = [run_cell(cell, s, args.metadata, args.estimate_delays) for s in range(args.seeds)]
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])
@@ -353,6 +419,14 @@ def main() -> None:
         note = next((str(r.get("error") or (r["warnings"][0] if r["warnings"] else "")) for r in rows  # type: ignore[index]
                      if r.get("error") or r["warnings"]), "")  # fmt: skip
         note = note.replace("rigidid: ", "")[:110]
+        if args.paired:
+            twins = [run_cell(cell, s, twin=True) for s in range(args.seeds)]
+            ratio = [np.array(r["errors"]) / np.array(t["errors"]) for r, t in zip(rows, twins, strict=True)
+                     if r["exit"] == 0 and t["exit"] == 0]  # fmt: skip
+            twin_errs = np.array([t["errors"] for t in twins if t["exit"] == 0])
+            top = np.max(ratio, axis=0)
+            note = (f"clean twin CG/J med {np.median(twin_errs[:, 0]):.3f}/{np.median(twin_errs[:, 1]):.2f}, "
+                    f"cell/twin max {top[0]:.2f}/{top[1]:.2f}  " + note)[:150]  # fmt: skip
         med, worst = np.median(errs, axis=0), np.max(errs, axis=0)
         print(f"{cell:<11} {len(done):>4}/{len(rows):<3} {med[0]:>8.3f}/{worst[0]:<8.3f} "
               f"{med[1]:>6.2f}/{worst[1]:<6.2f} "

@@ -72,6 +72,7 @@ def test_failure_writes_nothing_and_prints_one_line(tmp_path: Path) -> None:
         (("--method", "guess"), "--method: unknown method 'guess'"),
         (("--modes", "1,2,x"), "--modes: expected mode labels"),
         (("--modes", "1,2,3,4,5,7"), "--modes: mode 7 is not in the modes file"),
+        (("--estimate-delays",), "--estimate-delays: needs impact records and the refit"),
     ],
 )
 def test_bad_options(args: tuple[str, ...], message: str) -> None:

@@ -14,11 +14,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 __all__ = [
+    "ChainWarning",
     "ClippedChannelWarning",
     "DampingUnitWarning",
     "DoubleHitWarning",
     "ElasticModeWarning",
     "FrfMisfitWarning",
+    "HumWarning",
     "IdentificationError",
     "IllConditionedWarning",
     "InputError",
@@ -147,6 +149,14 @@ class ElasticNearBandWarning(RigididWarning):
 
 class FrfRoutesDisagreeWarning(RigididWarning):
     """Two FRF routes (``--method auto``) give answers further apart than their 95 % intervals allow."""
+
+
+class ChainWarning(RigididWarning):
+    """A channel's delay or filter shows in the records: an unmodelled skew, or an implausible estimated delay."""
+
+
+class HumWarning(RigididWarning):
+    """Mains hum (50 or 60 Hz or a harmonic) found in the records: modelled in the refit, named."""
 
 
 class RefinementWarning(RigididWarning):

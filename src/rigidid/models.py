@@ -131,6 +131,40 @@ class SensorTolerances(_Strict):
     position: Annotated[float, Field(ge=0.0, description="position error per axis (length unit)")] | None = None
 
 
+class AntiAliasSpec(_Strict):
+    """An analog anti-alias filter as its data sheet states it (a linear-phase digital one is a delay)."""
+
+    type: Literal["butterworth", "bessel"] = Field(description="the filter's type")
+    order: Annotated[int, Field(ge=1, le=16, description="its order (number of poles)")]
+    corner_hz: Annotated[float, AfterValidator(_finite), Field(gt=0.0, description="its -3 dB frequency (Hz)")]
+
+
+class ChannelChainSpec(_Strict):
+    """One channel's acquisition chain: AC coupling, anti-alias filter, delay (each optional)."""
+
+    highpass_hz: (
+        Annotated[float, AfterValidator(_finite), Field(ge=0.0, description="AC coupling's corner (Hz); 0: DC")] | None
+    ) = None
+    highpass_order: (
+        Annotated[int, Field(ge=1, le=4, description="first-order high-pass sections in series (default 1)")] | None
+    ) = None
+    antialias: AntiAliasSpec | None = Field(default=None, description="the anti-alias filter (analog)")
+    delay_s: (
+        Annotated[float, AfterValidator(_finite), Field(ge=-1.0, le=1.0, description="the channel's delay (s)")] | None
+    ) = None
+
+
+class ChainSpec(ChannelChainSpec):
+    """``layout.json``'s optional ``chain``: every channel's chain, and per-sensor entries overriding it field by field.
+
+    The records' refit models it (FORMATS.md, "The acquisition chain").
+    """
+
+    sensors: dict[str, ChannelChainSpec] | None = Field(
+        default=None, description="per sensor id: fields overriding the global ones for that channel"
+    )
+
+
 class ForceChannel(_Strict):
     """``layout.json``'s optional ``force``: the hammer's channel in the records and where it hits.
 
@@ -180,6 +214,10 @@ class LayoutFile(_Strict):
     force: ForceChannel | None = Field(
         default=None, description="the hammer's force channel and drive point: identify --records measures the mass"
     )
+    chain: ChainSpec | None = Field(
+        default=None,
+        description="the acquisition chain (AC coupling, anti-alias filter, delays): modelled in the refit",
+    )
 
     @field_validator("mass")
     @classmethod
@@ -193,6 +231,9 @@ class LayoutFile(_Strict):
             if sensor.id in seen:
                 raise ValueError(f"sensors.{i}.id: duplicate sensor id {sensor.id!r}")
             seen.add(sensor.id)
+        for name in (self.chain.sensors or {}) if self.chain is not None else {}:
+            if name not in seen:
+                raise ValueError(f"chain.sensors.{name}: no sensor has this id")
         refs: set[str] = set()
         for i, ref in enumerate(self.references or []):
             if ref.id in refs:
@@ -493,6 +534,14 @@ class RecordBoundResult(BaseModel):
     )
     tolerances: dict[str, float] | None = Field(
         default=None, description="the sensor error bounds the budget used (position in the layout's length unit)"
+    )
+    channel_delays: dict[str, dict[str, float]] | None = Field(
+        default=None,
+        description="--estimate-delays: per channel id, delay_s (its delay beyond the layout's chain, relative to "
+        "the first channel fitted) and std_s (its standard error)",
+    )
+    mains_hum_hz: list[float] | None = Field(
+        default=None, description="mains hum frequencies found in the records and modelled in the refit (Hz)"
     )
 
 

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from rigidid.api.force import ForceOptions
     from rigidid.core.sensor_budget import SensorBounds
     from rigidid.core.timedomain import ModalEstimate
+    from rigidid.core.timedomain.chain import ChainModel
     from rigidid.io.files import ModeTable
     from rigidid.progress import ProgressCallback
 
@@ -70,7 +71,8 @@ def estimate_modes(
     Returns
     -------
     modes : ModeTable
-        Modes labelled 1..n_modes in ascending frequency.
+        Modes labelled 1..n_modes in ascending frequency; with the layout's ``chain``, the
+        shapes with the chain divided out (:func:`chain_corrected`).
     estimate : ModalEstimate
         Everything the estimator found, the stabilisation diagram included.
 
@@ -123,7 +125,7 @@ def estimate_modes(
     _warn_hits(result.impacts, [str(p) for p in paths] if not records_given else
                [f"record {k + 1}" for k in range(len(arrays))], dts[0])  # fmt: skip
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
-    return table, result
+    return chain_corrected(table, lay), result
 
 
 def _warn_hits(impacts: Sequence[Any], names: Sequence[str], dt: float) -> None:
@@ -384,7 +386,7 @@ def _estimate_streamed(
     if any(r.trend is not None for r in streamed):
         result = replace(result, trends=tuple(r.trend for r in streamed))
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
-    return table, result
+    return chain_corrected(table, lay), result
 
 
 def with_record_spread(
@@ -440,6 +442,8 @@ def with_refinement(
     *,
     progress: ProgressCallback | None = None,
     tolerances: SensorBounds | None = None,
+    chain: ChainModel | None = None,
+    estimate_delays: bool = False,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -457,6 +461,10 @@ def with_refinement(
         The sensors' error bounds (type B), propagated into the intervals with the
         noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
         :func:`sensor_bounds` of a layout without ``tolerances``.
+    chain : ChainModel, optional
+        The channels' acquisition chain in layout order (:func:`chain_model`), modelled in the refit.
+    estimate_delays : bool
+        Fit each channel's delay relative to the first (``--estimate-delays``).
 
     Returns
     -------
@@ -502,14 +510,70 @@ def with_refinement(
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
             drift=estimate.trends is not None,
+            chain=_kept(chain, estimate.channels),
+            estimate_delays=estimate_delays,
         ),
         progress,
         tolerances,
+        _kept_ids(result, estimate.channels),
     )
 
 
+def _kept(chain: ChainModel | None, channels: Sequence[int] | None) -> ChainModel | None:
+    """The chains of the channels fitted (the clipped ones left out)."""
+    return chain if chain is None or channels is None else chain.columns(channels)
+
+
+def _kept_ids(result: IdentifyResult, channels: Sequence[int] | None) -> tuple[str, ...]:
+    """The fitted channels' ids (`result`'s are the layout's sensors it used)."""
+    ids = result.sensor_ids
+    return ids if channels is None or len(ids) == len(channels) else tuple(ids[c] for c in channels)
+
+
+def chain_model(layout: LayoutFile) -> ChainModel | None:
+    """The layout's ``chain`` as each sensor's chain, in layout order (None: no chain, or nothing to model).
+
+    Parameters
+    ----------
+    layout : LayoutFile
+
+    Returns
+    -------
+    ChainModel or None
+        Per sensor, the global fields overridden by its ``chain.sensors`` entry field by field.
+    """
+    from rigidid.core.timedomain.chain import AntiAlias, ChainModel, ChannelChain
+
+    block = layout.chain
+    if block is None:
+        return None
+    channels = []
+    for sensor in layout.sensors:
+        over = (block.sensors or {}).get(sensor.id)
+
+        def pick(name: str, over: Any = over) -> Any:
+            value = getattr(over, name) if over is not None else None
+            return value if value is not None else getattr(block, name)
+
+        aa = pick("antialias")
+        channels.append(
+            ChannelChain(
+                highpass_hz=pick("highpass_hz") or 0.0,
+                highpass_order=pick("highpass_order") or 1,
+                antialias=None if aa is None else AntiAlias(aa.type, aa.order, aa.corner_hz),
+                delay=pick("delay_s") or 0.0,
+            )
+        )
+    model = ChainModel(tuple(channels))
+    return None if model.identity else model
+
+
 def _refit(
-    result: IdentifyResult, fit: Any, progress: ProgressCallback | None, tolerances: SensorBounds | None = None
+    result: IdentifyResult,
+    fit: Any,
+    progress: ProgressCallback | None,
+    tolerances: SensorBounds | None = None,
+    ids: Sequence[str] = (),
 ) -> IdentifyResult:
     """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
     import warnings
@@ -529,7 +593,54 @@ def _refit(
     finally:
         if progress is not None:
             progress("refit", 1, 1)
-    return _accept_refinement(result, refinement, tolerances)
+    _warn_delays(refinement, ids, refinement.frequency_hz)
+    return _accept_refinement(result, refinement, tolerances, ids)
+
+
+_SKEW_Z = 5.0  # a delay step this many standard errors from zero: an unmodelled skew
+
+
+def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any) -> None:
+    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score;
+    a HumWarning naming the mains hum the refit modelled."""
+    import warnings
+
+    from rigidid.errors import ChainWarning
+
+    if refinement.delays is not None:
+        quarter = 0.25 / float(np.max(frequency_hz))
+        for name, d, sd in zip(ids, refinement.delays, refinement.delays_std, strict=False):
+            if abs(d) > quarter:
+                warnings.warn(
+                    f"channel {name}: estimated delay {d:.3g} s (std {sd:.2g} s) is beyond a quarter period of the "
+                    f"top mode ({quarter:.3g} s): implausible for a skew (a wrong sign or sensor?)",
+                    ChainWarning,
+                    stacklevel=3,
+                )
+    if refinement.hum:
+        from rigidid.errors import HumWarning
+
+        warnings.warn(
+            "mains hum in the records at "
+            + ", ".join(f"{hz:g} Hz (amplitude {amp:.3g} noise std, z = {z:.0f})" for hz, z, amp in refinement.hum)
+            + ": modelled in the refit as a sinusoid per channel and impact",
+            HumWarning,
+            stacklevel=3,
+        )
+    if refinement.delay_score is not None:
+        step, z = refinement.delay_score
+        late = [f"{name} ({d:.3g} s, z = {zz:.1f})" for name, d, zz in zip(ids, step, z, strict=False)
+                if abs(zz) > _SKEW_Z]  # fmt: skip
+        if late:
+            warnings.warn(
+                "the refit's residual shows a delay (a phase growing with frequency) on channel(s) "
+                + ", ".join(late)
+                + " relative to "
+                + (ids[0] if ids else "the first channel")
+                + ": state the chain's delays in the layout's chain block or use --estimate-delays",
+                ChainWarning,
+                stacklevel=3,
+            )
 
 
 def sensor_bounds(layout: LayoutFile | None, length: str = "m") -> SensorBounds:
@@ -579,7 +690,7 @@ def _sensor_std(result: IdentifyResult, bounds: SensorBounds) -> dict[str, dict[
 
 
 def _accept_refinement(
-    result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None
+    result: IdentifyResult, refinement: Any, tolerances: SensorBounds | None = None, ids: Sequence[str] = ()
 ) -> IdentifyResult:
     """`result` with the refinement's body and bound when its misfit test accepts it (:func:`refit_verdict`)."""
     import warnings
@@ -605,6 +716,11 @@ def _accept_refinement(
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
+    if refinement.delays is not None:
+        pairs = zip(ids, refinement.delays, refinement.delays_std, strict=False)
+        bound = replace(bound, delays={name: (float(d), float(sd)) for name, d, sd in pairs})
+    if refinement.hum:
+        bound = replace(bound, hum_hz=tuple(hz for hz, _, _ in refinement.hum))
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
 
 
@@ -676,6 +792,7 @@ def refine_records(
     *,
     progress: ProgressCallback | None = None,
     stream_above: int | None = None,
+    estimate_delays: bool = False,
 ) -> IdentifyResult:
     """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
 
@@ -698,6 +815,8 @@ def refine_records(
         (:func:`rigidid.io.records.refit.read_prepared_decays`: the pre-trigger
         statistics and the decays at the fit's rate, nothing else held);
         smaller ones are read whole.
+    estimate_delays : bool
+        Fit each channel's delay (:func:`with_refinement`); the layout's ``chain`` is modelled.
 
     Returns
     -------
@@ -747,8 +866,9 @@ def refine_records(
             raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(
-            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
-        )
+            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay),
+            chain=chain_model(lay), estimate_delays=estimate_delays,
+        )  # fmt: skip
     estimate = replace(estimate, impacts=tuple(impacts))
     from rigidid.io.records.refit import read_prepared_decays
 
@@ -767,9 +887,10 @@ def refine_records(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None,
+            chain=_kept(chain_model(lay), estimate.channels), estimate_delays=estimate_delays,
         )  # fmt: skip
 
-    return _refit(result, fit, progress, sensor_bounds(lay))
+    return _refit(result, fit, progress, sensor_bounds(lay), _kept_ids(result, estimate.channels))
 
 
 def records_spectrum(
@@ -901,6 +1022,7 @@ def identify_test(
     spectrum: bool = False,
     progress: ProgressCallback | None = None,
     force: ForceOptions | None = None,
+    estimate_delays: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -928,6 +1050,9 @@ def identify_test(
     force : ForceOptions, optional
         Measure the mass with the records' force channel (:mod:`rigidid.api.force`); also when
         the layout has a ``force`` block. The body is identified per unit mass, then scaled by it.
+    estimate_delays : bool
+        The refit fits each channel's delay relative to the first (``--estimate-delays``); the layout's
+        ``chain`` is modelled in any case.
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -939,7 +1064,8 @@ def identify_test(
     with _force_column_expected(layout, force):
         return _identify_test(
             layout, inputs, records=records, modal=modal, units=units, geometry=geometry, refine=refine,
-            resample=resample, spectrum=spectrum, progress=progress, force=force, **identify_options,
+            resample=resample, spectrum=spectrum, progress=progress, force=force, estimate_delays=estimate_delays,
+            **identify_options,
         )  # fmt: skip
 
 
@@ -980,6 +1106,7 @@ def _identify_test(
     spectrum: bool,
     progress: ProgressCallback | None,
     force: ForceOptions | None,
+    estimate_delays: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """:func:`identify_test`'s work."""
@@ -1030,11 +1157,14 @@ def _identify_test(
         try:
             with named_source(src), noted(notes, RefinementWarning):
                 if paths is not None:
-                    result = refine_records(result, paths, data.layout, estimate, progress=progress)
+                    result = refine_records(
+                        result, paths, data.layout, estimate, progress=progress, estimate_delays=estimate_delays
+                    )
                 else:
                     result = with_refinement(
-                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout)
-                    )
+                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout),
+                        chain=chain_model(data.layout), estimate_delays=estimate_delays,
+                    )  # fmt: skip
         except BaseException:
             checks.pass_on(held)
             raise
@@ -1045,6 +1175,32 @@ def _identify_test(
     if resample:
         result = _resampled(result, data, records, modal, resample, len(modes.labels))
     return TestRun(result, estimate, None if streamed else data.records, summed)
+
+
+def chain_corrected(modes: ModeTable, layout: LayoutFile) -> ModeTable:
+    """`modes` estimated from records with the layout's chain divided out of the shapes (``phi_ck / H_c(s_k)``).
+
+    Parameters
+    ----------
+    modes : ModeTable
+        Modes from the records (ERA or AR): each shape value is the mode's contribution
+        through the channel's chain (:mod:`rigidid.core.timedomain.chain`).
+    layout : LayoutFile
+        Its ``chain`` (none: `modes` returned as they are).
+
+    Returns
+    -------
+    ModeTable
+    """
+    chain = chain_model(layout)
+    if chain is None or modes.frequency_hz.size == 0:
+        return modes
+    index = {s.id: k for k, s in enumerate(layout.sensors)}
+    kept = chain.columns([index[name] for name in modes.sensor_ids])
+    w = 2.0 * np.pi * np.asarray(modes.frequency_hz, dtype=float)
+    zeta = np.asarray(modes.damping_ratio, dtype=float)
+    poles = -zeta * w + 1j * w * np.sqrt(np.maximum(1.0 - zeta**2, 0.0))
+    return replace(modes, shapes=kept.correct_shapes(poles, modes.shapes))
 
 
 def _resampled(

@@ -28,6 +28,7 @@ from rigidid.cli.options import (
     DampingNoise,
     Decimate,
     Draws,
+    EstimateDelays,
     ForceColumn,
     ForceUnit,
     FrequencyNoise,
@@ -98,6 +99,7 @@ def identify(
     refine: Refine = True,
     force: ForceColumn = None,
     frf_out: FrfOut = None,
+    estimate_delays: EstimateDelays = False,
 ) -> None:
     """Identify CG, inertia tensor, stiffness and damping from a layout and its modes (or impact records)."""
     with reported():
@@ -117,6 +119,9 @@ def identify(
         check_outputs({"--json": json_path, "--uff": uff, "--frf-out": frf_out}, {"--csv": csv})
         if frf_out is not None and not records:
             raise InputError("--frf-out needs impact records with a force channel (--records)", source="--frf-out")
+        if estimate_delays and not (records and refine):
+            raise InputError("needs impact records and the refit (--records, without --no-refine)",
+                             source="--estimate-delays")  # fmt: skip
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -125,7 +130,7 @@ def identify(
         run = identify_files(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
-            **_force_options(force, frf_out),
+            **_force_options(force, frf_out), **({"estimate_delays": True} if estimate_delays else {}),
         )  # fmt: skip
         result, estimate = run.result, run.estimate
         result = add_mounts(result, mounts, torque_axis)

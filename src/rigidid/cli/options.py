@@ -211,6 +211,15 @@ Refine = Annotated[
 ]
 
 
+EstimateDelays = Annotated[
+    bool,
+    typer.Option(
+        "--estimate-delays",
+        help="With --records: the refit also fits each channel's delay (relative to the first) and reports it.",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+
 Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),

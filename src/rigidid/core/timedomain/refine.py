@@ -29,6 +29,7 @@ from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
+from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -40,6 +41,7 @@ __all__ = [
     "Refinement",
     "columns_of",
     "cut_decays",
+    "delay_step",
     "fit_factor",
     "good_fit",
     "prepare_decays",
@@ -68,6 +70,8 @@ _DECREMENT = 0.05  # converged: Gauss-Newton decrement below this many residual 
 _STALL = 1e-4  # converged at a bound of J, K, C > 0: a step lowers the cost by less (in variances)
 _STALL_DECREMENT = 4.0  # ... while the Gauss-Newton step, out of reach, is below 2 standard errors
 _GOLUB_PEREYRA = False  # the full variable-projection Jacobian (measured: benchmarks/refine_diagnose.py)
+_PILOT = 30  # residual evaluations of the pilot fit whose residual gives the noise levels when hum is found
+_DELAY_SKIP = 2  # samples (at the fit's rate) dropped from each decay when the delays are fitted
 _GEODESIC_H = 0.1  # step fraction of the central difference for the second directional derivative
 
 
@@ -107,6 +111,19 @@ class Refinement:
         stalled at the boundary of positive definite J, K, C with the decrement below 4)
         rather than stopping at its evaluation budget; False when the start was only
         evaluated.
+    misfit : MisfitTest or None
+        The acceptance test of the residual against the pre-trigger.
+    delays, delays_std : ndarray, shape (p,), or None
+        With ``estimate_delays``: each channel's delay (s) beyond the stated chain's,
+        relative to the reference channel (0 there), and its standard error.
+    delay_score : ndarray, shape (2, p), or None
+        Without ``estimate_delays``, when the fit was not accepted: the one Gauss-Newton
+        step's delay of each channel (s) and its z score (delay over standard error), the
+        test for an unmodelled skew (:func:`delay_step`).
+    hum : tuple of (float, float, float)
+        Mains hum found in the start's residual and modelled (nuisance sinusoids per channel and
+        impact): frequency (Hz), z score and RMS amplitude in noise standard deviations
+        (:func:`rigidid.core.timedomain.hum.find_hum`).
     """
 
     center_of_gravity: Array
@@ -121,6 +138,10 @@ class Refinement:
     evaluations: int
     converged: bool = False
     misfit: MisfitTest | None = None
+    delays: Array | None = None
+    delays_std: Array | None = None
+    delay_score: Array | None = None
+    hum: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def frequency_hz(self) -> Array:
@@ -259,6 +280,57 @@ def _modes(theta: Array, pos: Array, dirs: Array, with_derivatives: bool) -> tup
         dlam[j] = dl
         dphi[j] = t_g @ (dv[:6] * lam_k + vec[:6, keep] * dl)
     return lam_k, phi, dlam, dphi
+
+
+# --- the acquisition chain -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Link:
+    """The chain in the refit's model: ``phi_ck H_c(s_k)``, and the fitted delays' parameters.
+
+    ``free`` lists the channels whose delays are ``theta[N_PARAMETERS:]`` (local time units,
+    seconds times `omega`); the other channels' delays are the stated ones only.
+    """
+
+    chain: ChainModel
+    omega: float
+    free: tuple[int, ...] = ()
+    hum: tuple[float, ...] = ()
+
+    def apply(
+        self, theta: Array, lam: CArray, phi: CArray, dlam: CArray, dphi: CArray
+    ) -> tuple[CArray, CArray, CArray]:
+        """Shapes through the chain and their derivatives (delay rows appended when delays are fitted).
+
+        ``d(phi H)/dtheta = dphi H + phi H'(s) omega dlam``; a delay ``tau_c`` multiplies channel c by
+        ``e^{-s tau_c}``, so ``d(phi_ck H_ck)/d(omega tau_c) = -lambda_k phi_ck H_ck`` (local units).
+        """
+        extra = np.zeros(phi.shape[0])
+        extra[list(self.free)] = theta[N_PARAMETERS:] / self.omega
+        h, dh = self.chain.transfer(lam * self.omega, extra)
+        out = phi * h
+        if dphi.shape[0] == 0:
+            return out, dlam, dphi
+        d = dphi * h[None] + phi[None] * dh[None] * self.omega * dlam[:, None, :]
+        dd = np.zeros((len(self.free), *phi.shape), complex)
+        for i, c in enumerate(self.free):
+            dd[i, c] = -lam * out[c]
+        return out, np.vstack([dlam, np.zeros((len(self.free), lam.size), complex)]), np.concatenate([d, dd])
+
+    def extra_columns(self) -> int:
+        """Linear unknowns per impact the chain adds (the AC coupling's transients, per channel) and the hum."""
+        hum = 2 * len(self.hum) * len(self.chain.channels)
+        return hum + int(sum(int(np.sum(mask)) for _, _, mask in self.chain.highpass_modes()))
+
+    def nuisance(self, t: Array) -> Array | None:
+        """Nuisance columns (n, p, m): the AC coupling's transients and the hum's sinusoids (None: none)."""
+        parts = [x for x in (self.chain.nuisance(t, self.omega),) if x is not None]
+        if self.hum:
+            from rigidid.core.timedomain.hum import hum_columns
+
+            parts.append(hum_columns(t, self.omega, self.hum, len(self.chain.channels)))
+        return np.concatenate(parts, axis=2) if parts else None
 
 
 # --- data preparation -------------------------------------------------------------------
@@ -450,17 +522,26 @@ _fit_factor = fit_factor
 # --- variable projection ----------------------------------------------------------------
 
 
-def _design(lam: CArray, phi: CArray, t: Array, drift: bool = False) -> tuple[Array, CArray]:
-    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6)."""
+def _design(
+    lam: CArray, phi: CArray, t: Array, drift: bool = False, extra: Array | None = None
+) -> tuple[Array, CArray]:
+    """Real design matrix (n p, 12 + p, or 12 + 2 p with a drift per channel) of one impact, and exp(lam t) (n, 6).
+
+    `extra` (n, p, m): per-channel nuisance functions (the chain's AC-coupling transients), each a column
+    per channel where it is not zero.
+    """
     n, p = t.shape[0], phi.shape[0]
     ex = np.exp(np.outer(t, lam))  # (n, 6)
     u = ex[:, None, :] * phi[None, :, :]  # (n, p, 6)
     cols = np.concatenate([u.real, -u.imag], axis=2).reshape(n * p, 12)
     offs = np.tile(np.eye(p), (n, 1))
-    if not drift:
-        return np.hstack([cols, offs]), ex
-    ramp = offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None]
-    return np.hstack([cols, offs, ramp]), ex
+    blocks = [cols, offs]
+    if drift:
+        blocks.append(offs * np.repeat(t / max(float(t[-1]), 1e-300), p)[:, None])
+    for m in range(0 if extra is None else extra.shape[2]):
+        f = offs * extra[:, :, m].reshape(-1)[:, None]  # type: ignore[index]
+        blocks.append(f[:, np.any(f != 0.0, axis=0)])
+    return np.hstack(blocks), ex
 
 
 def _projector(design: Array) -> Any:
@@ -574,7 +655,7 @@ def _dropped_term(design: Array, res: Array, ex: CArray, t: Array, phiw: CArray,
     e1 = res.T @ ex  # (p, 6): sum_n r_nc e^{lambda_k t_n}
     e2 = res.T @ (ex * t[:, None])
     s = np.einsum("ck,jck->jk", e1, dphiw) + dlam * np.einsum("ck,ck->k", phiw, e2)[None, :]
-    z = np.zeros((N_PARAMETERS, design.shape[1]))
+    z = np.zeros((dphiw.shape[0], design.shape[1]))
     z[:, :6], z[:, 6:12] = s.real, -s.imag
     coef = np.linalg.lstsq(design.T @ design, z.T, rcond=None)[0]  # (A^T A)^-1 z^T
     out: Array = design @ coef
@@ -587,25 +668,30 @@ def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
     The complex product ``[E, t E] [G1; G2]`` has real part ``[Re, Im] [Re G; -Im G]``: one BLAS
     call on (n, 24) by (24, 51 p), and no (n, 51, p) complex temporaries.
     """
-    n, p = t.shape[0], g1.shape[1]
+    n, p, n_theta = t.shape[0], g1.shape[1], g1.shape[0]
     e = np.hstack([ex, ex * t[:, None]])  # (n, 12)
-    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * N_PARAMETERS)  # (12, p 51)
+    g = np.concatenate([g1, g2], axis=2).transpose(2, 1, 0).reshape(12, p * n_theta)  # (12, p 51)
     left = np.hstack([e.real, e.imag])
     right = np.vstack([g.real, -g.imag])
-    out: Array = (left @ right).reshape(n, p, N_PARAMETERS)
+    out: Array = (left @ right).reshape(n, p, n_theta)
     return out
 
 
-def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool) -> tuple[Array, Array]:
+def _evaluate(
+    theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool, link: _Link | None = None
+) -> tuple[Array, Array]:
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
+    if link is not None:
+        phi, dlam, dphi = link.apply(theta, lam, phi, dlam, dphi)
     w = 1.0 / data.sigma
     res_parts = []
-    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, N_PARAMETERS))
+    j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, theta.size))
     row = 0
     for y in data.decays:
         n, p = y.shape
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        design, ex = _design(lam, phi * w[:, None], t, data.drift)
+        extra = None if link is None else link.nuisance(t)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift, extra)
         yw = (y * w).reshape(-1)
         project = _projector(design)
         beta, r = project(yw)
@@ -616,7 +702,7 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
             wd = dphi * w[None, :, None]  # (51, p, 6)
             g1 = wd * amp  # (51, p, 6)
             g2 = (phi * w[:, None])[None, :, :] * (dlam * amp)[:, None, :]
-            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, N_PARAMETERS)  # d model / d theta
+            dm = _model_derivative(ex, t, g1, g2).reshape(n * p, theta.size)  # d model / d theta
             jp = project(dm, j_all[row : row + n * p])[1]  # minus the projected derivative, in place
             del dm
             if _GOLUB_PEREYRA:
@@ -641,6 +727,8 @@ def refine_body(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool = False,
+    chain: ChainModel | None = None,
+    estimate_delays: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -669,6 +757,9 @@ def refine_body(
     drift : bool
         Fit a linear drift per channel and impact beside the offset
         (:attr:`PreparedDecays.drift`).
+    chain, estimate_delays
+        The acquisition chain and whether to fit the channels' delays
+        (:func:`refine_prepared`).
 
     Returns
     -------
@@ -714,6 +805,7 @@ def refine_body(
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
+        chain=chain, estimate_delays=estimate_delays,
     )  # fmt: skip
 
 
@@ -729,6 +821,8 @@ def refine_prepared(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool | None = None,
+    chain: ChainModel | None = None,
+    estimate_delays: bool = False,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -743,6 +837,13 @@ def refine_prepared(
         As for :func:`refine_body`.
     drift : bool, optional
         Overrides ``data.drift``.
+    chain : ChainModel, optional
+        The channels' acquisition chain (:mod:`rigidid.core.timedomain.chain`): each mode's
+        contribution to channel c is multiplied by ``H_c(s_k)``, the AC coupling's transients are
+        nuisance columns, the fit starts after the anti-alias filter's settling time.
+    estimate_delays : bool
+        Fit a delay per channel beside the body, relative to the first channel (whose delay a
+        common shift of every channel's would absorb in the modal amplitudes).
 
     Returns
     -------
@@ -759,6 +860,7 @@ def refine_prepared(
     """
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
+    data = _settled(data, chain, estimate_delays, float(dt))
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
     lf = layout_frame(pos)
@@ -775,17 +877,20 @@ def refine_prepared(
         np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
         np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
     )  # fmt: skip
+    p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
+    theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
+    link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
     if data.noise_from == "residual":
-        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False)
+        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
         data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
     def both(theta: Array) -> tuple[Array, Array]:
-        return _evaluate(theta, data, pos_l, dirs, omega, True)
+        return _evaluate(theta, data, pos_l, dirs, omega, True, link)
 
     def fun(theta: Array) -> Array:
-        return _evaluate(theta, data, pos_l, dirs, omega, False)[0]
+        return _evaluate(theta, data, pos_l, dirs, omega, False, link)[0]
 
     if max_evaluations > 0:
         n_res, scale = sum(d.size for d in data.decays), sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
@@ -794,28 +899,147 @@ def refine_prepared(
         theta, nfev, converged = theta0, 0, False
         r, jm = both(theta)
     n_res = r.size
-    dof = max(n_res - N_PARAMETERS - len(data.decays) * _linear_per_impact(pos.shape[0], data.drift), 1)
-    cost = float(r @ r) / dof if data.noise_from == "pretrigger" else 1.0
+    n_linear = _linear_per_impact(p, data.drift) + (0 if link is None else link.extra_columns())
+    dof = max(n_res - theta.size - len(data.decays) * n_linear, 1)
     s2 = float(r @ r) / dof
+    cost = s2 if data.noise_from == "pretrigger" else 1.0
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, n_linear)
     misfit = _misfit(r, data, dof / n_res, q_fit)
+    rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
+    delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
     return Refinement(
-        center_of_gravity=g,
-        inertia_per_mass=j,
-        stiffness_per_mass=k,
-        damping_per_mass=c,
-        poles=lam * omega,
-        std=std,
-        normalised_cost=cost,
-        noise_from=data.noise_from,
-        residuals=n_res,
-        evaluations=nfev,
-        converged=converged,
-        misfit=misfit,
-    )
+        center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega, std=std,
+        normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev, converged=converged,
+        misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
+    )  # fmt: skip
+
+
+def _delay_results(
+    theta: Array, std: dict[str, Array], link: _Link | None, rejected: bool, fit: tuple[Any, ...]
+) -> tuple[Array | None, Array | None, Array | None]:
+    """The fitted delays and their std (s), or, for a rejected fit without them, the delay score (:func:`delay_step`).
+
+    `fit` is ``(data, pos_l, dirs, omega, chain, s2)``; ``std``'s ``"delay"`` entry is taken out.
+    """
+    data, pos_l, dirs, omega, chain, s2 = fit
+    p = pos_l.shape[0]
+    if link is not None and link.free:
+        delays, delays_std = np.zeros(p), np.zeros(p)
+        delays[list(link.free)] = theta[N_PARAMETERS:] / omega
+        delays_std[list(link.free)] = std.pop("delay") / omega
+        return delays, delays_std, None
+    if not rejected or p < 2:
+        return None, None, None
+    wide = _link(chain, omega, p, True, () if link is None else link.hum)
+    r_d, j_d = _evaluate(np.concatenate([theta, np.zeros(p - 1)]), data, pos_l, dirs, omega, True, wide)
+    return None, None, delay_step(r_d, j_d, p - 1, s2) / np.array([[omega], [1.0]])
+
+
+def _link(
+    chain: ChainModel | None, omega: float, p: int, estimate_delays: bool, hum: Sequence[float] = ()
+) -> _Link | None:
+    """The chain's link into the refit (None: nothing to model, no delays fitted, no hum)."""
+    model = chain if chain is not None else ChainModel(tuple(ChannelChain() for _ in range(p)))
+    if model.identity and not estimate_delays and not hum:
+        return None
+    return _Link(model, omega, tuple(range(1, p)) if estimate_delays else (), tuple(hum))
+
+
+def _with_hum(
+    link: _Link | None, theta0: Array, data: PreparedDecays, model: tuple[Any, ...]
+) -> tuple[_Link | None, tuple[tuple[float, float, float], ...], PreparedDecays, Array]:
+    """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual.
+
+    `model` is ``(pos_l, dirs, omega, chain, estimate_delays, dt)`` (`dt` the raw sample interval).
+    Returns the link, the hum found, the data and the start. With hum, the pre-trigger's noise levels
+    hold the hum too (its power, far above the noise's, cannot be subtracted from them to the noise's
+    precision), so the levels come from the residual (``noise_from`` ``"residual"``, no misfit test):
+    of a pilot fit (:data:`_PILOT` evaluations) with the hum modelled and the levels of the start's
+    residual, whose end is the start returned (the start's own residual holds its misfit and would
+    weight the channels by it).
+    """
+    from rigidid.core.timedomain.hum import find_hum
+
+    pos_l, dirs, omega, chain, estimate_delays, _ = model
+    r0 = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0]
+    parts, row, p = [], 0, pos_l.shape[0]
+    for d in data.decays:
+        parts.append(r0[row : row + d.size].reshape(-1, p))
+        row += d.size
+    found = tuple(find_hum(parts, data.dt))
+    if not found:
+        return link, (), data, theta0
+    link = _link(chain, omega, p, estimate_delays, [f for f, _, _ in found])
+    data = replace(data, sigma=np.ones(p), noise_from="residual")
+    per = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0].reshape(-1, p)
+    pilot = replace(data, sigma=np.sqrt(np.mean(per**2, axis=0)) + 1e-300)
+
+    def both(theta: Array) -> tuple[Array, Array]:
+        return _evaluate(theta, pilot, pos_l, dirs, omega, True, link)
+
+    def fun(theta: Array) -> Array:
+        return _evaluate(theta, pilot, pos_l, dirs, omega, False, link)[0]
+
+    theta = _levenberg_marquardt(fun, both, theta0, _PILOT, per.size)[0]
+    return link, found, data, theta
+
+
+def _settled(
+    data: PreparedDecays, chain: ChainModel | None, estimate_delays: bool = False, dt: float = 0.0
+) -> PreparedDecays:
+    """`data` with the first samples of each decay dropped while the chain settles (:meth:`ChainModel.settle_time`).
+
+    With the delays estimated, :data:`_DELAY_SKIP` more samples (a late channel reads the impact's end there).
+    With an anti-alias filter and a decimated fit, the pre-trigger's noise levels (and squares) are scaled
+    for the noise's colour (:meth:`ChainModel.decimated_noise_ratio`; `dt` the raw sample interval).
+    """
+    q = max(1, round(data.dt / dt)) if dt > 0.0 else 1
+    if chain is not None and q > 1 and data.noise_from == "pretrigger":
+        ratio = chain.decimated_noise_ratio(dt, fir_taps(q))
+        m2 = None if data.pre_m2 is None else data.pre_m2 * ratio[None, :]
+        data = replace(data, sigma=data.sigma * np.sqrt(ratio), pre_m2=m2)
+    skip = (0 if chain is None else math.ceil(chain.settle_time() / data.dt)) + (_DELAY_SKIP if estimate_delays else 0)
+    if skip == 0:
+        return data
+    return replace(data, decays=[d[skip:] for d in data.decays])
+
+
+def delay_step(r: Array, jm: Array, n_delays: int, s2: float) -> Array:
+    """The delays' part of one Gauss-Newton step from a fit without them, and its z scores.
+
+    A score test for unmodelled channel delays: at the fitted body, the step
+    ``-(J^T J)^-1 J^T r`` of the fit with delays freed (the body's parameters and the
+    delays together, `jm`'s last `n_delays` columns the delays of channels 1..p-1) and its
+    standard errors ``sqrt(s2 diag (J^T J)^-1)``.
+
+    Parameters
+    ----------
+    r : ndarray, shape (n,)
+        The residual at the fit (whitened).
+    jm : ndarray, shape (n, n_theta)
+        Its Jacobian with the delays' columns last.
+    n_delays : int
+        Number of delay columns.
+    s2 : float
+        Residual variance.
+
+    Returns
+    -------
+    ndarray, shape (2, n_delays + 1)
+        Row 0: each channel's delay step (local time units; 0 for the reference, channel 0);
+        row 1: its z score.
+    """
+    info = jm.T @ jm
+    cov = pseudo_inverse(info, symmetric=True)[0]
+    step = -cov @ (jm.T @ r)
+    sd = np.sqrt(np.maximum(np.diag(cov)[-n_delays:] * s2, 1e-300))
+    out = np.zeros((2, n_delays + 1))
+    out[0, 1:] = step[-n_delays:]
+    out[1, 1:] = step[-n_delays:] / sd
+    return out
 
 
 def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
@@ -831,7 +1055,7 @@ def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) ->
     return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
 
 
-def _linear_per_impact(p: int, drift: bool) -> int:
+def _linear_per_impact(p: int, drift: bool | int) -> int:
     """Linear unknowns per impact: 12 modal amplitudes, an offset per channel (and a drift)."""
     return 12 + (2 if drift else 1) * p
 
@@ -853,7 +1077,7 @@ def _bound(
     residual: Array | None = None,
     lengths: Sequence[int] | None = None,
     factor: int = 1,
-    drift: bool = False,
+    n_linear: int | None = None,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -861,17 +1085,18 @@ def _bound(
     covariance of :func:`rigidid.core.timedomain.intervals.parameter_covariance`
     (sandwich from the residual per impact and channel, the decimation filter's
     correlation, the remaining Gauss-Newton step). Without: the textbook bound
-    ``s2 (J^T J)^+``.
+    ``s2 (J^T J)^+``. `n_linear`: linear unknowns per impact (default: 12 and an offset per channel).
+    Parameters beyond the body's (the channels' delays) get the key ``"delay"``.
     """
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
 
-        n_linear = len(lengths) * _linear_per_impact(pos_l.shape[0], drift)
-        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
+        per = _linear_per_impact(pos_l.shape[0], False) if n_linear is None else n_linear
+        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, len(lengths) * per).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
     base = _outputs(theta, frame, pos_l, dirs)
-    grad = np.zeros((base.size, N_PARAMETERS))
+    grad = np.zeros((base.size, theta.size))
     for i in range(N_PARAMETERS):
         h = 1e-6 * max(1.0, abs(theta[i]))
         step = theta.copy()
@@ -888,7 +1113,7 @@ def _bound(
         "damping_per_mass": sd[48:84].reshape(6, 6),
         "frequency_hz": sd[84:90],
         "damping_ratio": sd[90:96],
-    }
+    } | ({"delay": np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:], 0.0))} if theta.size > N_PARAMETERS else {})
 
 
 def good_fit(refinement: Refinement) -> bool:
@@ -927,6 +1152,11 @@ class RecordBound:
         See :func:`record_bound`.
     misfit : MisfitTest or None
         The refit's acceptance test (:class:`Refinement`).
+    delays : dict of str to (float, float), or None
+        With the delays estimated: per channel id, its delay (s) relative to the reference
+        channel and its standard error (:attr:`Refinement.delays`).
+    hum_hz : tuple of float
+        Mains hum frequencies modelled (:attr:`Refinement.hum`).
     """
 
     center_of_gravity: Any
@@ -943,6 +1173,8 @@ class RecordBound:
     sensor_budget: dict[str, dict[str, Array]] | None = None
     tolerances: dict[str, float] | None = None
     misfit: MisfitTest | None = None
+    delays: dict[str, tuple[float, float]] | None = None
+    hum_hz: tuple[float, ...] = ()
 
 
 def record_bound(

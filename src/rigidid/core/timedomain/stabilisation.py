@@ -119,12 +119,31 @@ class Cluster:
     order: int
 
 
+_HUM_FREQUENCY = 0.005  # relative distance from a mains frequency of a hum pole
+_HUM_DAMPING = 0.002  # largest damping ratio of a hum pole
+
+
 def _physical(poles: CArray, band: tuple[float, float], max_damping: float) -> BoolArray:
     w = np.abs(poles)
     f = w / (2.0 * np.pi)
     z = -poles.real / np.maximum(w, 1e-300)
     result: BoolArray = (poles.imag > 0.0) & (f > band[0]) & (f < band[1]) & (z > 0.0) & (z < max_damping)
-    return result
+    return result & ~_mains_hum(f, z)
+
+
+def _mains_hum(f: Array, z: Array) -> BoolArray:
+    """Poles that are mains hum, not modes: undamped (ratio below 0.2 %) within 0.5 % of 50/60 Hz or a harmonic.
+
+    Hum is a sinusoid of fixed amplitude; a sweep models it as a pole of zero damping at the mains'
+    frequency (:mod:`rigidid.core.timedomain.hum`; the refit finds and models it, named).
+    """
+    from rigidid.core.timedomain.hum import MAINS_HZ
+
+    near = np.zeros(f.shape, dtype=bool)
+    for hz in MAINS_HZ:
+        near |= np.abs(f / hz - 1.0) < _HUM_FREQUENCY
+    out: BoolArray = near & (np.abs(z) < _HUM_DAMPING)
+    return out
 
 
 def stabilise(
