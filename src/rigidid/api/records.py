@@ -487,6 +487,7 @@ def with_refinement(
         arrays = subtract_modes(
             arrays, records[0][1], [impact.start for impact in estimate.impacts], estimate.poles, unused
         )
+    bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     return _refit(
         result,
         lambda: refine_body(
@@ -502,9 +503,10 @@ def with_refinement(
             stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass,
             drift=estimate.trends is not None,
+            sensor_bounds=bounds,
         ),
         progress,
-        tolerances,
+        bounds,
     )
 
 
@@ -603,7 +605,9 @@ def _accept_refinement(
         damping_per_mass=refinement.damping_per_mass,
     )
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
-    sensor_std = _sensor_std(result, bounds)
+    sensor_std = refinement.sensor_std  # the refit's own linearisation (None: the modal kernel's)
+    if sensor_std is None:
+        sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
 
@@ -766,10 +770,11 @@ def refine_records(
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
-            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None,
+            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None, sensor_bounds=bounds,
         )  # fmt: skip
 
-    return _refit(result, fit, progress, sensor_bounds(lay))
+    bounds = sensor_bounds(lay)
+    return _refit(result, fit, progress, bounds)
 
 
 def records_spectrum(

@@ -28,7 +28,7 @@ from rigidid.core.geometry import layout_frame, normalise_directions, sensor_mat
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
-from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
+from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
 
@@ -38,6 +38,7 @@ __all__ = [
     "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "SensorTerms",
     "columns_of",
     "cut_decays",
     "fit_factor",
@@ -47,6 +48,7 @@ __all__ = [
     "record_bound",
     "refine_body",
     "refine_prepared",
+    "sensor_terms",
 ]
 
 Array = NDArray[np.float64]
@@ -107,6 +109,11 @@ class Refinement:
         stalled at the boundary of positive definite J, K, C with the decrement below 4)
         rather than stopping at its evaluation budget; False when the start was only
         evaluated.
+    misfit : MisfitTest or None
+        The acceptance test (:mod:`rigidid.core.timedomain.acceptance`).
+    sensor_std : dict or None
+        With stated sensor tolerances: per type-B source (:data:`rigidid.core.sensor_budget.SOURCES`),
+        the refit's own std of each physical value (keys as `std`) from the sensors' errors.
     """
 
     center_of_gravity: Array
@@ -121,6 +128,7 @@ class Refinement:
     evaluations: int
     converged: bool = False
     misfit: MisfitTest | None = None
+    sensor_std: dict[str, dict[str, Array]] | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -626,6 +634,124 @@ def _evaluate(theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, 
     return r_all, j_all
 
 
+# --- the sensors' tolerances (issue 23): their signatures in the residual ----------------
+
+
+@dataclass(frozen=True)
+class SensorTerms:
+    """How the stated sensors' errors would show in the refit, linearised at its minimum.
+
+    Per sensor ``i`` six unit errors, in the columns ``k p + i``: its gain (relative),
+    its axis turned towards the two normals of :func:`rigidid.core.sensor_budget.axis_normals`
+    (radians), its position shifted along x, y, z (the layout's length). Each error adds a
+    signature ``g`` to the weighted records; ``G~`` is ``G`` less its projection on each
+    impact's linear terms (modal amplitudes, offsets).
+
+    Attributes
+    ----------
+    cross : ndarray, shape (51, 6 p)
+        ``J^T G~`` (``J`` the refit's projected Jacobian).
+    gram : ndarray, shape (6 p, 6 p)
+        ``G~^T G~``.
+    data : ndarray, shape (6 p,)
+        ``G~^T r`` (``r`` the refit's residual).
+    """
+
+    cross: Array
+    gram: Array
+    data: Array
+
+
+def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array, r: Array,
+                 scale: float) -> SensorTerms:  # fmt: skip
+    """The sensor errors' signatures at `theta`, projected and reduced (:class:`SensorTerms`).
+
+    The signature of an error of sensor ``i`` is the model's motion read by a virtual
+    sensor, in channel ``i`` only: at the same point along the same axis (gain), along
+    a normal (tilt), or the difference of two points a unit apart (the reading is linear
+    in the position, eq. (3) of [1]); the per-impact modal amplitudes are the fit's.
+    Position columns are per layout length (`scale`: the local frame's length unit).
+    """
+    from rigidid.core.sensor_budget import axis_normals
+
+    p = pos_l.shape[0]
+    e1, e2 = axis_normals(dirs)
+    eye = np.eye(3)
+    vpos = np.concatenate([pos_l, pos_l, pos_l, pos_l + eye[0], pos_l + eye[1], pos_l + eye[2]])
+    vdir = np.concatenate([dirs, e1, e2, dirs, dirs, dirs])
+    lam, phi_v, *_ = _modes(theta, vpos, vdir, False)
+    phi_v = phi_v.reshape(6, p, 6)
+    phi_v[3:] = (phi_v[3:] - phi_v[0]) / scale
+    phi = phi_v[0]
+    w = 1.0 / data.sigma
+    k = 6 * p
+    cross, gram, proj = np.zeros((N_PARAMETERS, k)), np.zeros((k, k)), np.zeros(k)
+    row = 0
+    for y in data.decays:
+        n = y.shape[0]
+        t: Array = np.arange(n, dtype=float) * (data.dt * omega)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift)
+        norms = np.sqrt(np.einsum("ij,ij->j", design, design))
+        scaled = (design / np.where(norms > 0.0, norms, 1.0)).reshape(n, p, -1)
+        inv = pseudo_inverse(np.einsum("ncm,ncl->ml", scaled, scaled), symmetric=True)[0]
+        beta = inv @ np.einsum("ncm,nc->m", scaled, y * w) / np.where(norms > 0.0, norms, 1.0)
+        sig = np.einsum("nm,kcm->nkc", ex * (beta[:6] + 1j * beta[6:12]), phi_v).real * w  # (n, kind, sensor)
+        # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
+        sg = np.einsum("ncm,nkc->mkc", scaled, sig).reshape(-1, k)
+        block = np.einsum("nkc,nlc->ckl", sig, sig)
+        own = np.zeros((p, 6, p, 6))
+        own[np.arange(p), :, np.arange(p), :] = block
+        gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
+        jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
+        cross += np.einsum("ncj,nkc->jkc", jr, sig).reshape(N_PARAMETERS, k)
+        proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
+        row += n * p
+    return SensorTerms(cross, gram, proj)
+
+
+def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]]:
+    """Per column of :class:`SensorTerms`, ``E x^2`` and ``Var x^2``, and each source's ``E x^2`` per column."""
+    mo = bounds.moments()
+    (vs, ss), (vo, so), (vt, st), (vp, sp) = (mo[s] for s in ("sensitivity", "orientation", "transverse", "position"))
+    kinds = np.repeat(np.arange(6), p)
+    gain, tilt, shift = kinds == 0, (kinds == 1) | (kinds == 2), kinds >= 3
+    v = np.where(gain, vs, np.where(tilt, vo + vt, vp))
+    sv = np.where(gain, ss, np.where(tilt, so + st + 4.0 * vo * vt, sp))  # tilt: two independent errors summed
+    per_source = {"sensitivity": np.where(gain, vs, 0.0), "orientation": np.where(tilt, vo, 0.0),
+                  "transverse": np.where(tilt, vt, 0.0), "position": np.where(shift, vp, 0.0)}  # fmt: skip
+    return v, sv, per_source
+
+
+def _sensor_outcome(
+    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+) -> tuple[Array, Array, Array, dict[str, dict[str, Array]]]:
+    """The misfit's quadratic form, the moments, and each source's std of the physical values.
+
+    ``Q = G~^T G~ - (J^T G~)^T (J^T J)^+ J^T G~`` (what the fit cannot absorb); a sensor
+    error ``x`` moves the parameters by ``(J^T J)^+ J^T G~ x`` (Gauss-Newton, first order),
+    the physical values by `grad` times that.
+    """
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross  # (51, k)
+    q = terms.gram - terms.cross.T @ move
+    v, sv, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
+    effect = grad @ move  # (outputs, k)
+    std = {source: _physical_std(np.sqrt((effect**2) @ var)) for source, var in per_source.items()}
+    return 0.5 * (q + q.T), v, sv, std
+
+
+def _physical_std(sd: Array) -> dict[str, Array]:
+    """The flat standard deviations of :func:`_outputs` as a dict of CG, J/m, K/m, C/m, frequencies, damping."""
+    return {
+        "center_of_gravity": sd[:3],
+        "inertia_per_mass": sd[3:12].reshape(3, 3),
+        "stiffness_per_mass": sd[12:48].reshape(6, 6),
+        "damping_per_mass": sd[48:84].reshape(6, 6),
+        "frequency_hz": sd[84:90],
+        "damping_ratio": sd[90:96],
+    }
+
+
 def refine_body(
     records: Sequence[ArrayLike],
     dt: float,
@@ -641,6 +767,7 @@ def refine_body(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool = False,
+    sensor_bounds: Any = None,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -669,6 +796,11 @@ def refine_body(
     drift : bool
         Fit a linear drift per channel and impact beside the offset
         (:attr:`PreparedDecays.drift`).
+    sensor_bounds : SensorBounds, optional
+        The sensors' stated tolerances (:class:`rigidid.core.sensor_budget.SensorBounds`,
+        length in the layout's unit): the acceptance test expects the misfit they leave
+        (:func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`) and
+        ``sensor_std`` holds their effect on the body (:func:`sensor_terms`).
 
     Returns
     -------
@@ -714,6 +846,7 @@ def refine_body(
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
+        sensor_bounds=sensor_bounds,
     )  # fmt: skip
 
 
@@ -729,6 +862,7 @@ def refine_prepared(
     damping_per_mass: ArrayLike,
     max_evaluations: int = 240,
     drift: bool | None = None,
+    sensor_bounds: Any = None,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -740,6 +874,8 @@ def refine_prepared(
         Sample interval of the records the decays came from (s): the fit's
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
+        As for :func:`refine_body`.
+    sensor_bounds : SensorBounds, optional
         As for :func:`refine_body`.
     drift : bool, optional
         Overrides ``data.drift``.
@@ -800,8 +936,14 @@ def refine_prepared(
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift)
+    grad = _output_gradient(theta, frame, pos_l, dirs)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift, grad)
     misfit = _misfit(r, data, dof / n_res, q_fit)
+    sensor_std = None
+    if sensor_bounds is not None:
+        terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale)
+        q, v, sv, sensor_std = _sensor_outcome(terms, jm, sensor_bounds, grad)
+        misfit = _misfit(r, data, dof / n_res, q_fit, (q, v, sv)) or misfit
     return Refinement(
         center_of_gravity=g,
         inertia_per_mass=j,
@@ -815,11 +957,22 @@ def refine_prepared(
         evaluations=nfev,
         converged=converged,
         misfit=misfit,
+        sensor_std=sensor_std,
     )
 
 
-def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
-    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger."""
+def _misfit(
+    r: Array,
+    data: PreparedDecays,
+    dof_fraction: float,
+    factor: int,
+    systematic: tuple[Array, Array, Array] | None = None,
+) -> MisfitTest | None:
+    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger.
+
+    With `systematic` (the sensor errors' quadratic form and moments, :func:`_sensor_outcome`):
+    :func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`.
+    """
     if data.noise_from != "pretrigger" or data.pre_m2 is None or len(data.pre_counts) != len(data.decays):
         return None
     from rigidid.core.timedomain.intervals import noise_correlation
@@ -828,7 +981,12 @@ def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) ->
     counts = np.asarray(data.pre_counts, dtype=float)
     variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
     lengths = [d.shape[0] for d in data.decays]
-    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
+    rho = noise_correlation(factor)
+    if systematic is not None:
+        q, v, sv = systematic
+        p = data.sigma.size
+        return budgeted_misfit_test(r, lengths, p, dof_fraction, data.pre_counts, variance, rho, q, (v, sv))
+    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, rho)
 
 
 def _linear_per_impact(p: int, drift: bool) -> int:
@@ -854,6 +1012,7 @@ def _bound(
     lengths: Sequence[int] | None = None,
     factor: int = 1,
     drift: bool = False,
+    grad: Array | None = None,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -861,7 +1020,7 @@ def _bound(
     covariance of :func:`rigidid.core.timedomain.intervals.parameter_covariance`
     (sandwich from the residual per impact and channel, the decimation filter's
     correlation, the remaining Gauss-Newton step). Without: the textbook bound
-    ``s2 (J^T J)^+``.
+    ``s2 (J^T J)^+``. `grad`: :func:`_output_gradient` at `theta` when computed already.
     """
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
@@ -870,6 +1029,14 @@ def _bound(
         cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, n_linear).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
+    if grad is None:
+        grad = _output_gradient(theta, frame, pos_l, dirs)
+    var = np.einsum("ij,jk,ik->i", grad, cov, grad)
+    return _physical_std(np.sqrt(np.maximum(var, 0.0)))
+
+
+def _output_gradient(theta: Array, frame: _Frame, pos_l: Array, dirs: Array) -> Array:
+    """Central-difference derivatives of :func:`_outputs` with respect to the 51 parameters."""
     base = _outputs(theta, frame, pos_l, dirs)
     grad = np.zeros((base.size, N_PARAMETERS))
     for i in range(N_PARAMETERS):
@@ -879,16 +1046,7 @@ def _bound(
         back = theta.copy()
         back[i] -= h
         grad[:, i] = (_outputs(step, frame, pos_l, dirs) - _outputs(back, frame, pos_l, dirs)) / (2 * h)
-    var = np.einsum("ij,jk,ik->i", grad, cov, grad)
-    sd = np.sqrt(np.maximum(var, 0.0))
-    return {
-        "center_of_gravity": sd[:3],
-        "inertia_per_mass": sd[3:12].reshape(3, 3),
-        "stiffness_per_mass": sd[12:48].reshape(6, 6),
-        "damping_per_mass": sd[48:84].reshape(6, 6),
-        "frequency_hz": sd[84:90],
-        "damping_ratio": sd[90:96],
-    }
+    return grad
 
 
 def good_fit(refinement: Refinement) -> bool:
