@@ -461,8 +461,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
     ``converged``, per quantity ``{"estimate", "std", "ci95"}``, with a pre-trigger the
-    acceptance test's ``misfit_ratio``, ``misfit_p_value`` and ``false_alarm_rate``, and, when the sensors'
-    tolerances were propagated, ``sensor_budget`` (per source, ``noise`` first, the std of
+    acceptance test's ``misfit_ratio``, ``misfit_p_value``, ``false_alarm_rate`` and ``misfit_expected``,
+    and, when the sensors' tolerances were propagated, ``sensor_budget`` (per source, ``noise`` first, the std of
     ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
@@ -478,6 +478,7 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         out["misfit_ratio"] = bound.misfit.ratio
         out["misfit_p_value"] = bound.misfit.p_value
         out["false_alarm_rate"] = bound.misfit.false_alarm
+        out["misfit_expected"] = bound.misfit.expected
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

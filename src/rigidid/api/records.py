@@ -440,6 +440,7 @@ def with_refinement(
     *,
     progress: ProgressCallback | None = None,
     tolerances: SensorBounds | None = None,
+    estimate_sensors: bool = False,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -457,6 +458,11 @@ def with_refinement(
         The sensors' error bounds (type B), propagated into the intervals with the
         noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
         :func:`sensor_bounds` of a layout without ``tolerances``.
+    estimate_sensors : bool
+        Estimate each sensor's gain, axis and position errors with the body, the
+        tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
+        a sensor whose estimate is beyond 3 times its tolerance is named
+        (:func:`implausible_sensors`).
 
     Returns
     -------
@@ -504,6 +510,7 @@ def with_refinement(
             damping_per_mass=ident.damping_per_mass,
             drift=estimate.trends is not None,
             sensor_bounds=bounds,
+            estimate_sensors=estimate_sensors,
         ),
         progress,
         bounds,
@@ -605,11 +612,57 @@ def _accept_refinement(
         damping_per_mass=refinement.damping_per_mass,
     )
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
+    if refinement.sensor_correction is not None:
+        implausible_sensors(refinement.sensor_correction, bounds, result.sensor_ids)
     sensor_std = refinement.sensor_std  # the refit's own linearisation (None: the modal kernel's)
     if sensor_std is None:
         sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
+
+
+def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str]) -> list[str]:
+    """Name, in a :class:`~rigidid.errors.SensorCorrectionWarning`, each sensor whose estimated error is implausible.
+
+    Parameters
+    ----------
+    correction : SensorCorrection
+        The sensors' errors estimated with the body
+        (:class:`rigidid.core.timedomain.refine.SensorCorrection`).
+    bounds : SensorBounds
+        The stated tolerances.
+    ids : sequence of str
+        The sensors' ids, in the correction's order.
+
+    Returns
+    -------
+    list of str
+        The ids named: a determined gain beyond 3 times the sensitivity tolerance, a determined
+        tilt beyond 3 times the orientation and transverse tolerances together, or a determined
+        shift beyond 3 times the position tolerance along an axis.
+    """
+    from rigidid.errors import SensorCorrectionWarning
+
+    x, ok = correction.value, correction.determined
+    tilt_bound = math.radians(bounds.orientation_deg) + bounds.transverse
+    named = []
+    for i, sid in enumerate(ids):
+        parts = []
+        if ok[0, i] and abs(x[0, i]) > 3.0 * bounds.sensitivity:
+            parts.append(f"gain {100 * x[0, i]:+.3g} % (tolerance {100 * bounds.sensitivity:g} %)")
+        if ok[1:3, i].all() and math.hypot(x[1, i], x[2, i]) > 3.0 * tilt_bound:
+            parts.append(f"axis off by {math.degrees(math.hypot(x[1, i], x[2, i])):.3g} degrees")
+        if ok[3:, i].any() and np.max(np.abs(x[3:, i][ok[3:, i]])) > 3.0 * bounds.position:
+            parts.append(f"position off by {np.max(np.abs(x[3:, i][ok[3:, i]])):.3g} (tolerance {bounds.position:g})")
+        if parts:
+            named.append(sid)
+            warnings.warn(
+                f"sensor {sid}: the records say its " + ", ".join(parts) + ", beyond 3 times its stated tolerance: "
+                "check its calibration, mounting and position",
+                SensorCorrectionWarning,
+                stacklevel=3,
+            )
+    return named
 
 
 def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
@@ -680,6 +733,7 @@ def refine_records(
     *,
     progress: ProgressCallback | None = None,
     stream_above: int | None = None,
+    estimate_sensors: bool = False,
 ) -> IdentifyResult:
     """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
 
@@ -702,6 +756,8 @@ def refine_records(
         (:func:`rigidid.io.records.refit.read_prepared_decays`: the pre-trigger
         statistics and the decays at the fit's rate, nothing else held);
         smaller ones are read whole.
+    estimate_sensors : bool
+        As for :func:`with_refinement`.
 
     Returns
     -------
@@ -751,8 +807,9 @@ def refine_records(
             raw = load_records(paths, lay)
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(
-            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay)
-        )
+            result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay),
+            estimate_sensors=estimate_sensors,
+        )  # fmt: skip
     estimate = replace(estimate, impacts=tuple(impacts))
     from rigidid.io.records.refit import read_prepared_decays
 
@@ -771,6 +828,7 @@ def refine_records(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None, sensor_bounds=bounds,
+            estimate_sensors=estimate_sensors,
         )  # fmt: skip
 
     bounds = sensor_bounds(lay)

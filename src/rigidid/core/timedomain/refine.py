@@ -17,7 +17,7 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -38,6 +38,7 @@ __all__ = [
     "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "SensorCorrection",
     "SensorTerms",
     "columns_of",
     "cut_decays",
@@ -114,6 +115,9 @@ class Refinement:
     sensor_std : dict or None
         With stated sensor tolerances: per type-B source (:data:`rigidid.core.sensor_budget.SOURCES`),
         the refit's own std of each physical value (keys as `std`) from the sensors' errors.
+    sensor_correction : SensorCorrection or None
+        With ``estimate_sensors``: the sensors' errors estimated with the body (which the
+        body's values and ``sensor_std`` then account for).
     """
 
     center_of_gravity: Array
@@ -129,6 +133,7 @@ class Refinement:
     converged: bool = False
     misfit: MisfitTest | None = None
     sensor_std: dict[str, dict[str, Array]] | None = None
+    sensor_correction: SensorCorrection | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -672,6 +677,28 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     in the position, eq. (3) of [1]); the per-impact modal amplitudes are the fit's.
     Position columns are per layout length (`scale`: the local frame's length unit).
     """
+    p = pos_l.shape[0]
+    k = 6 * p
+    cross, gram, proj = np.zeros((N_PARAMETERS, k)), np.zeros((k, k)), np.zeros(k)
+    row = 0
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+        n = sig.shape[0]
+        # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
+        sg = np.einsum("ncm,nkc->mkc", scaled, sig).reshape(-1, k)
+        block = np.einsum("nkc,nlc->ckl", sig, sig)
+        own = np.zeros((p, 6, p, 6))
+        own[np.arange(p), :, np.arange(p), :] = block
+        gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
+        jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
+        cross += np.einsum("ncj,nkc->jkc", jr, sig).reshape(N_PARAMETERS, k)
+        proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
+        row += n * p
+    return SensorTerms(cross, gram, proj)
+
+
+def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float,
+                       scale: float) -> Iterator[tuple[Array, Array, Array]]:  # fmt: skip
+    """Per impact: the column-normalised design ``S`` (n, p, m), ``(S^T S)^+``, the signatures (n, 6, p)."""
     from rigidid.core.sensor_budget import axis_normals
 
     p = pos_l.shape[0]
@@ -684,29 +711,17 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     phi_v[3:] = (phi_v[3:] - phi_v[0]) / scale
     phi = phi_v[0]
     w = 1.0 / data.sigma
-    k = 6 * p
-    cross, gram, proj = np.zeros((N_PARAMETERS, k)), np.zeros((k, k)), np.zeros(k)
-    row = 0
     for y in data.decays:
         n = y.shape[0]
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
         design, ex = _design(lam, phi * w[:, None], t, data.drift)
         norms = np.sqrt(np.einsum("ij,ij->j", design, design))
-        scaled = (design / np.where(norms > 0.0, norms, 1.0)).reshape(n, p, -1)
+        norms = np.where(norms > 0.0, norms, 1.0)
+        scaled = (design / norms).reshape(n, p, -1)
         inv = pseudo_inverse(np.einsum("ncm,ncl->ml", scaled, scaled), symmetric=True)[0]
-        beta = inv @ np.einsum("ncm,nc->m", scaled, y * w) / np.where(norms > 0.0, norms, 1.0)
+        beta = inv @ np.einsum("ncm,nc->m", scaled, y * w) / norms
         sig = np.einsum("nm,kcm->nkc", ex * (beta[:6] + 1j * beta[6:12]), phi_v).real * w  # (n, kind, sensor)
-        # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
-        sg = np.einsum("ncm,nkc->mkc", scaled, sig).reshape(-1, k)
-        block = np.einsum("nkc,nlc->ckl", sig, sig)
-        own = np.zeros((p, 6, p, 6))
-        own[np.arange(p), :, np.arange(p), :] = block
-        gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
-        jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
-        cross += np.einsum("ncj,nkc->jkc", jr, sig).reshape(N_PARAMETERS, k)
-        proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
-        row += n * p
-    return SensorTerms(cross, gram, proj)
+        yield scaled, inv, sig
 
 
 def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]]:
@@ -740,6 +755,116 @@ def _sensor_outcome(
     return 0.5 * (q + q.T), v, sv, std
 
 
+@dataclass(frozen=True)
+class SensorCorrection:
+    """Per-sensor errors estimated jointly with the body from the records' redundancy (issue 23).
+
+    Rows of each (6, p) array: gain (relative), the axis turned towards the two normals of
+    :func:`rigidid.core.sensor_budget.axis_normals` (radians), the position shifted along x, y,
+    z (the layout's length); columns: sensors.
+
+    Attributes
+    ----------
+    value : ndarray, shape (6, p)
+        The estimate: the stated tolerances as a prior (rectangular, taken at its variance),
+        the records as data (Gauss-Newton from the refit's minimum).
+    std : ndarray, shape (6, p)
+        Its posterior standard deviation (the prior's where the records say nothing).
+    determined : ndarray of bool, shape (6, p)
+        Whether the records determine it, at least relative to the others: less than half of
+        its unit vector lies in the null space of the augmented Jacobian ``[J, G~]`` (rank by
+        :func:`rigidid.core.linalg.rank_tolerance`). The null space holds what no records can
+        tell: a common gain (the force is not measured), a common shift or turn of all sensors
+        (the CG and the axes move with them), a shift along a sensor's own axis.
+    rank : int
+        Rank of the augmented Jacobian, of ``51 + 6 p`` columns.
+    """
+
+    value: Array
+    std: Array
+    determined: NDArray[np.bool_]
+    rank: int
+
+
+def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array,
+                    scale: float) -> tuple[Array, int]:  # fmt: skip
+    """Which sensor errors the records determine: null vectors of ``[J, G~]`` (column-normalised), by rows.
+
+    The R factor of the stacked impacts (each impact's block factored, then the stack): the
+    signatures formed whole here (``n p`` by ``6 p`` per impact), so this runs only when the errors
+    are estimated.
+    """
+    from rigidid.core.linalg import rank_tolerance
+
+    p = pos_l.shape[0]
+    blocks = []
+    row = 0
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+        n = sig.shape[0]
+        g = (sig[:, None, :, :] * np.eye(p)[None, :, None, :]).reshape(n * p, 6 * p)
+        flat = scaled.reshape(n * p, -1)
+        gt = g - flat @ (inv @ (flat.T @ g))
+        blocks.append(np.linalg.qr(np.hstack([jm[row : row + n * p], gt]), mode="r"))
+        row += n * p
+    r = np.linalg.qr(np.vstack(blocks), mode="r")
+    norms = np.linalg.norm(r, axis=0)
+    _, sv, vt = np.linalg.svd(r / np.where(norms > 0.0, norms, 1.0))
+    keep = sv > rank_tolerance(sv[0], row)
+    null = vt[~keep]
+    return np.linalg.norm(null[:, N_PARAMETERS:], axis=0), int(np.sum(keep))
+
+
+def _sensor_correction(
+    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+) -> tuple[Array, Array, Array, dict[str, dict[str, Array]], Array]:
+    """The sensor errors estimated with the body (maximum a posteriori, linearised at the refit's minimum).
+
+    Minimises ``|r + J d - G~ x|^2 + x^T V^-1 x`` (``V`` the errors' stated variances): ``x =
+    (V Q + I)^-1 V G~^T r`` (``Q`` as in :func:`_sensor_outcome`), the body's parameters moved by
+    ``d = (J^T J)^+ J^T G~ x``. What a true error ``x`` still costs the body is
+    ``(J^T J)^+ J^T G~ (V Q + I)^-1 x``; the noise in ``x`` adds
+    ``(V Q + I)^-1 V Q V (V Q + I)^-T`` through the same map.
+
+    Returns
+    -------
+    x, x_std : ndarray, shape (6 p,)
+    shift : ndarray, shape (51,)
+        The parameters' move.
+    sensor_std : dict
+        Per source, the std of the physical values the errors leave after the correction.
+    noise_var : ndarray
+        Variance added to each physical value by the noise in ``x``.
+    """
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross
+    q = terms.gram - terms.cross.T @ move
+    q = 0.5 * (q + q.T)
+    v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
+    system = v[:, None] * q + np.eye(v.size)
+    x: Array = np.linalg.solve(system, v * terms.data).astype(float)
+    x_var: Array = np.diag(np.linalg.solve(system, np.diag(v)))
+    left = grad @ move @ np.linalg.solve(system, np.eye(v.size))  # physical value per unit true error, remaining
+    std = {source: _physical_std(np.sqrt((left**2) @ var)) for source, var in per_source.items()}
+    noise_var: Array = np.einsum("ij,jk,ik->i", left, (v[:, None] * q) * v[None, :], left)
+    shift: Array = move @ x
+    x_std: Array = np.sqrt(np.maximum(x_var, 0.0))
+    return x, x_std, shift, std, noise_var
+
+
+def _corrected(
+    theta: Array, data: _Data, sensors: tuple[Array, Array], frame: _Frame, jm: Array, terms: SensorTerms,
+    bounds: Any, grad: Array, std: dict[str, Array],
+) -> tuple[Array, dict[str, Array], dict[str, dict[str, Array]], SensorCorrection]:  # fmt: skip
+    """The parameters, noise std and type-B std after :func:`_sensor_correction`, and the correction."""
+    pos_l, dirs = sensors
+    x, x_std, shift, sensor_std, noise_var = _sensor_correction(terms, jm, bounds, grad)
+    null, rank = _augmented_null(theta, data, pos_l, dirs, frame.omega, jm, frame.scale)
+    p = pos_l.shape[0]
+    correction = SensorCorrection(x.reshape(6, p), x_std.reshape(6, p), (null**2 < 0.5).reshape(6, p), rank)
+    flat = np.concatenate([std[key].ravel() for key in std])
+    return theta + shift, _physical_std(np.sqrt(flat**2 + noise_var)), sensor_std, correction
+
+
 def _physical_std(sd: Array) -> dict[str, Array]:
     """The flat standard deviations of :func:`_outputs` as a dict of CG, J/m, K/m, C/m, frequencies, damping."""
     return {
@@ -768,6 +893,7 @@ def refine_body(
     max_evaluations: int = 240,
     drift: bool = False,
     sensor_bounds: Any = None,
+    estimate_sensors: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -801,6 +927,10 @@ def refine_body(
         length in the layout's unit): the acceptance test expects the misfit they leave
         (:func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`) and
         ``sensor_std`` holds their effect on the body (:func:`sensor_terms`).
+    estimate_sensors : bool
+        With `sensor_bounds`: estimate every sensor's gain, axis and position errors with the
+        body (the redundancy of more than six channels), the tolerances as their prior; the
+        body corrected (``sensor_correction``).
 
     Returns
     -------
@@ -846,7 +976,7 @@ def refine_body(
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
-        sensor_bounds=sensor_bounds,
+        sensor_bounds=sensor_bounds, estimate_sensors=estimate_sensors,
     )  # fmt: skip
 
 
@@ -863,6 +993,7 @@ def refine_prepared(
     max_evaluations: int = 240,
     drift: bool | None = None,
     sensor_bounds: Any = None,
+    estimate_sensors: bool = False,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -875,7 +1006,7 @@ def refine_prepared(
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
         As for :func:`refine_body`.
-    sensor_bounds : SensorBounds, optional
+    sensor_bounds, estimate_sensors
         As for :func:`refine_body`.
     drift : bool, optional
         Overrides ``data.drift``.
@@ -939,26 +1070,21 @@ def refine_prepared(
     grad = _output_gradient(theta, frame, pos_l, dirs)
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, data.drift, grad)
     misfit = _misfit(r, data, dof / n_res, q_fit)
-    sensor_std = None
+    sensor_std, correction = None, None
     if sensor_bounds is not None:
         terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale)
         q, v, sv, sensor_std = _sensor_outcome(terms, jm, sensor_bounds, grad)
         misfit = _misfit(r, data, dof / n_res, q_fit, (q, v, sv)) or misfit
+        if estimate_sensors:
+            theta, std, sensor_std, correction = _corrected(theta, data, (pos_l, dirs), frame, jm, terms,
+                                                            sensor_bounds, grad, std)  # fmt: skip
+            g, j, k, c = frame.physical(theta)
+            lam, *_ = _modes(theta, pos_l, dirs, False)
     return Refinement(
-        center_of_gravity=g,
-        inertia_per_mass=j,
-        stiffness_per_mass=k,
-        damping_per_mass=c,
-        poles=lam * omega,
-        std=std,
-        normalised_cost=cost,
-        noise_from=data.noise_from,
-        residuals=n_res,
-        evaluations=nfev,
-        converged=converged,
-        misfit=misfit,
-        sensor_std=sensor_std,
-    )
+        center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
+        std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
+        converged=converged, misfit=misfit, sensor_std=sensor_std, sensor_correction=correction,
+    )  # fmt: skip
 
 
 def _misfit(
