@@ -994,6 +994,7 @@ def refine_prepared(
     drift: bool | None = None,
     sensor_bounds: Any = None,
     estimate_sensors: bool = False,
+    sensor_passes: int = 2,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -1008,6 +1009,10 @@ def refine_prepared(
         As for :func:`refine_body`.
     sensor_bounds, estimate_sensors
         As for :func:`refine_body`.
+    sensor_passes : int
+        With `estimate_sensors`: Gauss-Newton passes on the sensors' errors, each a refit with
+        the sensors as the last corrected them (the errors' effect is not linear: one pass
+        leaves about their square).
     drift : bool, optional
         Overrides ``data.drift``.
 
@@ -1080,11 +1085,42 @@ def refine_prepared(
                                                             sensor_bounds, grad, std)  # fmt: skip
             g, j, k, c = frame.physical(theta)
             lam, *_ = _modes(theta, pos_l, dirs, False)
-    return Refinement(
+    out = Refinement(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
         std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
         converged=converged, misfit=misfit, sensor_std=sensor_std, sensor_correction=correction,
     )  # fmt: skip
+    if correction is not None and sensor_passes > 1:
+        return _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+    return out
+
+
+def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, Array], bounds: Any,
+               max_evaluations: int, passes: int) -> Refinement:  # fmt: skip
+    """The refit again with the sensors as `first` corrected them (gains out of the records, axes and
+    positions moved), from its body; its correction added to `first`'s (Gauss-Newton on the sensors)."""
+    from rigidid.core.sensor_budget import axis_normals
+
+    pos, dirs = sensors
+    x = first.sensor_correction
+    assert x is not None
+    e1, e2 = axis_normals(dirs)
+    dirs2 = normalise_directions(dirs + x.value[1][:, None] * e1 + x.value[2][:, None] * e2)
+    unit = 1.0 / (1.0 + x.value[0])
+    m2 = None if data.pre_m2 is None else data.pre_m2 * unit**2
+    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=data.sigma * unit, pre_m2=m2)
+    second = refine_prepared(
+        data2, dt, pos + x.value[3:].T, dirs2, center_of_gravity=first.center_of_gravity,
+        inertia_per_mass=first.inertia_per_mass, stiffness_per_mass=first.stiffness_per_mass,
+        damping_per_mass=first.damping_per_mass, max_evaluations=max_evaluations, sensor_bounds=bounds,
+        estimate_sensors=True, sensor_passes=passes,
+    )  # fmt: skip
+    y = second.sensor_correction
+    assert y is not None
+    value = x.value + y.value
+    value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
+    total = SensorCorrection(value, y.std, y.determined, y.rank)
+    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
 
 
 def _misfit(
