@@ -2,7 +2,8 @@
 
 Run from the worktree root (a few minutes; each cell runs ``rigidid identify --records`` with defaults)::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...]
+    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...] [--runs]
+        [--floor-draws 200] [--estimate-sensors]
 
 The test, simulated here with a forward model that shares no code with rigidid (6-DOF body on
 mounts written afresh, zero-order-hold state transition from scipy.linalg.expm, half-sine hammer):
@@ -293,7 +294,7 @@ def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float
     return float(np.mean(hits)), float(np.median(ratios)), float(np.median(j_errs))
 
 
-def run_cell(cell: str, seed: int) -> dict[str, object]:
+def run_cell(cell: str, seed: int, extra: tuple[str, ...] = ()) -> dict[str, object]:
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
     sensors = sensor_errors(effects, rng)
@@ -304,7 +305,7 @@ def run_cell(cell: str, seed: int) -> dict[str, object]:
         env = dict(os.environ)
         out = subprocess.run(
             [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
-             "--mass", str(MASS), "--json", "-"],
+             "--mass", str(MASS), "--json", "-", *extra],
             capture_output=True, text=True, env=env, check=False,
         )  # fmt: skip
     row: dict[str, object] = {"cell": cell, "seed": seed, "exit": out.returncode, "floor": floor(sensors)}
@@ -340,6 +341,7 @@ def main() -> None:
     parser.add_argument("--cells", default=",".join(CELLS))
     parser.add_argument("--floor-draws", type=int, default=200, help="draws of the type-B coverage table (0: none)")
     parser.add_argument("--runs", action="store_true", help="print each run's errors, floor and noise std")
+    parser.add_argument("--estimate-sensors", action="store_true", help="run identify with --estimate-sensors")
     args = parser.parse_args()
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
@@ -353,7 +355,7 @@ def main() -> None:
     print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
           f"{'refit':>5} {'cover':>6} {'silent':>6} {'target':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
-        rows = [run_cell(cell, s) for s in range(args.seeds)]
+        rows = [run_cell(cell, s, ("--estimate-sensors",) if args.estimate_sensors else ()) for s in range(args.seeds)]
         for r in rows if args.runs else []:
             print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
                   f"covered {r.get('covered')}/6 target {r.get('target')}", flush=True)  # fmt: skip

@@ -964,6 +964,7 @@ def identify_test(
     spectrum: bool = False,
     progress: ProgressCallback | None = None,
     force: ForceOptions | None = None,
+    estimate_sensors: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -991,6 +992,8 @@ def identify_test(
     force : ForceOptions, optional
         Measure the mass with the records' force channel (:mod:`rigidid.api.force`); also when
         the layout has a ``force`` block. The body is identified per unit mass, then scaled by it.
+    estimate_sensors : bool
+        In the refit, estimate each sensor's errors with the body (:func:`with_refinement`).
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -1002,7 +1005,8 @@ def identify_test(
     with _force_column_expected(layout, force):
         return _identify_test(
             layout, inputs, records=records, modal=modal, units=units, geometry=geometry, refine=refine,
-            resample=resample, spectrum=spectrum, progress=progress, force=force, **identify_options,
+            resample=resample, spectrum=spectrum, progress=progress, force=force, estimate_sensors=estimate_sensors,
+            **identify_options,
         )  # fmt: skip
 
 
@@ -1043,6 +1047,7 @@ def _identify_test(
     spectrum: bool,
     progress: ProgressCallback | None,
     force: ForceOptions | None,
+    estimate_sensors: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """:func:`identify_test`'s work."""
@@ -1093,11 +1098,14 @@ def _identify_test(
         try:
             with named_source(src), noted(notes, RefinementWarning):
                 if paths is not None:
-                    result = refine_records(result, paths, data.layout, estimate, progress=progress)
+                    result = refine_records(
+                        result, paths, data.layout, estimate, progress=progress, estimate_sensors=estimate_sensors
+                    )
                 else:
                     result = with_refinement(
-                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout)
-                    )
+                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout),
+                        estimate_sensors=estimate_sensors,
+                    )  # fmt: skip
         except BaseException:
             checks.pass_on(held)
             raise

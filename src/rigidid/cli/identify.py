@@ -28,6 +28,7 @@ from rigidid.cli.options import (
     DampingNoise,
     Decimate,
     Draws,
+    EstimateSensors,
     ForceColumn,
     ForceUnit,
     FrequencyNoise,
@@ -96,6 +97,7 @@ def identify(
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
     refine: Refine = True,
+    estimate_sensors: EstimateSensors = False,
     force: ForceColumn = None,
     frf_out: FrfOut = None,
 ) -> None:
@@ -125,7 +127,7 @@ def identify(
         run = identify_files(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
-            **_force_options(force, frf_out),
+            estimate_sensors=estimate_sensors, **_force_options(force, frf_out),
         )  # fmt: skip
         result, estimate = run.result, run.estimate
         result = add_mounts(result, mounts, torque_axis)
