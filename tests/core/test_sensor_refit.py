@@ -120,3 +120,22 @@ def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_bod
     assert np.max(np.abs(err / std)) < 3.0  # observed 1.7
     # the inertia's error without the gains estimated is 2.8e-3 (J/m, kg m^2/kg); with them, a tenth of it
     assert np.max(np.abs(err[3:])) < 1e-3  # observed 0.76e-3 (CG 0.06 mm against 0.66)
+
+
+def test_a_determined_correction_beyond_three_tolerances_names_its_sensor() -> None:
+    from rigidid.api.records import implausible_sensors
+    from rigidid.core.timedomain.refine import SensorCorrection
+    from rigidid.errors import SensorCorrectionWarning
+
+    value = np.zeros((6, 3))
+    value[0] = [0.12, 0.01, -0.2]  # sensor "c" beyond 3 x 3 % too, but undetermined
+    value[3, 1] = 0.05  # sensor "b" 50 mm off along x, tolerance 3 mm
+    determined = np.ones((6, 3), dtype=bool)
+    determined[0, 2] = False
+    correction = SensorCorrection(value, np.full((6, 3), 0.01), determined, 14)
+    bounds = SensorBounds(sensitivity=0.03, orientation_deg=3.0, transverse=0.03, position=0.003)
+    with pytest.warns(SensorCorrectionWarning) as caught:
+        named = implausible_sensors(correction, bounds, ("a", "b", "c"))
+    assert named == ["a", "b"]
+    assert "sensor a: the records say its gain +12 %" in str(caught[0].message)
+    assert "position off by 0.05" in str(caught[1].message)
