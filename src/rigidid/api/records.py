@@ -648,11 +648,11 @@ def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str
     named = []
     for i, sid in enumerate(ids):
         parts = []
-        if ok[0, i] and abs(x[0, i]) > 3.0 * bounds.sensitivity:
+        if ok[0, i] and bounds.sensitivity > 0.0 and abs(x[0, i]) > 3.0 * bounds.sensitivity:
             parts.append(f"gain {100 * x[0, i]:+.3g} % (tolerance {100 * bounds.sensitivity:g} %)")
-        if ok[1:3, i].all() and math.hypot(x[1, i], x[2, i]) > 3.0 * tilt_bound:
+        if ok[1:3, i].all() and tilt_bound > 0.0 and math.hypot(x[1, i], x[2, i]) > 3.0 * tilt_bound:
             parts.append(f"axis off by {math.degrees(math.hypot(x[1, i], x[2, i])):.3g} degrees")
-        if ok[3:, i].any() and np.max(np.abs(x[3:, i][ok[3:, i]])) > 3.0 * bounds.position:
+        if ok[3:, i].any() and bounds.position > 0.0 and np.max(np.abs(x[3:, i][ok[3:, i]])) > 3.0 * bounds.position:
             parts.append(f"position off by {np.max(np.abs(x[3:, i][ok[3:, i]])):.3g} (tolerance {bounds.position:g})")
         if parts:
             named.append(sid)
