@@ -459,7 +459,7 @@ def with_refinement(
         noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
         :func:`sensor_bounds` of a layout without ``tolerances``.
     estimate_sensors : bool
-        Estimate each sensor's gain, axis and position errors with the body, the
+        Estimate each sensor's gain and axis errors with the body (positions stay at their prior), the
         tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
         a sensor whose estimate is beyond 3 times its tolerance is named
         (:func:`implausible_sensors`).

@@ -215,7 +215,7 @@ EstimateSensors = Annotated[
     bool,
     typer.Option(
         "--estimate-sensors",
-        help="With --records and more than six channels: estimate each sensor's gain, axis and position errors "
+        help="With --records and more than six channels: estimate each sensor's gain and axis errors "
         "with the body in the refit (the layout's tolerances as their prior); a sensor beyond 3x its tolerance "
         "is named.",
         rich_help_panel=RECORDS_PANEL,
