@@ -2,7 +2,8 @@
 
 Run from the worktree root (a few minutes; each cell runs ``rigidid identify --records`` with defaults)::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...]
+    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...] [--runs]
+        [--floor-draws 200] [--estimate-sensors]
 
 The test, simulated here with a forward model that shares no code with rigidid (6-DOF body on
 mounts written afresh, zero-order-hold state transition from scipy.linalg.expm, half-sine hammer):
@@ -31,7 +32,9 @@ Printed per cell: runs finished (exit 0) of all; the median and worst CG error (
 span, largest coordinate) and inertia error (largest relative error of the diagonal, %); runs
 whose refit was accepted; coverage of the reported 95 % intervals (CG and inertia diagonal: the
 fraction of the 6 quantities x runs whose interval holds the truth); runs "silently wrong" (exit 0,
-no warning, some error beyond 4 reported standard errors); the layout states the sensor tolerances
+no warning, some error beyond 4 reported standard errors); ``target``: runs whose CG and inertia errors are
+within 1.25 times the floor plus 6 standard errors of the noise alone (the clean case's bound, the run's own
+``sensor_budget.noise``); the layout states the sensor tolerances
 the errors were drawn within (zero in the cells without sensor errors). ``floor``: the same errors from the
 exact modes read through the same erroneous sensors (``rigidid.api.identify`` on perfect modal
 data), the floor the chain's sensor errors leave.
@@ -349,9 +352,16 @@ def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float
 
 
 def run_cell(
-    cell: str, seed: int, metadata: bool = False, estimate_delays: bool = False, twin: bool = False
+    cell: str,
+    seed: int,
+    metadata: bool = False,
+    estimate_delays: bool = False,
+    twin: bool = False,
+    options: tuple[str, ...] = (),
 ) -> dict[str, object]:
-    """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin."""
+    """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin.
+
+    `options`: more options of ``rigidid identify`` (e.g. ``--estimate-sensors``)."""
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
     effects = set() if twin else effects
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
@@ -363,6 +373,7 @@ def run_cell(
         paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects), chain)
         env = dict(os.environ)
         extra = ["--estimate-delays"] if estimate_delays else []
+        extra += list(options)
         out = subprocess.run(
             [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
              "--mass", str(MASS), "--json", "-", *extra],
@@ -385,6 +396,13 @@ def run_cell(
         z = np.concatenate([(cg - CG) / cg_sd, (np.diag(inertia) - np.diag(INERTIA)) / j_sd])
         row["covered"] = int(np.sum(np.abs(z) <= 1.959964))
         row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
+        noise = (crb.get("sensor_budget") or {}).get("noise")
+        if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
+            span = float(np.max(np.ptp(SENSORS, axis=0)))
+            se = (100 * float(np.max(noise["center_of_gravity"])) / span,
+                  100 * float(np.max(np.diag(np.array(noise["inertia_tensor"])) / np.diag(INERTIA))))  # fmt: skip
+            fl = row["floor"]
+            row["target"] = all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], fl, se, strict=True))  # type: ignore[arg-type]
     return row
 
 
@@ -396,6 +414,8 @@ def main() -> None:
     parser.add_argument("--metadata", action="store_true", help="state the chain in the layout's chain block")
     parser.add_argument("--estimate-delays", action="store_true", help="pass --estimate-delays")
     parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
+    parser.add_argument("--runs", action="store_true", help="print each run's errors, floor and noise std")
+    parser.add_argument("--estimate-sensors", action="store_true", help="run identify with --estimate-sensors")
     args = parser.parse_args()
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
@@ -407,15 +427,22 @@ def main() -> None:
     print("truth: modes " + " ".join(f"{f:.2f}" for f in freq) + " Hz, damping "
           + " ".join(f"{100 * z:.1f}" for z in zeta) + " %")  # fmt: skip
     print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
-          f"{'refit':>5} {'cover':>6} {'silent':>6}  first warning or error")  # fmt: skip
+          f"{'refit':>5} {'cover':>6} {'silent':>6} {'target':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
-        rows = [run_cell(cell, s, args.metadata, args.estimate_delays) for s in range(args.seeds)]
+        sensors_option = ("--estimate-sensors",) if args.estimate_sensors else ()
+        rows = [
+            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option) for s in range(args.seeds)
+        ]
+        for r in rows if args.runs else []:
+            print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
+                  f"covered {r.get('covered')}/6 target {r.get('target')}", flush=True)  # fmt: skip
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])
         fitted = [r for r in done if r.get("refit")]
         cover = sum(int(r["covered"]) for r in fitted) / (6 * len(fitted)) if fitted else float("nan")  # type: ignore[call-overload]
         silent = sum(bool(r.get("silent")) for r in done)
+        met = sum(bool(r.get("target")) for r in done)
         note = next((str(r.get("error") or (r["warnings"][0] if r["warnings"] else "")) for r in rows  # type: ignore[index]
                      if r.get("error") or r["warnings"]), "")  # fmt: skip
         note = note.replace("rigidid: ", "")[:110]
@@ -430,7 +457,8 @@ def main() -> None:
         med, worst = np.median(errs, axis=0), np.max(errs, axis=0)
         print(f"{cell:<11} {len(done):>4}/{len(rows):<3} {med[0]:>8.3f}/{worst[0]:<8.3f} "
               f"{med[1]:>6.2f}/{worst[1]:<6.2f} "
-              f"{np.max(fl[:, 0]):>5.2f}/{np.max(fl[:, 1]):<5.2f} {len(fitted):>5} {cover:>6.2f} {silent:>6}  {note}",
+              f"{np.max(fl[:, 0]):>5.2f}/{np.max(fl[:, 1]):<5.2f} {len(fitted):>5} {cover:>6.2f} {silent:>6} "
+              f"{met:>6}  {note}",
               flush=True)  # fmt: skip
 
 

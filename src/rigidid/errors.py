@@ -110,6 +110,10 @@ class SensorFitWarning(RigididWarning):
     """One sensor's readings fit rigid-body motion much worse than the others' (wrong position or direction?)."""
 
 
+class SensorCorrectionWarning(RigididWarning):
+    """A sensor's gain, axis or position, estimated from the records' redundancy, is beyond 3x its tolerance."""
+
+
 class DampingUnitWarning(RigididWarning):
     """Damping ratios that look like percentages (0.39 meant as 0.39 %)."""
 

@@ -462,8 +462,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
     ``converged``, per quantity ``{"estimate", "std", "ci95"}``, with a pre-trigger the
-    acceptance test's ``misfit_ratio``, ``misfit_p_value`` and ``false_alarm_rate``, with the delays
-    estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
+    acceptance test's ``misfit_ratio``, ``misfit_p_value``, ``false_alarm_rate`` and ``misfit_expected``, with the
+    delays estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
     ``mains_hum_hz``, and, when the sensors' tolerances were propagated, ``sensor_budget`` (per source,
     ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
@@ -480,6 +480,7 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         out["misfit_ratio"] = bound.misfit.ratio
         out["misfit_p_value"] = bound.misfit.p_value
         out["false_alarm_rate"] = bound.misfit.false_alarm
+        out["misfit_expected"] = bound.misfit.expected
     if bound.delays is not None:
         out["channel_delays"] = {name: {"delay_s": d, "std_s": sd} for name, (d, sd) in bound.delays.items()}
     if bound.hum_hz:

@@ -526,6 +526,11 @@ class RecordBoundResult(BaseModel):
     false_alarm_rate: float | None = Field(
         default=None, description="the acceptance test's false-alarm rate (fraction of right models rejected)"
     )
+    misfit_expected: float | None = Field(
+        default=None,
+        description="the misfit ratio a right model is expected to leave: 1 plus the part the stated sensor "
+        "tolerances explain (their errors' signatures less what the fit absorbs, on average)",
+    )
     sensor_budget: dict[str, dict[str, list[float] | list[list[float]]]] | None = Field(
         default=None,
         description="standard deviation of center_of_gravity and inertia_tensor from each source: noise (the "

@@ -444,6 +444,7 @@ def with_refinement(
     tolerances: SensorBounds | None = None,
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
+    estimate_sensors: bool = False,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -465,6 +466,11 @@ def with_refinement(
         The channels' acquisition chain in layout order (:func:`chain_model`), modelled in the refit.
     estimate_delays : bool
         Fit each channel's delay relative to the first (``--estimate-delays``).
+    estimate_sensors : bool
+        Estimate each sensor's gain and axis errors with the body (positions stay at their prior), the
+        tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
+        a sensor whose estimate is beyond 3 times its tolerance is named
+        (:func:`implausible_sensors`).
 
     Returns
     -------
@@ -495,6 +501,7 @@ def with_refinement(
         arrays = subtract_modes(
             arrays, records[0][1], [impact.start for impact in estimate.impacts], estimate.poles, unused
         )
+    bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     return _refit(
         result,
         lambda: refine_body(
@@ -512,9 +519,11 @@ def with_refinement(
             drift=estimate.trends is not None,
             chain=_kept(chain, estimate.channels),
             estimate_delays=estimate_delays,
+            sensor_bounds=bounds,
+            estimate_sensors=estimate_sensors,
         ),
         progress,
-        tolerances,
+        bounds,
         _kept_ids(result, estimate.channels),
     )
 
@@ -714,7 +723,11 @@ def _accept_refinement(
         damping_per_mass=refinement.damping_per_mass,
     )
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
-    sensor_std = _sensor_std(result, bounds)
+    if refinement.sensor_correction is not None:
+        implausible_sensors(refinement.sensor_correction, bounds, result.sensor_ids)
+    sensor_std = refinement.sensor_std  # the refit's own linearisation (None: the modal kernel's)
+    if sensor_std is None:
+        sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
     if refinement.delays is not None:
         pairs = zip(ids, refinement.delays, refinement.delays_std, strict=False)
@@ -722,6 +735,50 @@ def _accept_refinement(
     if refinement.hum:
         bound = replace(bound, hum_hz=tuple(hz for hz, _, _ in refinement.hum))
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
+
+
+def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str]) -> list[str]:
+    """Name, in a :class:`~rigidid.errors.SensorCorrectionWarning`, each sensor whose estimated error is implausible.
+
+    Parameters
+    ----------
+    correction : SensorCorrection
+        The sensors' errors estimated with the body
+        (:class:`rigidid.core.timedomain.refine.SensorCorrection`).
+    bounds : SensorBounds
+        The stated tolerances.
+    ids : sequence of str
+        The sensors' ids, in the correction's order.
+
+    Returns
+    -------
+    list of str
+        The ids named: a determined gain beyond 3 times the sensitivity tolerance, a determined
+        tilt beyond 3 times the orientation and transverse tolerances together, or a determined
+        shift beyond 3 times the position tolerance along an axis.
+    """
+    from rigidid.errors import SensorCorrectionWarning
+
+    x, ok = correction.value, correction.determined
+    tilt_bound = math.radians(bounds.orientation_deg) + bounds.transverse
+    named = []
+    for i, sid in enumerate(ids):
+        parts = []
+        if ok[0, i] and bounds.sensitivity > 0.0 and abs(x[0, i]) > 3.0 * bounds.sensitivity:
+            parts.append(f"gain {100 * x[0, i]:+.3g} % (tolerance {100 * bounds.sensitivity:g} %)")
+        if ok[1:3, i].all() and tilt_bound > 0.0 and math.hypot(x[1, i], x[2, i]) > 3.0 * tilt_bound:
+            parts.append(f"axis off by {math.degrees(math.hypot(x[1, i], x[2, i])):.3g} degrees")
+        if ok[3:, i].any() and bounds.position > 0.0 and np.max(np.abs(x[3:, i][ok[3:, i]])) > 3.0 * bounds.position:
+            parts.append(f"position off by {np.max(np.abs(x[3:, i][ok[3:, i]])):.3g} (tolerance {bounds.position:g})")
+        if parts:
+            named.append(sid)
+            warnings.warn(
+                f"sensor {sid}: the records say its " + ", ".join(parts) + ", beyond 3 times its stated tolerance: "
+                "check its calibration, mounting and position",
+                SensorCorrectionWarning,
+                stacklevel=3,
+            )
+    return named
 
 
 def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
@@ -793,6 +850,7 @@ def refine_records(
     progress: ProgressCallback | None = None,
     stream_above: int | None = None,
     estimate_delays: bool = False,
+    estimate_sensors: bool = False,
 ) -> IdentifyResult:
     """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
 
@@ -817,6 +875,8 @@ def refine_records(
         smaller ones are read whole.
     estimate_delays : bool
         Fit each channel's delay (:func:`with_refinement`); the layout's ``chain`` is modelled.
+    estimate_sensors : bool
+        As for :func:`with_refinement`.
 
     Returns
     -------
@@ -867,7 +927,7 @@ def refine_records(
         found = tuple(find_impact(data, step) for data, step in raw)
         return with_refinement(
             result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay),
-            chain=chain_model(lay), estimate_delays=estimate_delays,
+            chain=chain_model(lay), estimate_delays=estimate_delays, estimate_sensors=estimate_sensors,
         )  # fmt: skip
     estimate = replace(estimate, impacts=tuple(impacts))
     from rigidid.io.records.refit import read_prepared_decays
@@ -886,11 +946,13 @@ def refine_records(
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
-            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None,
+            damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None, sensor_bounds=bounds,
             chain=_kept(chain_model(lay), estimate.channels), estimate_delays=estimate_delays,
+            estimate_sensors=estimate_sensors,
         )  # fmt: skip
 
-    return _refit(result, fit, progress, sensor_bounds(lay), _kept_ids(result, estimate.channels))
+    bounds = sensor_bounds(lay)
+    return _refit(result, fit, progress, bounds, _kept_ids(result, estimate.channels))
 
 
 def records_spectrum(
@@ -1023,6 +1085,7 @@ def identify_test(
     progress: ProgressCallback | None = None,
     force: ForceOptions | None = None,
     estimate_delays: bool = False,
+    estimate_sensors: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -1053,6 +1116,8 @@ def identify_test(
     estimate_delays : bool
         The refit fits each channel's delay relative to the first (``--estimate-delays``); the layout's
         ``chain`` is modelled in any case.
+    estimate_sensors : bool
+        In the refit, estimate each sensor's errors with the body (:func:`with_refinement`).
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -1065,6 +1130,7 @@ def identify_test(
         return _identify_test(
             layout, inputs, records=records, modal=modal, units=units, geometry=geometry, refine=refine,
             resample=resample, spectrum=spectrum, progress=progress, force=force, estimate_delays=estimate_delays,
+            estimate_sensors=estimate_sensors,
             **identify_options,
         )  # fmt: skip
 
@@ -1107,6 +1173,7 @@ def _identify_test(
     progress: ProgressCallback | None,
     force: ForceOptions | None,
     estimate_delays: bool = False,
+    estimate_sensors: bool = False,
     **identify_options: Any,
 ) -> TestRun:
     """:func:`identify_test`'s work."""
@@ -1156,15 +1223,7 @@ def _identify_test(
         assert estimate is not None
         try:
             with named_source(src), noted(notes, RefinementWarning):
-                if paths is not None:
-                    result = refine_records(
-                        result, paths, data.layout, estimate, progress=progress, estimate_delays=estimate_delays
-                    )
-                else:
-                    result = with_refinement(
-                        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout),
-                        chain=chain_model(data.layout), estimate_delays=estimate_delays,
-                    )  # fmt: skip
+                result = _refit_test(result, data, paths, estimate, progress, estimate_delays, estimate_sensors)
         except BaseException:
             checks.pass_on(held)
             raise
@@ -1175,6 +1234,27 @@ def _identify_test(
     if resample:
         result = _resampled(result, data, records, modal, resample, len(modes.labels))
     return TestRun(result, estimate, None if streamed else data.records, summed)
+
+
+def _refit_test(
+    result: IdentifyResult,
+    data: TestData,
+    paths: list[PathLike] | None,
+    estimate: ModalEstimate,
+    progress: ProgressCallback | None,
+    estimate_delays: bool,
+    estimate_sensors: bool,
+) -> IdentifyResult:
+    """The refit on the test's records: read in row blocks from `paths`, else on the records held."""
+    if paths is not None:
+        return refine_records(
+            result, paths, data.layout, estimate, progress=progress, estimate_delays=estimate_delays,
+            estimate_sensors=estimate_sensors,
+        )  # fmt: skip
+    return with_refinement(
+        result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout),
+        chain=chain_model(data.layout), estimate_delays=estimate_delays, estimate_sensors=estimate_sensors,
+    )  # fmt: skip
 
 
 def chain_corrected(modes: ModeTable, layout: LayoutFile) -> ModeTable:

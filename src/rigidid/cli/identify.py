@@ -29,6 +29,7 @@ from rigidid.cli.options import (
     Decimate,
     Draws,
     EstimateDelays,
+    EstimateSensors,
     ForceColumn,
     ForceUnit,
     FrequencyNoise,
@@ -97,6 +98,7 @@ def identify(
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
     refine: Refine = True,
+    estimate_sensors: EstimateSensors = False,
     force: ForceColumn = None,
     frf_out: FrfOut = None,
     estimate_delays: EstimateDelays = False,
@@ -130,7 +132,8 @@ def identify(
         run = identify_files(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
-            **_force_options(force, frf_out), **({"estimate_delays": True} if estimate_delays else {}),
+            estimate_sensors=estimate_sensors, **_force_options(force, frf_out),
+            **({"estimate_delays": True} if estimate_delays else {}),
         )  # fmt: skip
         result, estimate = run.result, run.estimate
         result = add_mounts(result, mounts, torque_axis)

@@ -220,6 +220,18 @@ EstimateDelays = Annotated[
     ),
 ]
 
+
+EstimateSensors = Annotated[
+    bool,
+    typer.Option(
+        "--estimate-sensors",
+        help="With --records and more than six channels: estimate each sensor's gain and axis errors "
+        "with the body in the refit (the layout's tolerances as their prior); a sensor beyond 3x its tolerance "
+        "is named.",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+
 Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),

@@ -49,6 +49,7 @@ __all__ = [
     "SensorBounds",
     "SensorBudget",
     "SensorJacobians",
+    "axis_normals",
     "sensor_budget",
     "sensor_jacobians",
 ]
@@ -102,6 +103,32 @@ class SensorBounds:
             "position": self.position / root3,
         }
 
+    def moments(self) -> dict[str, tuple[float, float]]:
+        """Variance and variance of the square of each source's error per axis.
+
+        Returns
+        -------
+        dict of str to (float, float)
+            Keys :data:`SOURCES`: ``(E x^2, Var x^2)`` of one axis's error ``x``
+            (units as :meth:`standard`).
+
+        Notes
+        -----
+        Rectangular on ``[-a, a]`` (sensitivity, orientation, position):
+        ``E x^2 = a^2 / 3``, ``E x^4 = a^4 / 5``. Transverse, a magnitude
+        ``tau`` rectangular on ``[0, a]`` along a uniform direction, per normal
+        axis ``x = tau cos phi``: ``E x^2 = a^2 / 6``, ``E x^4 = 3 a^4 / 40``.
+        They give the spread of the misfit the errors leave
+        (:func:`rigidid.core.timedomain.acceptance.budgeted_misfit_test`).
+        """
+        out = {}
+        for source, a in (("sensitivity", self.sensitivity), ("orientation", math.radians(self.orientation_deg)),
+                          ("position", self.position)):  # fmt: skip
+            out[source] = (a**2 / 3.0, a**4 / 5.0 - a**4 / 9.0)
+        t = self.transverse
+        out["transverse"] = (t**2 / 6.0, 3.0 * t**4 / 40.0 - t**4 / 36.0)
+        return {source: out[source] for source in SOURCES}
+
 
 DEFAULT_BOUNDS = SensorBounds(sensitivity=0.02, orientation_deg=2.0, transverse=0.05, position=0.002)
 """Typical of piezoelectric (IEPE) accelerometers, length in metres: sensitivity within +-2 %
@@ -134,8 +161,19 @@ _SHAPES = {"center_of_gravity": (3,), "inertia_per_mass": (3, 3), "stiffness_per
            "damping_per_mass": (6, 6)}  # fmt: skip
 
 
-def _normals(d: Array) -> tuple[Array, Array]:
-    """Two unit vectors normal to each unit row of `d` and to each other."""
+def axis_normals(d: Array) -> tuple[Array, Array]:
+    """Two unit vectors normal to each unit row of `d` and to each other.
+
+    Parameters
+    ----------
+    d : ndarray, shape (p, 3)
+        Unit measuring axes.
+
+    Returns
+    -------
+    e1, e2 : ndarray, shape (p, 3)
+        ``e1`` normal to ``d`` (from the x axis, or the y axis when ``d`` is near x), ``e2 = d x e1``.
+    """
     helper = np.where(np.abs(d[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     e1 = np.cross(d, helper)
     e1 /= np.linalg.norm(e1, axis=1)[:, None]
@@ -209,7 +247,7 @@ def sensor_jacobians(
     psi = np.asarray(shapes, dtype=complex).reshape(pos.shape[0], -1)
     p = pos.shape[0]
     _, radius = frame_arrays(pos)
-    e1, e2 = _normals(dirs)
+    e1, e2 = axis_normals(dirs)
     h_rel, h_len = 1e-5, 1e-5 * float(radius)
     batch = 1 + 12 * p  # per sensor: gain, two tilts, three shifts, each both ways
     bp, bd = np.repeat(pos[None], batch, axis=0), np.repeat(dirs[None], batch, axis=0)

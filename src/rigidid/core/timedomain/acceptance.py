@@ -9,6 +9,13 @@ normal score; the fit is accepted when its one-sided p-value is at least the sta
 false-alarm rate (:data:`FALSE_ALARM`): on records the model explains, it rejects that
 fraction of fits, whatever the noise level of each impact and channel.
 
+Sensors within stated tolerances (gain, axis, position: :mod:`rigidid.core.sensor_budget`)
+read a motion the rigid-body model cannot quite reproduce, so a right model leaves more
+than the noise. :func:`budgeted_misfit_test` expects that excess: the part of each
+sensor error's signature the fit cannot absorb is a quadratic form in the errors, whose
+mean and variance follow from the errors' stated distributions (a type-B term of the
+expected residual, GUM 4.3); the test asks whether the residual exceeds noise plus that.
+
 References
 ----------
 .. [1] "Determination of rigid body characteristics from time domain modal test
@@ -24,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FALSE_ALARM", "MisfitTest", "misfit_test"]
+__all__ = ["FALSE_ALARM", "MisfitTest", "budgeted_misfit_test", "misfit_test"]
 
 Array = NDArray[np.float64]
 
@@ -47,12 +54,16 @@ class MisfitTest:
         One-sided: the probability of a score at least `z` when the model is right.
     false_alarm : float
         The rate the test was run at.
+    expected : float
+        The ratio a right model is expected to leave: 1, or above when the stated sensor
+        tolerances explain part of the residual (:func:`budgeted_misfit_test`).
     """
 
     ratio: float
     z: float
     p_value: float
     false_alarm: float
+    expected: float = 1.0
 
     @property
     def accepted(self) -> bool:
@@ -129,3 +140,74 @@ def misfit_test(
     z = float(np.sum(w * lg) / math.sqrt(float(np.sum(w))))
     ratio = float(np.exp(np.sum(w * lg) / np.sum(w)))
     return MisfitTest(ratio, z, 0.5 * math.erfc(z / math.sqrt(2.0)), false_alarm)
+
+
+def budgeted_misfit_test(
+    residual: Array,
+    lengths: Sequence[int],
+    channels: int,
+    dof_fraction: float,
+    pre_counts: Sequence[int],
+    pre_variance: Array,
+    correlation: Array,
+    systematic: Array,
+    moments: tuple[Array, Array],
+    false_alarm: float = FALSE_ALARM,
+) -> MisfitTest | None:
+    """The residual against the pre-trigger's noise plus the misfit the stated sensor errors leave.
+
+    Parameters
+    ----------
+    residual, lengths, channels, dof_fraction, pre_counts, pre_variance, correlation, false_alarm
+        As for :func:`misfit_test`.
+    systematic : ndarray, shape (k, k)
+        ``G^T (I - P) G``: the sensor errors' signatures in the weighted residual
+        (columns of ``G``, one per unit error), less what the fit absorbs (``P``, the
+        projector on the fit's Jacobian and linear terms).
+    moments : (ndarray, ndarray), shape (k,) each
+        Per error, ``E x^2`` and ``Var x^2`` (:meth:`rigidid.core.sensor_budget.SensorBounds.moments`).
+
+    Returns
+    -------
+    MisfitTest or None
+        None when an impact has a pre-trigger of fewer than 8 samples (then
+        :func:`misfit_test` applies).
+
+    Notes
+    -----
+    The weighted residual sum of squares ``R`` is noise, ``sum u_ic m_ic`` on average
+    (``u`` the pre-trigger variance, ``m = n f`` the degrees of freedom), plus the sensor
+    errors' part ``X = x^T Q x`` with ``E X = sum Q_kk v_k`` and, the errors independent
+    and symmetric, ``Var X = 2 sum_{k != l} Q_kl^2 v_k v_l + sum Q_kk^2 Var x_k^2``
+    (GUM 4.3 for the distributions; the moments of a quadratic form). ``R``'s variance
+    adds the noise's (``2 u^2 m`` times the decimation filter's inflation, and ``2 u^2
+    m^2 / d2`` for ``u`` estimated from ``d2`` pre-trigger samples) and their cross term
+    ``4 E X``. ``R`` is taken as a gamma variable of that mean and variance
+    (Satterthwaite), its upper tail by the Wilson-Hilferty cube root.
+    """
+    if any(c < 8 for c in pre_counts[: len(lengths)]):
+        return None
+    inflation = 1.0 + 2.0 * float(np.sum(np.asarray(correlation)[1:] ** 2))
+    rss = noise_mean = noise_var = 0.0
+    at = 0
+    for i, n in enumerate(lengths):
+        part = residual[at : at + n * channels].reshape(n, channels)
+        at += n * channels
+        m, u = n * dof_fraction, np.asarray(pre_variance[i], dtype=float)
+        rss += float(np.sum(part**2))
+        noise_mean += float(np.sum(u) * m)
+        noise_var += float(np.sum(2.0 * u**2 * m * inflation + 2.0 * u**2 * m**2 / (pre_counts[i] - 1.0)))
+    if noise_mean <= 0.0:
+        return None
+    v, sv = (np.asarray(x, dtype=float) for x in moments)
+    q = np.asarray(systematic, dtype=float)
+    d = np.diag(q)
+    mean_x = float(d @ v)
+    var_x = float(2.0 * (v @ (q**2) @ v - np.sum(d**2 * v**2)) + np.sum(d**2 * sv))
+    unit = noise_mean / sum(n * dof_fraction * channels for n in lengths)  # mean noise variance per residual
+    mean = noise_mean + mean_x
+    var = noise_var + var_x + 4.0 * mean_x * unit
+    nu = 2.0 * mean**2 / var  # chi-square degrees of freedom of the gamma approximation
+    z = ((rss / mean) ** (1.0 / 3.0) - (1.0 - 2.0 / (9.0 * nu))) / math.sqrt(2.0 / (9.0 * nu))
+    p = 0.5 * math.erfc(z / math.sqrt(2.0))
+    return MisfitTest(rss / noise_mean, z, p, false_alarm, expected=mean / noise_mean)

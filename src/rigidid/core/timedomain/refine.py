@@ -17,7 +17,7 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -28,7 +28,7 @@ from rigidid.core.geometry import layout_frame, normalise_directions, sensor_mat
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
-from rigidid.core.timedomain.acceptance import MisfitTest, misfit_test
+from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.errors import InputError
@@ -39,6 +39,8 @@ __all__ = [
     "PreparedDecays",
     "RecordBound",
     "Refinement",
+    "SensorCorrection",
+    "SensorTerms",
     "columns_of",
     "cut_decays",
     "delay_step",
@@ -49,6 +51,7 @@ __all__ = [
     "record_bound",
     "refine_body",
     "refine_prepared",
+    "sensor_terms",
 ]
 
 Array = NDArray[np.float64]
@@ -124,6 +127,13 @@ class Refinement:
         Mains hum found in the start's residual and modelled (nuisance sinusoids per channel and
         impact): frequency (Hz), z score and RMS amplitude in noise standard deviations
         (:func:`rigidid.core.timedomain.hum.find_hum`).
+        The acceptance test (:mod:`rigidid.core.timedomain.acceptance`).
+    sensor_std : dict or None
+        With stated sensor tolerances: per type-B source (:data:`rigidid.core.sensor_budget.SOURCES`),
+        the refit's own std of each physical value (keys as `std`) from the sensors' errors.
+    sensor_correction : SensorCorrection or None
+        With ``estimate_sensors``: the sensors' errors estimated with the body (which the
+        body's values and ``sensor_std`` then account for).
     """
 
     center_of_gravity: Array
@@ -142,6 +152,8 @@ class Refinement:
     delays_std: Array | None = None
     delay_score: Array | None = None
     hum: tuple[tuple[float, float, float], ...] = ()
+    sensor_std: dict[str, dict[str, Array]] | None = None
+    sensor_correction: SensorCorrection | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -712,6 +724,252 @@ def _evaluate(
     return r_all, j_all
 
 
+# --- the sensors' tolerances (issue 23): their signatures in the residual ----------------
+
+
+@dataclass(frozen=True)
+class SensorTerms:
+    """How the stated sensors' errors would show in the refit, linearised at its minimum.
+
+    Per sensor ``i`` six unit errors, in the columns ``k p + i``: its gain (relative),
+    its axis turned towards the two normals of :func:`rigidid.core.sensor_budget.axis_normals`
+    (radians), its position shifted along x, y, z (the layout's length). Each error adds a
+    signature ``g`` to the weighted records; ``G~`` is ``G`` less its projection on each
+    impact's linear terms (modal amplitudes, offsets).
+
+    Attributes
+    ----------
+    cross : ndarray, shape (51, 6 p)
+        ``J^T G~`` (``J`` the refit's projected Jacobian).
+    gram : ndarray, shape (6 p, 6 p)
+        ``G~^T G~``.
+    data : ndarray, shape (6 p,)
+        ``G~^T r`` (``r`` the refit's residual).
+    """
+
+    cross: Array
+    gram: Array
+    data: Array
+
+
+def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array, r: Array,
+                 scale: float) -> SensorTerms:  # fmt: skip
+    """The sensor errors' signatures at `theta`, projected and reduced (:class:`SensorTerms`).
+
+    The signature of an error of sensor ``i`` is the model's motion read by a virtual
+    sensor, in channel ``i`` only: at the same point along the same axis (gain), along
+    a normal (tilt), or the difference of two points a unit apart (the reading is linear
+    in the position, eq. (3) of [1]); the per-impact modal amplitudes are the fit's.
+    Position columns are per layout length (`scale`: the local frame's length unit).
+    """
+    p = pos_l.shape[0]
+    k = 6 * p
+    cross, gram, proj = np.zeros((N_PARAMETERS, k)), np.zeros((k, k)), np.zeros(k)
+    row = 0
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+        n = sig.shape[0]
+        # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
+        sg = np.einsum("ncm,nkc->mkc", scaled, sig).reshape(-1, k)
+        block = np.einsum("nkc,nlc->ckl", sig, sig)
+        own = np.zeros((p, 6, p, 6))
+        own[np.arange(p), :, np.arange(p), :] = block
+        gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
+        jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
+        cross += np.einsum("ncj,nkc->jkc", jr, sig).reshape(N_PARAMETERS, k)
+        proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
+        row += n * p
+    return SensorTerms(cross, gram, proj)
+
+
+def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float,
+                       scale: float) -> Iterator[tuple[Array, Array, Array]]:  # fmt: skip
+    """Per impact: the column-normalised design ``S`` (n, p, m), ``(S^T S)^+``, the signatures (n, 6, p)."""
+    from rigidid.core.sensor_budget import axis_normals
+
+    p = pos_l.shape[0]
+    e1, e2 = axis_normals(dirs)
+    eye = np.eye(3)
+    vpos = np.concatenate([pos_l, pos_l, pos_l, pos_l + eye[0], pos_l + eye[1], pos_l + eye[2]])
+    vdir = np.concatenate([dirs, e1, e2, dirs, dirs, dirs])
+    lam, phi_v, *_ = _modes(theta, vpos, vdir, False)
+    phi_v = phi_v.reshape(6, p, 6)
+    phi_v[3:] = (phi_v[3:] - phi_v[0]) / scale
+    phi = phi_v[0]
+    w = 1.0 / data.sigma
+    for y in data.decays:
+        n = y.shape[0]
+        t: Array = np.arange(n, dtype=float) * (data.dt * omega)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift)
+        norms = np.sqrt(np.einsum("ij,ij->j", design, design))
+        norms = np.where(norms > 0.0, norms, 1.0)
+        scaled = (design / norms).reshape(n, p, -1)
+        inv = pseudo_inverse(np.einsum("ncm,ncl->ml", scaled, scaled), symmetric=True)[0]
+        beta = inv @ np.einsum("ncm,nc->m", scaled, y * w) / norms
+        sig = np.einsum("nm,kcm->nkc", ex * (beta[:6] + 1j * beta[6:12]), phi_v).real * w  # (n, kind, sensor)
+        yield scaled, inv, sig
+
+
+def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]]:
+    """Per column of :class:`SensorTerms`, ``E x^2`` and ``Var x^2``, and each source's ``E x^2`` per column."""
+    mo = bounds.moments()
+    (vs, ss), (vo, so), (vt, st), (vp, sp) = (mo[s] for s in ("sensitivity", "orientation", "transverse", "position"))
+    kinds = np.repeat(np.arange(6), p)
+    gain, tilt, shift = kinds == 0, (kinds == 1) | (kinds == 2), kinds >= 3
+    v = np.where(gain, vs, np.where(tilt, vo + vt, vp))
+    sv = np.where(gain, ss, np.where(tilt, so + st + 4.0 * vo * vt, sp))  # tilt: two independent errors summed
+    per_source = {"sensitivity": np.where(gain, vs, 0.0), "orientation": np.where(tilt, vo, 0.0),
+                  "transverse": np.where(tilt, vt, 0.0), "position": np.where(shift, vp, 0.0)}  # fmt: skip
+    return v, sv, per_source
+
+
+def _sensor_outcome(
+    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+) -> tuple[Array, Array, Array, dict[str, dict[str, Array]]]:
+    """The misfit's quadratic form, the moments, and each source's std of the physical values.
+
+    ``Q = G~^T G~ - (J^T G~)^T (J^T J)^+ J^T G~`` (what the fit cannot absorb); a sensor
+    error ``x`` moves the parameters by ``(J^T J)^+ J^T G~ x`` (Gauss-Newton, first order),
+    the physical values by `grad` times that.
+    """
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross  # (51, k)
+    q = terms.gram - terms.cross.T @ move
+    v, sv, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
+    effect = grad @ move  # (outputs, k)
+    std = {source: _physical_std(np.sqrt((effect**2) @ var)) for source, var in per_source.items()}
+    return 0.5 * (q + q.T), v, sv, std
+
+
+@dataclass(frozen=True)
+class SensorCorrection:
+    """Per-sensor errors estimated jointly with the body from the records' redundancy (issue 23).
+
+    Rows of each (6, p) array: gain (relative), the axis turned towards the two normals of
+    :func:`rigidid.core.sensor_budget.axis_normals` (radians), the position shifted along x, y,
+    z (the layout's length); columns: sensors.
+
+    Attributes
+    ----------
+    value : ndarray, shape (6, p)
+        The estimate: the stated tolerances as a prior (rectangular, taken at its variance),
+        the records as data (Gauss-Newton from the refit's minimum).
+    std : ndarray, shape (6, p)
+        Its posterior standard deviation (the prior's where the records say nothing).
+    determined : ndarray of bool, shape (6, p)
+        Whether the records determine it, at least relative to the others: less than half of
+        its unit vector lies in the null space of the augmented Jacobian ``[J, G~]`` (rank by
+        :func:`rigidid.core.linalg.rank_tolerance`). The null space holds what no records can
+        tell: a common gain (the force is not measured), a common shift or turn of all sensors
+        (the CG and the axes move with them), a shift along a sensor's own axis.
+    rank : int
+        Rank of the augmented Jacobian, of ``51 + 6 p`` columns.
+    """
+
+    value: Array
+    std: Array
+    determined: NDArray[np.bool_]
+    rank: int
+
+
+def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array,
+                    scale: float) -> tuple[Array, int]:  # fmt: skip
+    """Which sensor errors the records determine: null vectors of ``[J, G~]`` (column-normalised), by rows.
+
+    The R factor of the stacked impacts (each impact's block factored, then the stack): the
+    signatures formed whole here (``n p`` by ``6 p`` per impact), so this runs only when the errors
+    are estimated.
+    """
+    from rigidid.core.linalg import rank_tolerance
+
+    p = pos_l.shape[0]
+    blocks = []
+    row = 0
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+        n = sig.shape[0]
+        g = (sig[:, None, :, :] * np.eye(p)[None, :, None, :]).reshape(n * p, 6 * p)
+        flat = scaled.reshape(n * p, -1)
+        gt = g - flat @ (inv @ (flat.T @ g))
+        blocks.append(np.linalg.qr(np.hstack([jm[row : row + n * p], gt]), mode="r"))
+        row += n * p
+    r = np.linalg.qr(np.vstack(blocks), mode="r")
+    norms = np.linalg.norm(r, axis=0)
+    _, sv, vt = np.linalg.svd(r / np.where(norms > 0.0, norms, 1.0))
+    keep = sv > rank_tolerance(sv[0], row)
+    null = vt[~keep]
+    return np.linalg.norm(null[:, N_PARAMETERS:], axis=0), int(np.sum(keep))
+
+
+_ESTIMATED_KINDS = 3
+"""Sensor errors estimated with the body: gains and the two tilts (kinds 0-2). Positions stay at their
+prior: freed together with the axes they let the correction absorb the model's small misfits (clean
+records, default tolerances, benchmarks/chain_matrix.py's simulator: CG off 1.4-3.8 % of the span and
+inertia 10-41 %, outside the intervals; without the positions, inertia 1.6 % within them)."""
+
+
+def _sensor_correction(
+    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+) -> tuple[Array, Array, Array, dict[str, dict[str, Array]], Array]:
+    """The sensor errors estimated with the body (maximum a posteriori, linearised at the refit's minimum).
+
+    Minimises ``|r + J d - G~ x|^2 + x^T V^-1 x`` (``V`` the errors' stated variances): ``x =
+    (V Q + I)^-1 V G~^T r`` (``Q`` as in :func:`_sensor_outcome`), the body's parameters moved by
+    ``d = (J^T J)^+ J^T G~ x``. What a true error ``x`` still costs the body is
+    ``(J^T J)^+ J^T G~ (V Q + I)^-1 x``; the noise in ``x`` adds
+    ``(V Q + I)^-1 V Q V (V Q + I)^-T`` through the same map.
+
+    Returns
+    -------
+    x, x_std : ndarray, shape (6 p,)
+    shift : ndarray, shape (51,)
+        The parameters' move.
+    sensor_std : dict
+        Per source, the std of the physical values the errors leave after the correction.
+    noise_var : ndarray
+        Variance added to each physical value by the noise in ``x``.
+    """
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross
+    q = terms.gram - terms.cross.T @ move
+    q = 0.5 * (q + q.T)
+    v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
+    v_all, v = v, np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)  # positions: prior only
+    system = v[:, None] * q + np.eye(v.size)
+    x: Array = np.linalg.solve(system, v * terms.data).astype(float)
+    x_var: Array = np.where(v > 0.0, np.diag(np.linalg.solve(system, np.diag(v))), v_all)
+    left = grad @ move @ np.linalg.solve(system, np.eye(v.size))  # physical value per unit true error, remaining
+    std = {source: _physical_std(np.sqrt((left**2) @ var)) for source, var in per_source.items()}
+    noise_var: Array = np.einsum("ij,jk,ik->i", left, (v[:, None] * q) * v[None, :], left)
+    shift: Array = move @ x
+    x_std: Array = np.sqrt(np.maximum(x_var, 0.0))
+    return x, x_std, shift, std, noise_var
+
+
+def _corrected(
+    theta: Array, data: _Data, sensors: tuple[Array, Array], frame: _Frame, jm: Array, terms: SensorTerms,
+    bounds: Any, grad: Array, std: dict[str, Array],
+) -> tuple[Array, dict[str, Array], dict[str, dict[str, Array]], SensorCorrection]:  # fmt: skip
+    """The parameters, noise std and type-B std after :func:`_sensor_correction`, and the correction."""
+    pos_l, dirs = sensors
+    x, x_std, shift, sensor_std, noise_var = _sensor_correction(terms, jm, bounds, grad)
+    null, rank = _augmented_null(theta, data, pos_l, dirs, frame.omega, jm, frame.scale)
+    p = pos_l.shape[0]
+    correction = SensorCorrection(x.reshape(6, p), x_std.reshape(6, p), (null**2 < 0.5).reshape(6, p), rank)
+    flat = np.concatenate([std[key].ravel() for key in std])
+    return theta + shift, _physical_std(np.sqrt(flat**2 + noise_var)), sensor_std, correction
+
+
+def _physical_std(sd: Array) -> dict[str, Array]:
+    """The flat standard deviations of :func:`_outputs` as a dict of CG, J/m, K/m, C/m, frequencies, damping."""
+    return {
+        "center_of_gravity": sd[:3],
+        "inertia_per_mass": sd[3:12].reshape(3, 3),
+        "stiffness_per_mass": sd[12:48].reshape(6, 6),
+        "damping_per_mass": sd[48:84].reshape(6, 6),
+        "frequency_hz": sd[84:90],
+        "damping_ratio": sd[90:96],
+    }
+
+
 def refine_body(
     records: Sequence[ArrayLike],
     dt: float,
@@ -729,6 +987,8 @@ def refine_body(
     drift: bool = False,
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
+    sensor_bounds: Any = None,
+    estimate_sensors: bool = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -760,6 +1020,15 @@ def refine_body(
     chain, estimate_delays
         The acquisition chain and whether to fit the channels' delays
         (:func:`refine_prepared`).
+    sensor_bounds : SensorBounds, optional
+        The sensors' stated tolerances (:class:`rigidid.core.sensor_budget.SensorBounds`,
+        length in the layout's unit): the acceptance test expects the misfit they leave
+        (:func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`) and
+        ``sensor_std`` holds their effect on the body (:func:`sensor_terms`).
+    estimate_sensors : bool
+        With `sensor_bounds`: estimate every sensor's gain and axis errors (positions at their prior) with the
+        body (the redundancy of more than six channels), the tolerances as their prior; the
+        body corrected (``sensor_correction``).
 
     Returns
     -------
@@ -805,7 +1074,7 @@ def refine_body(
     return refine_prepared(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
-        chain=chain, estimate_delays=estimate_delays,
+        chain=chain, estimate_delays=estimate_delays, sensor_bounds=sensor_bounds, estimate_sensors=estimate_sensors,
     )  # fmt: skip
 
 
@@ -823,6 +1092,9 @@ def refine_prepared(
     drift: bool | None = None,
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
+    sensor_bounds: Any = None,
+    estimate_sensors: bool = False,
+    sensor_passes: int = 2,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -835,6 +1107,12 @@ def refine_prepared(
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
         As for :func:`refine_body`.
+    sensor_bounds, estimate_sensors
+        As for :func:`refine_body`.
+    sensor_passes : int
+        With `estimate_sensors`: Gauss-Newton passes on the sensors' errors, each a refit with
+        the sensors as the last corrected them (the errors' effect is not linear: one pass
+        leaves about their square).
     drift : bool, optional
         Overrides ``data.drift``.
     chain : ChainModel, optional
@@ -863,20 +1141,9 @@ def refine_prepared(
     data = _settled(data, chain, estimate_delays, float(dt))
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
-    lf = layout_frame(pos)
-    pos_l = lf.to_local(pos)
-    frame0 = _Frame(lf.centre, lf.scale, 1.0)
-    theta_unit = frame0.to_theta(
-        np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
-        np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
-    )  # fmt: skip
-    lam0, *_ = _modes(theta_unit, pos_l, dirs, False)
-    omega = float(np.median(np.abs(lam0)))
-    frame = _Frame(lf.centre, lf.scale, omega)
-    theta0 = frame.to_theta(
-        np.asarray(center_of_gravity, float), np.asarray(inertia_per_mass, float),
-        np.asarray(stiffness_per_mass, float), np.asarray(damping_per_mass, float),
-    )  # fmt: skip
+    body = (center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass)
+    pos_l, frame, theta0 = _started(pos, dirs, body)
+    omega = frame.omega
     p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
@@ -906,15 +1173,44 @@ def refine_prepared(
     g, j, k, c = frame.physical(theta)
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, n_linear)
+    grad = _output_gradient(theta, frame, pos_l, dirs)
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, n_linear, grad)
     misfit = _misfit(r, data, dof / n_res, q_fit)
+    sensor_std, correction = None, None
+    if sensor_bounds is not None and link is None:  # the sensors' signatures are the plain model's
+        theta, std, misfit, sensor_std, correction = _with_sensors(
+            (theta, std, misfit), (data, pos_l, dirs, omega, frame), (jm, r, grad), sensor_bounds, estimate_sensors,
+            lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
+        )  # fmt: skip
+        g, j, k, c = frame.physical(theta)
+        lam, *_ = _modes(theta, pos_l, dirs, False)
+    elif estimate_sensors:
+        raise InputError(
+            "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
+            source="estimate_sensors",
+        )
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
     delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
-    return Refinement(
-        center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega, std=std,
-        normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev, converged=converged,
-        misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
+    out = Refinement(
+        center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
+        std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
+        converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
+        sensor_std=sensor_std, sensor_correction=correction,
     )  # fmt: skip
+    if correction is not None and sensor_passes > 1:
+        return _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+    return out
+
+
+def _started(pos: Array, dirs: Array, body: tuple[ArrayLike, ...]) -> tuple[Array, _Frame, Array]:
+    """The sensors in the layout's local frame, the fit's frame (time in units of the start's median
+    natural frequency) and the start's parameters in it; `body` is (CG, J/m, K/m, C/m)."""
+    lf = layout_frame(pos)
+    pos_l = lf.to_local(pos)
+    physical = [np.asarray(x, float) for x in body]
+    lam0, *_ = _modes(_Frame(lf.centre, lf.scale, 1.0).to_theta(*physical), pos_l, dirs, False)
+    frame = _Frame(lf.centre, lf.scale, float(np.median(np.abs(lam0))))
+    return pos_l, frame, frame.to_theta(*physical)
 
 
 def _delay_results(
@@ -1042,8 +1338,73 @@ def delay_step(r: Array, jm: Array, n_delays: int, s2: float) -> Array:
     return out
 
 
-def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) -> MisfitTest | None:
-    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger."""
+def _with_sensors(
+    fit: tuple[Array, dict[str, Array], MisfitTest | None],
+    model: tuple[Any, ...],
+    linear: tuple[Array, Array, Array],
+    bounds: Any,
+    estimate: bool,
+    budgeted: Callable[[tuple[Array, Array, Array]], MisfitTest | None],
+) -> tuple[Array, dict[str, Array], MisfitTest | None, dict[str, dict[str, Array]], SensorCorrection | None]:
+    """The stated sensor tolerances in the refit: the misfit they leave expected by the acceptance test,
+    their effect on the body (``sensor_std``) and, with `estimate`, the sensors' errors estimated.
+
+    `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame)``, `linear`
+    ``(jm, r, grad)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
+    and moments. Returns theta, std, misfit, sensor_std and the correction (or None).
+    """
+    theta, std, misfit = fit
+    data, pos_l, dirs, omega, frame = model
+    jm, r, grad = linear
+    terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale)
+    q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
+    misfit = budgeted((q, v, sv)) or misfit
+    correction = None
+    if estimate:
+        theta, std, sensor_std, correction = _corrected(theta, data, (pos_l, dirs), frame, jm, terms, bounds, grad, std)
+    return theta, std, misfit, sensor_std, correction
+
+
+def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, Array], bounds: Any,
+               max_evaluations: int, passes: int) -> Refinement:  # fmt: skip
+    """The refit again with the sensors as `first` corrected them (gains out of the records, axes and
+    positions moved), from its body; its correction added to `first`'s (Gauss-Newton on the sensors)."""
+    from rigidid.core.sensor_budget import axis_normals
+
+    pos, dirs = sensors
+    x = first.sensor_correction
+    assert x is not None
+    e1, e2 = axis_normals(dirs)
+    dirs2 = normalise_directions(dirs + x.value[1][:, None] * e1 + x.value[2][:, None] * e2)
+    unit = 1.0 / (1.0 + x.value[0])
+    m2 = None if data.pre_m2 is None else data.pre_m2 * unit**2
+    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=data.sigma * unit, pre_m2=m2)
+    second = refine_prepared(
+        data2, dt, pos + x.value[3:].T, dirs2, center_of_gravity=first.center_of_gravity,
+        inertia_per_mass=first.inertia_per_mass, stiffness_per_mass=first.stiffness_per_mass,
+        damping_per_mass=first.damping_per_mass, max_evaluations=max_evaluations, sensor_bounds=bounds,
+        estimate_sensors=True, sensor_passes=passes,
+    )  # fmt: skip
+    y = second.sensor_correction
+    assert y is not None
+    value = x.value + y.value
+    value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
+    total = SensorCorrection(value, y.std, y.determined, y.rank)
+    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
+
+
+def _misfit(
+    r: Array,
+    data: PreparedDecays,
+    dof_fraction: float,
+    factor: int,
+    systematic: tuple[Array, Array, Array] | None = None,
+) -> MisfitTest | None:
+    """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger.
+
+    With `systematic` (the sensor errors' quadratic form and moments, :func:`_sensor_outcome`):
+    :func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`.
+    """
     if data.noise_from != "pretrigger" or data.pre_m2 is None or len(data.pre_counts) != len(data.decays):
         return None
     from rigidid.core.timedomain.intervals import noise_correlation
@@ -1052,7 +1413,12 @@ def _misfit(r: Array, data: PreparedDecays, dof_fraction: float, factor: int) ->
     counts = np.asarray(data.pre_counts, dtype=float)
     variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
     lengths = [d.shape[0] for d in data.decays]
-    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, noise_correlation(factor))
+    rho = noise_correlation(factor)
+    if systematic is not None:
+        q, v, sv = systematic
+        p = data.sigma.size
+        return budgeted_misfit_test(r, lengths, p, dof_fraction, data.pre_counts, variance, rho, q, (v, sv))
+    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, rho)
 
 
 def _linear_per_impact(p: int, drift: bool | int) -> int:
@@ -1078,6 +1444,7 @@ def _bound(
     lengths: Sequence[int] | None = None,
     factor: int = 1,
     n_linear: int | None = None,
+    grad: Array | None = None,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -1086,7 +1453,8 @@ def _bound(
     (sandwich from the residual per impact and channel, the decimation filter's
     correlation, the remaining Gauss-Newton step). Without: the textbook bound
     ``s2 (J^T J)^+``. `n_linear`: linear unknowns per impact (default: 12 and an offset per channel).
-    Parameters beyond the body's (the channels' delays) get the key ``"delay"``.
+    Parameters beyond the body's (the channels' delays) get the key ``"delay"``. `grad`:
+    :func:`_output_gradient` at `theta` when computed already.
     """
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
@@ -1095,6 +1463,15 @@ def _bound(
         cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, len(lengths) * per).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
+    if grad is None:
+        grad = _output_gradient(theta, frame, pos_l, dirs)
+    var = np.einsum("ij,jk,ik->i", grad, cov, grad)
+    delays = np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:], 0.0))
+    return _physical_std(np.sqrt(np.maximum(var, 0.0))) | ({"delay": delays} if theta.size > N_PARAMETERS else {})
+
+
+def _output_gradient(theta: Array, frame: _Frame, pos_l: Array, dirs: Array) -> Array:
+    """Central-difference derivatives of :func:`_outputs` with respect to the 51 parameters."""
     base = _outputs(theta, frame, pos_l, dirs)
     grad = np.zeros((base.size, theta.size))
     for i in range(N_PARAMETERS):
@@ -1104,16 +1481,7 @@ def _bound(
         back = theta.copy()
         back[i] -= h
         grad[:, i] = (_outputs(step, frame, pos_l, dirs) - _outputs(back, frame, pos_l, dirs)) / (2 * h)
-    var = np.einsum("ij,jk,ik->i", grad, cov, grad)
-    sd = np.sqrt(np.maximum(var, 0.0))
-    return {
-        "center_of_gravity": sd[:3],
-        "inertia_per_mass": sd[3:12].reshape(3, 3),
-        "stiffness_per_mass": sd[12:48].reshape(6, 6),
-        "damping_per_mass": sd[48:84].reshape(6, 6),
-        "frequency_hz": sd[84:90],
-        "damping_ratio": sd[90:96],
-    } | ({"delay": np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:], 0.0))} if theta.size > N_PARAMETERS else {})
+    return grad
 
 
 def good_fit(refinement: Refinement) -> bool:

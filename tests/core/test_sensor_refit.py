@@ -1,0 +1,141 @@
+"""The refit with the sensors' stated tolerances: misfit expected, intervals calibrated (issue 23)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigidid.api import body_from_file
+from rigidid.core.sensor_budget import SensorBounds
+from rigidid.core.simulate import system_matrices
+from rigidid.core.timedomain.preprocess import find_impact
+from rigidid.core.timedomain.refine import refine_body
+from rigidid.io.files import layout_arrays, load_body, load_layout
+
+SAMPLE = Path(__file__).resolve().parents[2] / "samples" / "four-mounts"
+IMPACTS = [((0.3, 0.2, 0.15), (0.3, -0.5, -1.0)), ((-0.3, -0.1, 0.0), (1.0, 0.6, 0.2))]
+RATE, SECONDS, PRE = 256.0, 2.0, 64
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def _records(gain: np.ndarray, shift: np.ndarray, rng: np.random.Generator) -> tuple[list[np.ndarray], object]:
+    """Impulse records written afresh: 6-DOF body at its CG, state transition by scipy's matrix exponential.
+
+    The sensors read ``gain_i d_i . a(p_i + shift_i)``; 1 % noise of each channel's RMS; ``PRE`` samples of
+    pre-trigger before each impulse (an initial velocity ``M^-1 T^T f``).
+    """
+    from scipy.linalg import expm
+
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
+    m6, k6, c6 = system_matrices(body)  # about the CG
+    a = np.block([[np.zeros((6, 6)), np.eye(6)], [-np.linalg.solve(m6, k6), -np.linalg.solve(m6, c6)]])
+    step = expm(a / RATE)
+    g = np.asarray(body.center_of_gravity)
+    read = np.array([gi * d @ np.hstack([np.eye(3), -_skew(p + s - g)])
+                     for gi, d, p, s in zip(gain, dirs, pos, shift, strict=True)])  # fmt: skip
+    n = int(RATE * SECONDS)
+    out = []
+    for where, direction in IMPACTS:
+        f = 500.0 * np.asarray(direction) / np.linalg.norm(direction)
+        at = np.hstack([np.eye(3), -_skew(np.asarray(where) - g)])
+        x = np.concatenate([np.zeros(6), np.linalg.solve(m6, at.T @ f)])
+        states = np.empty((n, 12))
+        for i in range(n):
+            states[i] = x
+            x = step @ x
+        acc = (states @ a.T)[:, 6:] @ read.T
+        rec = np.vstack([np.zeros((PRE, pos.shape[0])), acc])
+        out.append(rec + 0.01 * np.sqrt(np.mean(acc**2, axis=0)) * rng.standard_normal(rec.shape))
+    return out, body
+
+
+def _fit(records: list[np.ndarray], start, bounds: SensorBounds | None, evaluations: int = 240,  # type: ignore[no-untyped-def]
+         estimate_sensors: bool = False):  # fmt: skip
+    """The refit from `start` (g, J/m, K/m, C/m), with the stated tolerances `bounds`."""
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
+    impacts = [find_impact(r, 1.0 / RATE) for r in records]
+    return refine_body(
+        records, 1.0 / RATE, pos, dirs, starts=[i.start for i in impacts], onsets=[i.onset for i in impacts],
+        decimation=1, center_of_gravity=start[0], inertia_per_mass=start[1], stiffness_per_mass=start[2],
+        damping_per_mass=start[3], sensor_bounds=bounds, max_evaluations=evaluations,
+        estimate_sensors=estimate_sensors,
+    )  # fmt: skip
+
+
+def _truth(body) -> tuple[np.ndarray, ...]:  # type: ignore[no-untyped-def]
+    _, k6, c6 = system_matrices(body)
+    return body.center_of_gravity, body.inertia_tensor / body.mass, k6 / body.mass, c6 / body.mass
+
+
+@pytest.fixture(scope="module")
+def gain_errors():  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(3)
+    gain = 1.0 + rng.uniform(-0.03, 0.03, 8)
+    records, body = _records(gain, np.zeros((8, 3)), rng)
+    return records, body
+
+
+def test_stated_gain_tolerances_explain_the_misfit_and_widen_the_intervals_to_the_truth(gain_errors) -> None:  # type: ignore[no-untyped-def]
+    records, body = gain_errors
+    bounds = SensorBounds(sensitivity=0.03, orientation_deg=0.0, transverse=0.0, position=0.0)
+    fit = _fit(records, _truth(body), bounds)
+    assert fit.misfit is not None and fit.misfit.accepted and fit.misfit.expected > 1.2
+    # the same fit judged against the noise alone: rejected (ratio 1.38, p < 1e-10)
+    at = (fit.center_of_gravity, fit.inertia_per_mass, fit.stiffness_per_mass, fit.damping_per_mass)
+    plain = _fit(records, at, None, evaluations=0)
+    assert plain.misfit is not None and not plain.misfit.accepted
+    assert fit.sensor_std is not None
+    std = np.sqrt(np.concatenate([fit.std["center_of_gravity"], np.diag(fit.std["inertia_per_mass"])]) ** 2
+                  + sum(np.concatenate([s["center_of_gravity"], np.diag(s["inertia_per_mass"])]) ** 2
+                        for s in fit.sensor_std.values()))  # fmt: skip
+    noise = np.concatenate([fit.std["center_of_gravity"], np.diag(fit.std["inertia_per_mass"])])
+    err = np.concatenate([fit.center_of_gravity - body.center_of_gravity,
+                          np.diag(fit.inertia_per_mass - body.inertia_tensor / body.mass)])  # fmt: skip
+    assert np.max(np.abs(err / noise)) > 3.0  # observed 9: the gains' error is far beyond the noise's intervals
+    assert np.max(np.abs(err / std)) < 2.5  # observed 0.72: within the intervals with the gains' tolerance
+
+
+def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_body(gain_errors) -> None:  # type: ignore[no-untyped-def]
+    records, body = gain_errors
+    bounds = SensorBounds(sensitivity=0.03, orientation_deg=0.0, transverse=0.0, position=0.0)
+    fit = _fit(records, _truth(body), bounds, estimate_sensors=True)
+    x = fit.sensor_correction
+    assert x is not None and x.determined[0].all()
+    true = np.random.default_rng(3).uniform(-0.03, 0.03, 8)
+    # a common gain is undetermined (the force is not measured): the gains relative to their mean
+    rel = (x.value[0] - x.value[0].mean()) - (true - true.mean())
+    assert np.max(np.abs(rel)) < 3 * x.std[0].min()  # observed 0.3 of 0.62 %
+    assert fit.sensor_std is not None
+    std = np.sqrt(np.concatenate([fit.std["center_of_gravity"], np.diag(fit.std["inertia_per_mass"])]) ** 2
+                  + sum(np.concatenate([s["center_of_gravity"], np.diag(s["inertia_per_mass"])]) ** 2
+                        for s in fit.sensor_std.values()))  # fmt: skip
+    err = np.concatenate([fit.center_of_gravity - body.center_of_gravity,
+                          np.diag(fit.inertia_per_mass - body.inertia_tensor / body.mass)])  # fmt: skip
+    assert np.max(np.abs(err / std)) < 3.0  # observed 1.7
+    # the inertia's error without the gains estimated is 2.8e-3 (J/m, kg m^2/kg); with them, a tenth of it
+    assert np.max(np.abs(err[3:])) < 1e-3  # observed 0.76e-3 (CG 0.06 mm against 0.66)
+
+
+def test_a_determined_correction_beyond_three_tolerances_names_its_sensor() -> None:
+    from rigidid.api.records import implausible_sensors
+    from rigidid.core.timedomain.refine import SensorCorrection
+    from rigidid.errors import SensorCorrectionWarning
+
+    value = np.zeros((6, 3))
+    value[0] = [0.12, 0.01, -0.2]  # sensor "c" beyond 3 x 3 % too, but undetermined
+    value[3, 1] = 0.05  # sensor "b" 50 mm off along x, tolerance 3 mm
+    determined = np.ones((6, 3), dtype=bool)
+    determined[0, 2] = False
+    correction = SensorCorrection(value, np.full((6, 3), 0.01), determined, 14)
+    bounds = SensorBounds(sensitivity=0.03, orientation_deg=3.0, transverse=0.03, position=0.003)
+    with pytest.warns(SensorCorrectionWarning) as caught:
+        named = implausible_sensors(correction, bounds, ("a", "b", "c"))
+    assert named == ["a", "b"]
+    assert "sensor a: the records say its gain +12 %" in str(caught[0].message)
+    assert "position off by 0.05" in str(caught[1].message)
