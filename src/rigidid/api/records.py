@@ -716,7 +716,10 @@ def refine_records(
     prove its impacts, and when `result` leaves out a mode of `estimate` (an
     elastic one, subtracted from the raw records). The refit's decimation is
     the smallest up to `estimate`'s factor that fits its row budget, so it may
-    differ from a whole-record estimation's when that budget binds.
+    differ from a whole-record estimation's when that budget binds (and, for a
+    CSV whose rows are estimated from its size, by up to a tenth). That pass
+    also reads the decays (:func:`rigidid.io.records.refit.locate_and_read`): each
+    file is read once for the refit, rarely twice.
     """
 
     import warnings
