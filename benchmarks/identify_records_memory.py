@@ -10,13 +10,17 @@ fresh processes, interleaved ``--repeat`` times:
 - ``whole``: the same with ``api.STREAM_REFIT_VALUES`` raised so far that the refit reads the raw
   records whole (the refit's numbers of a whole read);
 - ``before`` (with ``--before-src DIR``, the ``src`` folder of an older checkout, e.g.
-  ``git archive <commit> src | tar -x -C DIR``): that version's ``identify --records``.
+  ``git archive <commit> src | tar -x -C DIR``): that version's ``identify --records``;
+- ``modes`` (with ``--modes``): ``rigidid modes`` on the same file, the issue's yardstick (the
+  refit within 1.5x of its time).
 
-It prints medians of wall time (start-up included) and peak resident memory (the child's VmHWM),
-how the peak grows from the first case to the last (same channels), and the CG, its standard error
-and the normalised cost of every route.
+It prints medians of wall time (start-up included), of CPU time (user + system of the child: on a
+shared machine the figure to compare) and of peak resident memory (the child's VmHWM), each
+route's times over ``modes``'s, how the peak grows from the first case to the last (same
+channels), and the CG, its standard error and the normalised cost of every identify route.
 
 Run: ``python benchmarks/identify_records_memory.py --cases-dir /tmp/cases --cases 8x1000000,8x10000000``
+(``--suffix .csv --modes`` for the issue's CSV figures; the records as ``modes_speed.py --keep`` writes them)
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -49,18 +54,21 @@ main()
 )
 
 
-def _run_peak(cmd: list[str], folder: Path, src: str | None) -> tuple[float, float]:
-    """Wall time (s) and peak resident memory (MB, the child's VmHWM) of a child process."""
+def _run_peak(cmd: list[str], folder: Path, src: str | None) -> tuple[float, float, float]:
+    """Wall time (s), CPU time (s, user + system) and peak resident memory (MB, VmHWM) of a child process."""
     peak_file = folder / "peak.txt"
     env = {**os.environ, "RIGIDID_BENCH_PEAK": str(peak_file)}
     if src is not None:
         env["PYTHONPATH"] = src
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     out = subprocess.run(cmd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if out.returncode:
         raise SystemExit(f"{' '.join(cmd[3:6])}... failed with exit status {out.returncode}: {out.stderr.strip()}")
-    return wall, float(peak_file.read_text()) / 1024.0
+    cpu = after.ru_utime + after.ru_stime - used.ru_utime - used.ru_stime
+    return wall, cpu, float(peak_file.read_text()) / 1024.0
 
 
 def main() -> None:
@@ -71,9 +79,11 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--before-src", help="src folder of an older checkout to measure too")
     parser.add_argument("--routes", default="row blocks,whole", help="comma-separated: row blocks, whole")
+    parser.add_argument("--modes", action="store_true", help="also time `rigidid modes` on the same files")
     args = parser.parse_args()
     folder = Path(args.cases_dir)
     names = [r.strip() for r in args.routes.split(",")] + (["before"] if args.before_src else [])
+    names += ["modes"] if args.modes else []
     peaks: dict[str, list[float]] = {name: [] for name in names}
     srcs = {name: (args.before_src if name == "before" else None) for name in names}
     for case in args.cases.split(","):
@@ -81,27 +91,36 @@ def main() -> None:
         record = folder / f"record_{channels}x{samples}{args.suffix}"
         layout = folder / f"layout{channels}.json"
         out = {name: folder / f"identify_{name.replace(' ', '_')}.json" for name in peaks}
-        codes = {"row blocks": CLI_CODE, "whole": WHOLE_CODE, "before": CLI_CODE}
+        codes = {"row blocks": CLI_CODE, "whole": WHOLE_CODE, "before": CLI_CODE, "modes": CLI_CODE}
         commands = {
             name: [sys.executable, "-c", codes[name], "identify", str(layout), "--records", str(record),
                    "--json", str(out[name])]
             for name in names
         }  # fmt: skip
-        runs: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
+        if "modes" in commands:
+            commands["modes"] = [sys.executable, "-c", CLI_CODE, "modes", str(layout), str(record),
+                                 "-o", str(folder / "modes_out.csv")]  # fmt: skip
+        runs: dict[str, list[tuple[float, float, float]]] = {name: [] for name in commands}
         for _ in range(args.repeat):
             for name, cmd in commands.items():
                 runs[name].append(_run_peak(cmd, folder, srcs[name]))
         print(f"\n{channels} channels x {samples} samples ({record.name}); medians of {args.repeat} interleaved runs")
-        print(f"{'route':<16} {'wall s':>7} {'peak MB':>8}  CG (m), its std, normalised cost")
-        for name, values in runs.items():
-            wall = float(np.median([w for w, _ in values]))
-            peak = float(np.median([m for _, m in values]))
-            peaks[name].append(peak)
+        print(f"{'route':<16} {'wall s':>7} {'cpu s':>7} {'peak MB':>8}  x modes (wall, cpu)  CG (m), its std, cost")
+        medians = {name: np.median(np.array(values), axis=0) for name, values in runs.items()}
+        for name, (wall, cpu, peak) in medians.items():
+            peaks[name].append(float(peak))
+            ratio = ""
+            if "modes" in medians:
+                ratio = f"{wall / medians['modes'][0]:.2f}x, {cpu / medians['modes'][1]:.2f}x"
+            if name == "modes":
+                print(f"{name:<16} {wall:>7.2f} {cpu:>7.2f} {peak:>8.0f}  {ratio}")
+                continue
             data = json.loads(out[name].read_text())
             crb = data["uncertainty_records_crb"]
             cg = np.round(data["center_of_gravity"], 7).tolist()
             std = np.round(crb["center_of_gravity"]["std"], 8).tolist()
-            print(f"{name:<16} {wall:>7.2f} {peak:>8.0f}  {cg} +- {std}, {crb['normalised_cost']:.3f}")
+            cost = crb["normalised_cost"]
+            print(f"{name:<16} {wall:>7.2f} {cpu:>7.2f} {peak:>8.0f}  {ratio}  {cg} +- {std}, {cost:.3f}")
     for name, values in peaks.items():
         if len(values) > 1:
             print(f"peak growth, {name}: {values[0]:.0f} -> {values[-1]:.0f} MB ({values[-1] / values[0]:.2f}x)")

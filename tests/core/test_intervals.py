@@ -34,6 +34,20 @@ def test_noise_correlation_is_that_of_decimated_white_noise() -> None:
     np.testing.assert_array_equal(noise_correlation(1), [1.0])
 
 
+def test_rows_correlated_by_the_truncated_toeplitz_matrix() -> None:
+    # the sandwich's meat applies P (Toeplitz of rho, cut at the record's ends) to the Jacobian's rows
+    from rigidid.core.timedomain.intervals import _correlate_rows
+
+    rho = noise_correlation(4)
+    n = 3 * rho.size
+    lag = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    dense = np.where(lag < rho.size, rho[np.minimum(lag, rho.size - 1)], 0.0)
+    block = np.random.default_rng(2).standard_normal((n, 2, 3))
+    expected = np.einsum("ij,jkl->ikl", dense, block)
+    np.testing.assert_allclose(_correlate_rows(block, rho), expected, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(_correlate_rows(block, np.ones(1)), block, rtol=0.0, atol=0.0)
+
+
 def test_remaining_step_is_added_to_the_covariance() -> None:
     rng = np.random.default_rng(1)
     jac = rng.standard_normal((400, 3))

@@ -79,3 +79,28 @@ def test_golub_pereyra_jacobian_is_the_exact_derivative(monkeypatch) -> None:  #
         r_up = rf._evaluate(up, data, pos_l, dirs, 60.0, False)[0]
         fd = (r_up - rf._evaluate(down, data, pos_l, dirs, 60.0, False)[0]) / (2 * h)
         assert np.linalg.norm(jac[:, i] - fd) <= REFINE_GOLUB_PEREYRA_REL * np.linalg.norm(fd)
+
+
+def test_fit_on_the_rigid_combinations_is_the_same_problem() -> None:
+    # the refit fits the weighted channels' six rigid combinations (refine._reduced): cost (plus the
+    # constant no parameter moves), gradient and J^T J must be the full problem's, at any CG and weights
+    import rigidid.core.timedomain.refine as rf
+    from rigidid.core.geometry import layout_frame
+
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
+    records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=128.0, duration=1.0, noise=0.05, seed=0)
+    lf = layout_frame(pos)
+    frame = rf._Frame(lf.centre, lf.scale, 60.0)
+    theta = frame.to_theta(body.center_of_gravity + np.array([0.05, -0.03, 0.02]), *_truth_per_mass(body))
+    sigma = np.random.default_rng(1).uniform(0.02, 0.2, pos.shape[0])
+    pos_l = lf.to_local(pos)
+    for drift in (False, True):
+        data = rf._Data([r[:100] for r in records], sigma, 1.0 / 128.0, "pretrigger", drift=drift)
+        r, jac = rf._evaluate(theta, data, pos_l, dirs, 60.0, True)
+        red = rf._reduced(data, rf._channel_basis(sigma, pos_l, dirs))
+        r6, jac6 = rf._evaluate(theta, red.data, pos_l, dirs, 60.0, True, red.mix)
+        assert r6.size * pos.shape[0] == r.size * 6
+        np.testing.assert_allclose(r6 @ r6 + red.constant, r @ r, rtol=1e-10)
+        np.testing.assert_allclose(jac6.T @ r6, jac.T @ r, rtol=1e-7, atol=1e-9 * np.max(np.abs(jac.T @ r)))
+        np.testing.assert_allclose(jac6.T @ jac6, jac.T @ jac, rtol=1e-7, atol=1e-9 * np.max(jac.T @ jac))

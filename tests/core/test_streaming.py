@@ -157,3 +157,25 @@ def test_a_larger_hit_after_the_rows_held_is_not_taken_for_the_impact() -> None:
     x[20000:] += 5.0 * _record(10000, 0, seed=12)  # a second, larger hit
     first = find_impact(x[:15000], DT)
     assert streaming.locate_impact(_blocks(x, (3000,)), 4, DT, lo=1500, hi=first.start + 4000) is None
+
+
+def test_impacts_and_decays_read_in_one_pass_equal_the_whole_record_routines() -> None:
+    # io's locate_and_read: the window held, the decay decimated from the impact found in it as the
+    # rest arrives (the first record is longer than the window, the second ends inside it)
+    from rigidid.core.timedomain.preprocess import Impact
+
+    records = [_record(80000, 2000, seed=7), _record(30000, 1500, seed=8)]
+    whole = [find_impact(x, DT) for x in records]
+    near = [Impact(i.onset - 40, i.peak, i.start + 30) for i in whole]
+    found = streaming.located_decays(
+        lambda i: _blocks(records[i], (3000, 411)), [x.shape[0] for x in records], 4, DT, near, 200, 4
+    )
+    assert found is not None and found[1] is not None
+    impacts, passes, q = found
+    assert impacts == whole
+    ref = prepare_decays(records, DT, [i.start for i in whole], [i.onset for i in whole], 4)
+    data = streaming.prepared_from(passes, 4, DT, q)
+    assert data.dt == ref.dt and data.pre_counts == ref.pre_counts
+    np.testing.assert_allclose(data.sigma, ref.sigma, rtol=1e-12)
+    for a, b in zip(data.decays, ref.decays, strict=True):
+        np.testing.assert_allclose(a, b, rtol=0.0, atol=STREAMED_DECIMATION)

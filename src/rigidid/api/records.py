@@ -895,7 +895,10 @@ def refine_records(
     prove its impacts, and when `result` leaves out a mode of `estimate` (an
     elastic one, subtracted from the raw records). The refit's decimation is
     the smallest up to `estimate`'s factor that fits its row budget, so it may
-    differ from a whole-record estimation's when that budget binds.
+    differ from a whole-record estimation's when that budget binds (and, for a
+    CSV whose rows are estimated from its size, by up to a tenth). That pass
+    also reads the decays (:func:`rigidid.io.records.refit.locate_and_read`): each
+    file is read once for the refit, rarely twice.
     """
 
     import warnings
@@ -911,14 +914,17 @@ def refine_records(
     if not unused:
         size = sum(open_source(Path(p), layout_ids(ids, str(p)), None).rows for p in paths) * len(ids)
     dt = estimate.sample_interval / max(1, estimate.decimation)
-    impacts = None
+    impacts, read = None, None
     if not unused and size > (STREAM_REFIT_VALUES if stream_above is None else stream_above):
         from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH
-        from rigidid.io.records.refit import locate_impacts
+        from rigidid.io.records.refit import locate_and_read
 
         reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
-        impacts = locate_impacts(paths, ids, dt, estimate.impacts, reach, progress=progress, trends=estimate.trends)
-    if impacts is None:  # read whole; the impacts where the raw records put them (as their estimation would)
+        located = locate_and_read(paths, ids, dt, estimate.impacts, reach, factor=estimate.decimation,
+                                  progress=progress, trends=estimate.trends)  # fmt: skip
+        impacts, read = (None, None) if located is None else located
+    if impacts is None or read is None:
+        # read whole; the impacts where the raw records put them (as their estimation would)
         from rigidid.core.timedomain.preprocess import find_impact
 
         with warnings.catch_warnings():  # named when the records were read for the estimation
@@ -930,17 +936,12 @@ def refine_records(
             chain=chain_model(lay), estimate_delays=estimate_delays, estimate_sensors=estimate_sensors,
         )  # fmt: skip
     estimate = replace(estimate, impacts=tuple(impacts))
-    from rigidid.io.records.refit import read_prepared_decays
-
     ident = result.identification
     if progress is not None:
         progress("refit", 0, 1)
 
     def fit() -> Any:
-        data = read_prepared_decays(
-            paths, ids, dt, starts=[i.start for i in estimate.impacts], onsets=[i.onset for i in estimate.impacts],
-            factor=estimate.decimation, progress=progress, trends=estimate.trends,
-        )  # fmt: skip
+        data = read()  # the decays, read with the impacts when they could be (io.records.refit.locate_and_read)
         if estimate.channels is not None:  # clipped channels left out
             data = columns_of(data, estimate.channels)
         return refine_prepared(

@@ -164,6 +164,7 @@ def levenberg_marquardt(
     decrement: float = 0.0,
     stall: tuple[float, float] = (0.0, 0.0),
     acceleration: Acceleration | None = None,
+    damping: float = _MU0,
 ) -> Minimum:
     """Minimise the costs ``|r_i(x_i)|^2`` of a stack of problems by Levenberg-Marquardt.
 
@@ -195,6 +196,9 @@ def levenberg_marquardt(
         ``acceleration(x, v, index) -> J^T r''_v``: adds half the geodesic acceleration
         ``a``, ``(J^T J + mu D) a = -J^T r''_v``, to each step; a step with
         ``2 |a| / |v| > 0.75`` (``D`` norm) is refused untried.
+    damping : float
+        The initial damping ``mu`` (1e-3; a start already near the minimum, e.g. a
+        coarser fit's end, takes Gauss-Newton steps at once with a small one).
 
     Returns
     -------
@@ -225,7 +229,7 @@ def levenberg_marquardt(
     every = np.arange(m)
     c0, g0, h0 = normal(x, every)
     state = _State(
-        x, np.asarray(c0, float).copy(), g0.copy(), h0.copy(), np.full(m, _MU0), np.full(m, 2.0),
+        x, np.asarray(c0, float).copy(), g0.copy(), h0.copy(), np.full(m, float(damping)), np.full(m, 2.0),
         np.full(m, math.inf), np.ones(m, dtype=np.int64), np.isfinite(c0), np.zeros(m, dtype=bool),
     )  # fmt: skip
     floor = (ROUNDING_FLOOR * np.finfo(float).eps) ** 2 * (state.cost if scale is None else np.asarray(scale, float))

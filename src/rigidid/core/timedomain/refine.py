@@ -601,7 +601,14 @@ def _minus(x: Array, basis: Array, coef: Array, out: Array | None) -> Array:
 
 
 def _levenberg_marquardt(
-    fun: Any, jacobian: Any, theta0: Array, max_evaluations: int, residuals: int, scale: float | None = None
+    fun: Any,
+    jacobian: Any,
+    theta0: Array,
+    max_evaluations: int,
+    residuals: int,
+    scale: float | None = None,
+    constant: float = 0.0,
+    damping: float = 1e-3,
 ) -> tuple[Array, int, Array, Array, bool]:
     """Minimise ``|r(theta)|^2`` by :func:`rigidid.core.optimize.levenberg_marquardt` with geodesic acceleration.
 
@@ -620,7 +627,9 @@ def _levenberg_marquardt(
     decrement is below the rounding floor of `scale` (``|y|^2`` of the weighted data; the
     cost at the start by default): exact data. Stops unconverged after `max_evaluations`
     residual evaluations (may overrun by three) or when no step lowers the cost.
-    `residuals` is the length of ``r`` (the variance's degrees of freedom).
+    `residuals` is the length of ``r`` (the variance's degrees of freedom); `constant` is added
+    to every cost (the part of ``|r|^2`` that no parameter moves, when `fun` gives the rest:
+    :func:`_reduced`); `damping` is the initial Levenberg-Marquardt damping.
 
     Returns
     -------
@@ -631,7 +640,7 @@ def _levenberg_marquardt(
     def normal(x: Array, index: Any) -> tuple[Array, Array, Array]:
         r, jm = jacobian(x[0])
         last.update(theta=x[0].copy(), r=r, jm=jm)
-        return np.array([r @ r]), (jm.T @ r)[None], (jm.T @ jm)[None]
+        return np.array([r @ r + constant]), (jm.T @ r)[None], (jm.T @ jm)[None]
 
     def residual(theta: Array) -> Array | None:
         try:
@@ -641,7 +650,7 @@ def _levenberg_marquardt(
 
     def cost(x: Array, index: Any) -> Array:
         r = residual(x[0])
-        return np.array([math.inf if r is None else float(r @ r)])
+        return np.array([math.inf if r is None else float(r @ r) + constant])
 
     def acceleration(x: Array, step: Array, index: Any) -> Array:
         h = _GEODESIC_H
@@ -654,6 +663,7 @@ def _levenberg_marquardt(
     best = levenberg_marquardt(
         normal, cost, theta0[None], max_evaluations=max_evaluations, scale=None if scale is None else np.array([scale]),
         residuals=residuals, decrement=_DECREMENT, stall=(_STALL, _STALL_DECREMENT), acceleration=acceleration,
+        damping=damping,
     )  # fmt: skip
     return best.x[0], int(best.evaluations[0]), last["r"], last["jm"], bool(best.converged[0])
 
@@ -690,11 +700,24 @@ def _model_derivative(ex: CArray, t: Array, g1: CArray, g2: CArray) -> Array:
 
 
 def _evaluate(
-    theta: Array, data: _Data, pos: Array, dirs: Array, omega: float, jac: bool, link: _Link | None = None
+    theta: Array,
+    data: _Data,
+    pos: Array,
+    dirs: Array,
+    omega: float,
+    jac: bool,
+    link: _Link | None = None,
+    mix: Array | None = None,
 ) -> tuple[Array, Array]:
+    """Weighted residual (n p,) and its projected Jacobian (n p, n_theta); `link` the chain's model
+    (:class:`_Link`); with `mix` (m, p) the shapes are ``mix phi`` (the decays then hold the channels'
+    combinations, :func:`_reduced`)."""
     lam, phi, dlam, dphi = _modes(theta, pos, dirs, jac)
     if link is not None:
         phi, dlam, dphi = link.apply(theta, lam, phi, dlam, dphi)
+    if mix is not None:
+        phi = mix @ phi
+        dphi = np.matmul(mix, dphi) if jac else dphi
     w = 1.0 / data.sigma
     res_parts = []
     j_all = np.empty((sum(d.size for d in data.decays) if jac else 0, theta.size))
@@ -1153,18 +1176,11 @@ def refine_prepared(
         sigma = np.sqrt(np.mean(per**2, axis=0))
         data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
-    def both(theta: Array) -> tuple[Array, Array]:
-        return _evaluate(theta, data, pos_l, dirs, omega, True, link)
-
-    def fun(theta: Array) -> Array:
-        return _evaluate(theta, data, pos_l, dirs, omega, False, link)[0]
-
     if max_evaluations > 0:
-        n_res, scale = sum(d.size for d in data.decays), sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
-        theta, nfev, r, jm, converged = _levenberg_marquardt(fun, both, theta0, max_evaluations, n_res, scale)
+        theta, nfev, r, jm, converged = _fit(data, pos_l, dirs, omega, theta0, max_evaluations, link)
     else:
         theta, nfev, converged = theta0, 0, False
-        r, jm = both(theta)
+        r, jm = _evaluate(theta, data, pos_l, dirs, omega, True, link)
     n_res = r.size
     n_linear = _linear_per_impact(p, data.drift) + (0 if link is None else link.extra_columns())
     dof = max(n_res - theta.size - len(data.decays) * n_linear, 1)
@@ -1391,6 +1407,109 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
     total = SensorCorrection(value, y.std, y.determined, y.rank)
     return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
+
+
+_COARSE_ROWS = 24_000
+"""Residuals (samples x channel combinations) of the coarse fit that starts the full one (:func:`_fit`)."""
+_COARSE_STEP = 3  # the coarse fit runs only when it takes at most every third sample
+_FINE_DAMPING = 1e-9  # initial damping of the full fit after the coarse one (Gauss-Newton steps from a near start)
+
+
+@dataclass(frozen=True)
+class _Reduced:
+    """The fit's problem on fewer columns (:func:`_reduced`)."""
+
+    data: PreparedDecays  # the columns fitted, weights one
+    mix: Array | None  # (m, p): the channels' shapes to the columns' (None: the channels themselves)
+    constant: float  # the part of |r|^2 no parameter moves
+
+
+def _channel_basis(sigma: Array, pos: Array, dirs: Array) -> Array | None:
+    """Orthonormal basis (p, 6) of the span of ``diag(1/sigma) T_0`` (eq. (3)); None for p <= 6 or rank < 6."""
+    if pos.shape[0] <= 6:
+        return None
+    q, rr = np.linalg.qr(sensor_matrix(pos, dirs) / sigma[:, None])
+    d = np.abs(np.diag(rr))
+    return q if float(d.min()) > 1e-8 * float(d.max()) else None
+
+
+def _reduced(data: PreparedDecays, basis: Array | None, step: int = 1) -> _Reduced:
+    """Every `step`-th sample of the decays, their weighted channels projected on `basis` (:func:`_channel_basis`).
+
+    Every CG ``g`` gives shapes ``T_g (lambda v)`` in the span of ``T_0``'s columns
+    (``T_g = T_0 [[I, G], [0, I]]``, ``G`` the skew matrix of ``g``, eq. (3)), so the model's
+    weighted shapes lie in the span of ``Q`` (`basis`) whatever the parameters. The offsets
+    (and drifts) are free per channel: the weighted data's part orthogonal to ``Q`` is fitted
+    by them alone, and its least-squares ``|.|^2`` is `constant`. The rest is the same problem
+    on the six columns ``Y W Q`` with shapes ``Q^T W phi``: the same cost (plus `constant`),
+    gradient and ``J^T J``, exactly, at ``6 / p`` of the work.
+    """
+    if basis is None:
+        return _Reduced(replace(data, decays=[d[::step] for d in data.decays], dt=data.dt * step), None, 0.0)
+    w = 1.0 / data.sigma
+    decays, constant = [], 0.0
+    for y in data.decays:
+        yw = y[::step] * w
+        cols = yw @ basis
+        rest = yw - cols @ basis.T
+        n = rest.shape[0]
+        trend = np.column_stack([np.ones(n), np.arange(n, dtype=float)]) if data.drift else np.ones((n, 1))
+        coef = np.linalg.lstsq(trend, rest, rcond=None)[0]
+        constant += float(np.sum((rest - trend @ coef) ** 2))
+        decays.append(cols)
+    reduced = replace(data, decays=decays, sigma=np.ones(basis.shape[1]), dt=data.dt * step, pre_m2=None)
+    return _Reduced(reduced, basis.T * w[None, :], constant)
+
+
+def _fit(
+    data: PreparedDecays,
+    pos: Array,
+    dirs: Array,
+    omega: float,
+    theta0: Array,
+    max_evaluations: int,
+    link: _Link | None = None,
+) -> tuple[Array, int, Array, Array, bool]:
+    """:func:`_levenberg_marquardt` on the channels' rigid combinations (:func:`_reduced`), from a coarse fit's end.
+
+    When the decays hold more than ``3 _COARSE_ROWS`` residuals, a fit on every k-th sample
+    (about :data:`_COARSE_ROWS` residuals: the model is exact at any sample times) gives the
+    full fit its start, a fraction of a standard error from the minimum, so the full fit ends
+    in a few iterations. The full fit's end, its convergence test and the cost are those of the
+    fit on every channel and sample; its residual and Jacobian are evaluated there on every
+    channel (the intervals and the acceptance test are per channel).
+
+    Returns
+    -------
+    theta, evaluations, residual, jacobian, converged
+        Evaluations of both fits.
+    """
+    # a modelled chain, delay or hum leaves the rigid span per channel: no reduction then
+    basis = _channel_basis(data.sigma, pos, dirs) if link is None else None
+    columns = data.sigma.size if basis is None else basis.shape[1]
+    step = sum(d.shape[0] for d in data.decays) * columns // _COARSE_ROWS
+    scale = sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
+    theta, nfev, converged = theta0, 0, False
+    r, jm = np.zeros(0), np.zeros((0, theta0.size))
+    for k in [step, 1] if step >= _COARSE_STEP else [1]:
+        red = _reduced(data, basis, k)
+        budget = max_evaluations - nfev if k > 1 else max(max_evaluations - nfev, max_evaluations // 4)
+
+        def both(th: Array, red: _Reduced = red) -> tuple[Array, Array]:
+            return _evaluate(th, red.data, pos, dirs, omega, True, link, red.mix)
+
+        def fun(th: Array, red: _Reduced = red) -> Array:
+            return _evaluate(th, red.data, pos, dirs, omega, False, link, red.mix)[0]
+
+        n_k = sum(d.shape[0] for d in red.data.decays) * data.sigma.size
+        damping = _FINE_DAMPING if nfev else 1e-3
+        theta, used, r, jm, converged = _levenberg_marquardt(
+            fun, both, theta, budget, n_k, scale / k, red.constant, damping
+        )
+        nfev += used
+    if basis is not None:
+        r, jm = _evaluate(theta, data, pos, dirs, omega, True)
+    return theta, nfev, r, jm, converged
 
 
 def _misfit(

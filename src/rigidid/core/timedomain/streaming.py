@@ -70,15 +70,19 @@ __all__ = [
     "ContentWelch",
     "DecayPass",
     "Decimated",
+    "LocatedDecay",
     "StreamingDecimation",
     "chunk_maxima",
     "decay_pass",
     "head_content",
     "locate_impact",
     "locate_impacts",
+    "located_decay",
+    "located_decays",
     "power_density",
     "pre_factor",
     "prepared_decays",
+    "prepared_from",
     "record_power",
     "second_factor",
     "spectra_content",
@@ -502,25 +506,35 @@ def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) ->
         if stop > hi:
             after.append(chunk_maxima(mags[max(0, hi - row) :]))
         row = stop
-    if not held:
-        return None
-    window = np.concatenate(held)
+    return _proved(np.concatenate(held), peaks, before, after, dt, lo) if held else None
+
+
+def _in_window(window: Array, peaks: Array, dt: float, lo: int) -> tuple[Impact, float] | None:
+    """:func:`find_impact` on the rows held from row `lo`, the energy weighted by `peaks`, and the energy's top."""
     energy = channel_energy(window, peaks)
     top = float(energy.max()) if energy.size else 0.0
     if top <= 0.0:
+        return None
+    found = find_impact(window, dt, threshold=_THRESHOLD, pulse_width=PULSE_WIDTH, energy=energy)
+    pulse = max(2, round(PULSE_WIDTH / dt))
+    if found.onset + pulse > window.shape[0] or found.start >= window.shape[0] - 1:
+        return None  # the pulse window or the decay start run past the rows held
+    return Impact(lo + found.onset, lo + found.peak, lo + found.start, found.hits), top
+
+
+def _proved(window: Array, peaks: Array, before: list[Array], after: list[Array], dt: float, lo: int) -> Impact | None:
+    """The impact in `window` when the chunk maxima `before` and `after` it prove it (:func:`locate_impact`)."""
+    found = _in_window(window, peaks, dt, lo)
+    if found is None:
         return None
 
     def bound(parts: list[Array]) -> float:  # no row of these chunks has a larger energy
         return float(max(energy_bound(m, peaks).max() for m in parts)) if parts else 0.0
 
     # the largest energy lies in the window, no row before it reaches the threshold
-    if bound(after) > top or bound(before) > _THRESHOLD * top:
+    if bound(after) > found[1] or bound(before) > _THRESHOLD * found[1]:
         return None
-    found = find_impact(window, dt, threshold=_THRESHOLD, pulse_width=PULSE_WIDTH, energy=energy)
-    pulse = max(2, round(PULSE_WIDTH / dt))
-    if found.onset + pulse > window.shape[0] or found.start >= window.shape[0] - 1:
-        return None  # the pulse window or the decay start run past the rows held
-    return Impact(lo + found.onset, lo + found.peak, lo + found.start, found.hits)
+    return found[0]
 
 
 def locate_impacts(
@@ -598,34 +612,59 @@ def decay_pass(blocks: Blocks, channels: int, start: int, pre_end: int, factor: 
     :class:`~rigidid.core.timedomain.preprocess.Decimator` fed from row
     `start` (the same polyphase sums as on the whole record).
     """
-    stream = Decimator(factor, channels)
-    n_pre, mean, m2 = 0, np.zeros(channels), np.zeros(channels)
-    parts: list[Array] = []
-    held = 0
+    pre = _Moments(channels)
+    feed = _DecayFeed(factor, channels, cap)
     row = 0
     for values in blocks:
         stop = row + values.shape[0]
         if row < pre_end:  # pre-trigger statistics, merged block by block
-            x = values[: min(stop, pre_end) - row]
-            n_b = x.shape[0]
-            mean_b = x.mean(axis=0)
-            m2_b = ((x - mean_b) ** 2).sum(axis=0)
-            total = n_pre + n_b
-            delta = mean_b - mean
-            m2 = m2 + m2_b + delta**2 * (n_pre * n_b / total)
-            mean = mean + delta * (n_b / total)
-            n_pre = total
-        if stop > start and held < cap:
-            out = stream.push(values[max(0, start - row) :])
-            if out.shape[0]:
-                out = out[: cap - held]
-                parts.append(np.array(out, dtype=float))
-                held += out.shape[0]
+            pre.add(values[: min(stop, pre_end) - row])
+        if stop > start:
+            feed.push(values[max(0, start - row) :])
         row = stop
-    if held < cap:
-        stream.finish()
-    decay = np.concatenate(parts) if parts else np.zeros((0, channels))
-    return DecayPass(row, n_pre, m2, decay)
+    return DecayPass(row, pre.count, pre.m2, feed.finish())
+
+
+class _Moments:
+    """Count and squared deviations from the mean per channel, merged block by block (Chan, Golub and LeVeque)."""
+
+    def __init__(self, channels: int) -> None:
+        self.count, self.mean, self.m2 = 0, np.zeros(channels), np.zeros(channels)
+
+    def add(self, x: Array) -> None:
+        n_b = x.shape[0]
+        if n_b == 0:
+            return
+        mean_b = x.mean(axis=0)
+        m2_b = ((x - mean_b) ** 2).sum(axis=0)
+        total = self.count + n_b
+        delta = mean_b - self.mean
+        self.m2 = self.m2 + m2_b + delta**2 * (self.count * n_b / total)
+        self.mean = self.mean + delta * (n_b / total)
+        self.count = total
+
+
+class _DecayFeed:
+    """A decay's rows decimated as they arrive (:class:`Decimator`), at most `cap` rows of it kept."""
+
+    def __init__(self, factor: int, channels: int, cap: int) -> None:
+        self.stream, self.channels, self.cap = Decimator(factor, channels), channels, cap
+        self.parts: list[Array] = []
+        self.held = 0
+
+    def push(self, values: Array) -> None:
+        if self.held >= self.cap:
+            return
+        out = self.stream.push(values)
+        if out.shape[0]:
+            out = out[: self.cap - self.held]
+            self.parts.append(np.array(out, dtype=float))
+            self.held += out.shape[0]
+
+    def finish(self) -> Array:
+        if self.held < self.cap:
+            self.stream.finish()
+        return np.concatenate(self.parts) if self.parts else np.zeros((0, self.channels))
 
 
 def prepared_decays(
@@ -682,10 +721,157 @@ def prepared_decays(
         if fit_factor([n - s for n, s in zip(counted, starts, strict=True)], channels, max(1, factor)) == q:
             break
         known = counted
+    return prepared_from(read, channels, dt, q)
+
+
+def prepared_from(read: Sequence[DecayPass], channels: int, dt: float, q: int) -> PreparedDecays:
+    """The refit's data from each record's :class:`DecayPass` at the fit's factor `q`.
+
+    Raises
+    ------
+    InputError
+        Records too short for the refinement (:func:`~rigidid.core.timedomain.refine.cut_decays`).
+    """
     decays = cut_decays([r.decay for r in read], channels)
     sigma, noise_from = pretrigger_sigma([r.pre_count for r in read], [r.pre_m2 for r in read], len(read), q)
     return PreparedDecays(decays, sigma, dt * q, noise_from, pre_counts=tuple(r.pre_count for r in read),
                           pre_m2=np.array([r.pre_m2 for r in read]))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class LocatedDecay:
+    """What :func:`located_decay` gives: the impact and, when read on the way, the refit's pass.
+
+    Attributes
+    ----------
+    impact : Impact
+        As :func:`locate_impact` finds it.
+    decay : DecayPass or None
+        ``decay_pass(record, ..., impact.start, impact.onset - 2, factor, cap)``; None when
+        the impact found before the record's end was not the one proved at its end (or
+        its pre-trigger ends before the rows held): the decay must be read again.
+    """
+
+    impact: Impact
+    decay: DecayPass | None
+
+
+def located_decay(
+    blocks: Blocks, channels: int, dt: float, lo: int, hi: int, factor: int, cap: int
+) -> LocatedDecay | None:
+    """:func:`locate_impact` and :func:`decay_pass` in one read of a record (None as :func:`locate_impact`).
+
+    Once rows ``lo:hi`` are held, the impact is found in them with the channels' peaks seen so
+    far (the impact's own, usually the record's) and its decay is decimated from there as the
+    rest arrives; at the end the impact is proved as :func:`locate_impact` proves it, and the
+    decay kept when it started where the proved impact starts. The pre-trigger statistics merge
+    the rows before `lo` as they arrive and the held ones before the onset at the end.
+    """
+    peaks = np.zeros(channels)
+    held: list[Array] = []
+    before: list[Array] = []
+    after: list[Array] = []
+    pre = _Moments(channels)
+    feed: _DecayFeed | None = None
+    guess: Impact | None = None
+    row = 0
+    for values in blocks:
+        stop = row + values.shape[0]
+        mags = np.abs(values)
+        peaks = np.maximum(peaks, mags.max(axis=0))
+        if row < lo:
+            before.append(chunk_maxima(mags[: min(stop, lo) - row]))
+            pre.add(values[: min(stop, lo) - row])
+        if stop > lo and row < hi:
+            held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
+        if stop > hi:
+            after.append(chunk_maxima(mags[max(0, hi - row) :]))
+        if feed is not None:
+            feed.push(values[max(0, hi - row) :])
+        elif guess is None and stop >= hi and held:
+            guess, feed = _decay_from(np.concatenate(held), peaks, dt, lo, factor, cap)
+            if feed is not None:
+                feed.push(values[hi - row :])
+        row = stop
+    if not held:
+        return None
+    window = np.concatenate(held)
+    if guess is None:  # the record ended inside the window
+        guess, feed = _decay_from(window, peaks, dt, lo, factor, cap)
+    impact = _proved(window, peaks, before, after, dt, lo)
+    if impact is None:
+        return None
+    if feed is None or guess != impact or impact.onset - 2 < lo:
+        return LocatedDecay(impact, None)
+    pre.add(window[: impact.onset - 2 - lo])
+    return LocatedDecay(impact, DecayPass(row, pre.count, pre.m2, feed.finish()))
+
+
+def _decay_from(
+    window: Array, peaks: Array, dt: float, lo: int, factor: int, cap: int
+) -> tuple[Impact, _DecayFeed | None]:
+    """The impact found in the rows held and a :class:`_DecayFeed` fed its decay's rows among them."""
+    found = _in_window(window, peaks, dt, lo)
+    if found is None:
+        return Impact(-1, -1, -1), None
+    feed = _DecayFeed(factor, window.shape[1], cap)
+    feed.push(window[found[0].start - lo :])
+    return found[0], feed
+
+
+def located_decays(
+    records: Callable[[int], Blocks],
+    rows: Sequence[int],
+    channels: int,
+    dt: float,
+    near: Sequence[Impact],
+    reach: int,
+    factor: int,
+) -> tuple[list[Impact], list[DecayPass] | None, int] | None:
+    """:func:`locate_impacts` and :func:`prepared_decays`'s reading in one read of each record.
+
+    Parameters
+    ----------
+    records, channels, dt, near, reach
+        As for :func:`locate_impacts`.
+    rows, factor
+        As for :func:`prepared_decays`.
+
+    Returns
+    -------
+    (list of Impact, list of DecayPass or None, int) or None
+        None when :func:`locate_impacts` would give None. Otherwise the impacts,
+        each record's :class:`DecayPass` at the fit's factor and that factor
+        (:func:`prepared_from` makes them :func:`prepared_decays`'s answer, the
+        factor chosen from `rows`); the passes are None when a record's decay could
+        not be read on the way (:func:`located_decay`) or the rows counted ask a
+        factor more than :data:`_FACTOR_SLACK` away: the caller reads them again
+        (:func:`prepared_decays`).
+    """
+    cap = MAX_ROWS // channels + 1
+    q = fit_factor([n - i.start for n, i in zip(rows, near, strict=True)], channels, max(1, factor))
+    found: list[Impact] = []
+    passes: list[DecayPass] = []
+    for i, impact in enumerate(near):
+        lo, hi = max(0, impact.onset - reach), impact.start + max(reach, AFTER_ROWS)
+        one = located_decay(records(i), channels, dt, lo, hi, q, cap)
+        if one is None:
+            return None
+        found.append(one.impact)
+        if one.decay is not None:
+            passes.append(one.decay)
+    if len(passes) < len(near):
+        return found, None, q
+    counted = fit_factor([p.rows - f.start for p, f in zip(passes, found, strict=True)], channels, max(1, factor))
+    return found, (passes if abs(counted - q) <= _FACTOR_SLACK * counted else None), q
+
+
+_FACTOR_SLACK = 0.1
+"""A one-pass read keeps the fit's factor chosen from the rows as known before reading (a CSV's
+estimated from its size) when the rows counted ask one at most this fraction away: the decays are
+then at most a tenth longer (their end cut, :func:`~rigidid.core.timedomain.refine.cut_decays`) or
+shorter than the budget. Re-reading a 530 MB CSV for a factor of 53 instead of 52 doubled the refit's
+reading."""
 
 
 def record_power(blocks: Blocks, channels: int, window: Array) -> Array:

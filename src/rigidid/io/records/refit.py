@@ -23,13 +23,13 @@ from numpy.typing import NDArray
 from rigidid.core.timedomain.preprocess import Impact
 from rigidid.core.timedomain.refine import PreparedDecays
 from rigidid.core.timedomain.streaming import locate_impacts as _locate
-from rigidid.core.timedomain.streaming import prepared_decays
+from rigidid.core.timedomain.streaming import located_decays, prepared_decays, prepared_from
 from rigidid.core.timedomain.trend import Trend
 from rigidid.io.records.checks import layout_ids
 from rigidid.io.records.sources import in_range, open_source
 from rigidid.progress import ProgressCallback
 
-__all__ = ["locate_impacts", "read_prepared_decays"]
+__all__ = ["locate_and_read", "locate_impacts", "read_prepared_decays"]
 
 Array = NDArray[np.float64]
 
@@ -155,3 +155,55 @@ def read_prepared_decays(
         rows.append(open_source(path, layout_ids(sensor_ids, str(path)), None).rows)  # a CSV's: from its size
     records = _opener(paths, sensor_ids, progress, trends)
     return prepared_decays(records, rows, len(sensor_ids), dt, starts=starts, onsets=onsets, factor=factor)
+
+
+def _rows(paths: Sequence[str | os.PathLike[str]], sensor_ids: Sequence[str]) -> list[int]:
+    """Each file's rows as its header or size tells (a CSV's estimated from its size)."""
+    return [open_source(Path(p), layout_ids(sensor_ids, str(p)), None).rows for p in paths]
+
+
+def locate_and_read(
+    paths: Sequence[str | os.PathLike[str]],
+    sensor_ids: Sequence[str],
+    dt: float,
+    near: Sequence[Impact],
+    reach: int,
+    *,
+    factor: int,
+    progress: ProgressCallback | None = None,
+    trends: Sequence[Trend | None] | None = None,
+) -> tuple[list[Impact], Callable[[], PreparedDecays]] | None:
+    """:func:`locate_impacts`, and :func:`read_prepared_decays` in the same read of each file when it can.
+
+    Parameters
+    ----------
+    paths, sensor_ids, dt, near, reach, progress, trends
+        As for :func:`locate_impacts`.
+    factor : int
+        As for :func:`read_prepared_decays`.
+
+    Returns
+    -------
+    (list of Impact, callable) or None
+        None when :func:`locate_impacts` gives None. Otherwise the impacts and
+        ``data()``, :func:`read_prepared_decays`'s answer with them (it raises what
+        that raises); the files are read a second time, by ``data()``, only when the
+        decays could not be taken on the way
+        (:func:`rigidid.core.timedomain.streaming.located_decays`).
+    """
+    if len(paths) != len(near):
+        raise ValueError(f"{len(paths)} record files for {len(near)} impacts")
+    rows = _rows(paths, sensor_ids)
+    records = _opener(paths, sensor_ids, progress, trends)
+    found = located_decays(records, rows, len(sensor_ids), dt, near, reach, factor)
+    if found is None:
+        return None
+    impacts, passes, q = found
+
+    def data() -> PreparedDecays:
+        if passes is not None:
+            return prepared_from(passes, len(sensor_ids), dt, q)
+        starts, onsets = [i.start for i in impacts], [i.onset for i in impacts]
+        return prepared_decays(records, rows, len(sensor_ids), dt, starts=starts, onsets=onsets, factor=factor)
+
+    return impacts, data
