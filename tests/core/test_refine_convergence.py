@@ -99,7 +99,7 @@ def test_fit_on_the_rigid_combinations_is_the_same_problem() -> None:
         data = rf._Data([r[:100] for r in records], sigma, 1.0 / 128.0, "pretrigger", drift=drift)
         r, jac = rf._evaluate(theta, data, pos_l, dirs, 60.0, True)
         red = rf._reduced(data, rf._channel_basis(sigma, pos_l, dirs))
-        r6, jac6 = rf._evaluate(theta, red.data, pos_l, dirs, 60.0, True, red.mix)
+        r6, jac6 = rf._evaluate(theta, red.data, pos_l, dirs, 60.0, True, mix=red.mix)
         assert r6.size * pos.shape[0] == r.size * 6
         np.testing.assert_allclose(r6 @ r6 + red.constant, r @ r, rtol=1e-10)
         np.testing.assert_allclose(jac6.T @ r6, jac.T @ r, rtol=1e-7, atol=1e-9 * np.max(np.abs(jac.T @ r)))
