@@ -126,6 +126,23 @@ def test_summed_power_equals_summed_spectrum() -> None:
         streaming.record_power(_blocks(records[0][:500], (100,)), 4, window)
 
 
+def test_summed_spectrum_is_welchs_average() -> None:
+    """summed_spectrum against scipy's Welch (a reference written apart): Hann, half overlap, mean removed."""
+    from scipy.signal import welch
+
+    records = [_record(10000, 500, seed=7), _record(9000, 800, seed=8)]
+    f, p = summed_spectrum(records, DT, segment=1024)
+    ref = [welch(x, fs=1.0 / DT, nperseg=1024, axis=0, detrend="constant") for x in records]
+    np.testing.assert_allclose(f, ref[0][0], rtol=1e-15)
+    np.testing.assert_allclose(p, sum(np.sum(q, axis=1) for _, q in ref), rtol=1e-10)
+    short = [x[:700] for x in records]  # a record shorter than the segment shortens it
+    f, p = summed_spectrum(short, DT, segment=1024)
+    _, q = welch(short[0], fs=1.0 / DT, nperseg=700, axis=0, detrend="constant")
+    assert f.size == 351 and np.allclose(
+        p, np.sum(q, axis=1) + np.sum(welch(short[1], fs=1.0 / DT, nperseg=700, axis=0, detrend="constant")[1], axis=1)
+    )
+
+
 def test_two_stages_equal_decimation_twice_and_the_content_spectrum_is_the_decays() -> None:
     x = _record(20000, 700, seed=9)
     stream = streaming.StreamingDecimation(x.shape[0], x.shape[1], factor=3, second=2)

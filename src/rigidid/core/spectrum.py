@@ -37,18 +37,18 @@ def summed_spectrum(records: Sequence[ArrayLike], dt: float, *, segment: int = 4
     -----
     The sum of the spectra peaks at every mode that any channel sees in any
     record, which is what the stabilisation diagram's poles should line up with.
+    The average is :func:`rigidid.core.timedomain.streaming.record_power` over each
+    whole record (the same numbers as ``scipy.signal.welch(..., detrend="constant")``,
+    without importing ``scipy.signal``, about a second of start-up).
     """
-    from scipy.signal import welch
+    from rigidid.core.timedomain.streaming import hann_window, power_density, record_power
 
     if not records or not dt > 0.0:
         raise ValueError("need at least one record and a positive sample interval")
     arrays = [np.atleast_2d(np.asarray(r, dtype=float).T).T for r in records]
     n = min(segment, *(a.shape[0] for a in arrays))
-    freq: Array | None = None
-    total: Array | None = None
+    window = hann_window(n)
+    total = np.zeros(n // 2 + 1)
     for a in arrays:
-        f, p = welch(a, fs=1.0 / dt, nperseg=n, axis=0, detrend="constant")
-        summed = np.sum(p, axis=1)
-        freq, total = (f, summed) if total is None else (freq, total + summed)
-    assert freq is not None and total is not None
-    return np.asarray(freq, dtype=float), np.asarray(total, dtype=float)
+        total += record_power([a], a.shape[1], window)
+    return power_density(total, window, dt)

@@ -74,6 +74,7 @@ __all__ = [
     "StreamingDecimation",
     "chunk_maxima",
     "decay_pass",
+    "hann_window",
     "head_content",
     "locate_impact",
     "locate_impacts",
@@ -872,6 +873,12 @@ estimated from its size) when the rows counted ask one at most this fraction awa
 then at most a tenth longer (their end cut, :func:`~rigidid.core.timedomain.refine.cut_decays`) or
 shorter than the budget. Re-reading a 530 MB CSV for a factor of 53 instead of 52 doubled the refit's
 reading."""
+
+
+def hann_window(n: int) -> Array:
+    """The periodic Hann window of `n` samples (``scipy.signal.get_window("hann", n)``): Welch's segments'."""
+    k = np.arange(n)
+    return np.asarray(0.5 - 0.5 * np.cos(2.0 * np.pi * k / n))
 
 
 def record_power(blocks: Blocks, channels: int, window: Array) -> Array:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.timedomain.streaming import power_density, record_power
+from rigidid.core.timedomain.streaming import hann_window, power_density, record_power
 from rigidid.io.records.checks import layout_ids
 from rigidid.io.records.sources import open_source, values_of
 from rigidid.progress import ProgressCallback
@@ -63,8 +63,7 @@ def summed_spectrum_streamed(
         shortens the segment: read such records whole).
     """
     n = int(segment)
-    k = np.arange(n)
-    window = 0.5 - 0.5 * np.cos(2.0 * np.pi * k / n)  # periodic Hann, as scipy.signal.get_window("hann", n)
+    window = hann_window(n)
     total = np.zeros(n // 2 + 1)
     for p in paths:
         path = Path(p)
