@@ -491,23 +491,36 @@ def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) ->
         In the record's rows; None when the rows held cannot prove it (a
         larger energy, or one above the onset threshold, outside them).
     """
-    peaks = np.zeros(channels)
-    held: list[Array] = []
-    before: list[Array] = []  # max |x| per channel of each block part before the window
-    after: list[Array] = []  # ... and after it
-    row = 0
+    scan = _WindowScan(channels, lo, hi)
     for values in blocks:
-        stop = row + values.shape[0]
+        scan.add(values)
+    return _proved(np.concatenate(scan.held), scan.peaks, scan.before, scan.after, dt, lo) if scan.held else None
+
+
+class _WindowScan:
+    """A record's blocks seen once around the rows ``lo:hi``: the channels' peaks so far, the rows
+    held, and each block part's chunk maxima before and after them (what :func:`_proved` needs)."""
+
+    def __init__(self, channels: int, lo: int, hi: int) -> None:
+        self.lo, self.hi, self.row = lo, hi, 0
+        self.peaks = np.zeros(channels)
+        self.held: list[Array] = []
+        self.before: list[Array] = []  # max |x| per channel of each block part before the window
+        self.after: list[Array] = []  # ... and after it
+
+    def add(self, values: Array) -> int:
+        """Take the next block; return the row it starts at."""
+        row, stop, lo, hi = self.row, self.row + values.shape[0], self.lo, self.hi
         mags = np.abs(values)
-        peaks = np.maximum(peaks, mags.max(axis=0))
+        self.peaks = np.maximum(self.peaks, mags.max(axis=0))
         if row < lo:
-            before.append(chunk_maxima(mags[: min(stop, lo) - row]))
+            self.before.append(chunk_maxima(mags[: min(stop, lo) - row]))
         if stop > lo and row < hi:
-            held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
+            self.held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
         if stop > hi:
-            after.append(chunk_maxima(mags[max(0, hi - row) :]))
-        row = stop
-    return _proved(np.concatenate(held), peaks, before, after, dt, lo) if held else None
+            self.after.append(chunk_maxima(mags[max(0, hi - row) :]))
+        self.row = stop
+        return row
 
 
 def _in_window(window: Array, peaks: Array, dt: float, lo: int) -> tuple[Impact, float] | None:
@@ -768,44 +781,32 @@ def located_decay(
     decay kept when it started where the proved impact starts. The pre-trigger statistics merge
     the rows before `lo` as they arrive and the held ones before the onset at the end.
     """
-    peaks = np.zeros(channels)
-    held: list[Array] = []
-    before: list[Array] = []
-    after: list[Array] = []
+    scan = _WindowScan(channels, lo, hi)
     pre = _Moments(channels)
     feed: _DecayFeed | None = None
     guess: Impact | None = None
-    row = 0
     for values in blocks:
-        stop = row + values.shape[0]
-        mags = np.abs(values)
-        peaks = np.maximum(peaks, mags.max(axis=0))
+        row = scan.add(values)
         if row < lo:
-            before.append(chunk_maxima(mags[: min(stop, lo) - row]))
-            pre.add(values[: min(stop, lo) - row])
-        if stop > lo and row < hi:
-            held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
-        if stop > hi:
-            after.append(chunk_maxima(mags[max(0, hi - row) :]))
+            pre.add(values[: min(scan.row, lo) - row])
         if feed is not None:
             feed.push(values[max(0, hi - row) :])
-        elif guess is None and stop >= hi and held:
-            guess, feed = _decay_from(np.concatenate(held), peaks, dt, lo, factor, cap)
+        elif guess is None and scan.row >= hi and scan.held:
+            guess, feed = _decay_from(np.concatenate(scan.held), scan.peaks, dt, lo, factor, cap)
             if feed is not None:
                 feed.push(values[hi - row :])
-        row = stop
-    if not held:
+    if not scan.held:
         return None
-    window = np.concatenate(held)
+    window = np.concatenate(scan.held)
     if guess is None:  # the record ended inside the window
-        guess, feed = _decay_from(window, peaks, dt, lo, factor, cap)
-    impact = _proved(window, peaks, before, after, dt, lo)
+        guess, feed = _decay_from(window, scan.peaks, dt, lo, factor, cap)
+    impact = _proved(window, scan.peaks, scan.before, scan.after, dt, lo)
     if impact is None:
         return None
     if feed is None or guess != impact or impact.onset - 2 < lo:
         return LocatedDecay(impact, None)
     pre.add(window[: impact.onset - 2 - lo])
-    return LocatedDecay(impact, DecayPass(row, pre.count, pre.m2, feed.finish()))
+    return LocatedDecay(impact, DecayPass(scan.row, pre.count, pre.m2, feed.finish()))
 
 
 def _decay_from(
