@@ -1186,6 +1186,7 @@ def _identify_test(
     modal = modal or ModalOptions()
     method = identify_options.get("method", "structured")
     src = input_source(layout, inputs)
+    _refuse_sensors_with_chain(layout, estimate_sensors, estimate_delays)
     check_uff_options(layout, units, geometry)
     if not records:
         _refuse_record_options(modal, refine)
@@ -1238,6 +1239,18 @@ def _identify_test(
     if resample:
         result = _resampled(result, data, records, modal, resample, len(modes.labels))
     return TestRun(result, estimate, None if streamed else data.records, summed)
+
+
+def _refuse_sensors_with_chain(layout: PathLike, estimate_sensors: bool, estimate_delays: bool) -> None:
+    """``--estimate-sensors`` with a stated chain or ``--estimate-delays``: refused before any work (the
+    sensors' signatures are the plain model's, :func:`rigidid.core.timedomain.refine.refine_prepared`)."""
+    if not estimate_sensors:
+        return
+    chain = chain_model(load_layout(layout)) if Path(layout).suffix.lower() == ".json" else None
+    if estimate_delays or (chain is not None and not chain.identity):
+        raise InputError(
+            "the sensors' errors are not estimated with a modelled chain or fitted delays", source="estimate_sensors"
+        )
 
 
 def _refit_test(

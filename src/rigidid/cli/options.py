@@ -313,6 +313,8 @@ FLAGS = {
     "mass": "--mass",
     "pretrigger": "--pretrigger",
     "force": "--force",
+    "estimate_sensors": "--estimate-sensors",
+    "estimate_delays": "--estimate-delays",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
