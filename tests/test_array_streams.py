@@ -219,7 +219,7 @@ def test_bad_mat_is_one_line_naming_file_and_field(tmp_path: Path, name: str, fa
 def test_bad_mat_record_exits_2_with_one_line(tmp_path: Path) -> None:
     from rigidid import api
 
-    from .test_cli import run
+    from .cli_runner import run
     from .test_record_formats import ENGINE
 
     ids = [s.id for s in api.load_layout(ENGINE / "layout.json").sensors]

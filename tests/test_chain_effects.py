@@ -11,8 +11,8 @@ import pytest
 from rigidid.core.timedomain.preprocess import find_impact, last_hit
 from rigidid.core.timedomain.trend import fit_trend, remove_trend, trend_matters
 
+from .cli_runner import run
 from .conftest import SAMPLES
-from .test_cli import run
 
 FOUR = SAMPLES / "four-mounts"
 RATE = 512.0

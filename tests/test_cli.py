@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -11,16 +10,11 @@ import pytest
 
 from rigidid.models import ResultFile
 
-from . import cli_runner
+from .cli_runner import run
 from .conftest import DATA, PAPER, SAMPLES
 from .tolerances import CSV_DIGITS_REL, MOUNT_RATES_CSV_REL
 
 ENGINE = SAMPLES / "engine-on-mounts"
-
-
-def run(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
-    return cli_runner.run(*args, cwd=cwd)
 
 
 def test_identify_prints_tables() -> None:

@@ -9,8 +9,8 @@ import numpy as np
 
 from rigidid.models import ResultFile
 
+from .cli_runner import run
 from .conftest import SAMPLES
-from .test_cli import run
 from .tolerances import MOUNT_RATES_CSV_REL
 
 CASE = SAMPLES / "four-mounts"

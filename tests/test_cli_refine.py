@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from .cli_runner import run
 from .conftest import SAMPLES
-from .test_cli import run
 from .tolerances import STREAMED_DECAY_ATOL, STREAMED_REFIT_REL, STREAMED_REFIT_STD_REL
 
 FOUR = SAMPLES / "four-mounts"

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from .cli_runner import run
 from .conftest import PAPER, SAMPLES
-from .test_cli import run
 
 ENGINE = SAMPLES / "engine-on-mounts"
 

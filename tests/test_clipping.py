@@ -12,8 +12,8 @@ from rigidid import api
 from rigidid.core.timedomain.clipping import PeakCount, clipped_channels
 from rigidid.errors import ClippedChannelWarning
 
+from .cli_runner import run
 from .conftest import SAMPLES
-from .test_cli import run
 
 FOUR = SAMPLES / "four-mounts"
 

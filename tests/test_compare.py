@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -19,16 +18,11 @@ from rigidid.compare_render import comparison_junit
 from rigidid.errors import InputError
 from rigidid.jsonout import result_to_dict
 
-from . import cli_runner
+from .cli_runner import run
 from .conftest import SAMPLES
 
 ENGINE = SAMPLES / "engine-on-mounts"
 FOUR = SAMPLES / "four-mounts"
-
-
-def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
-    return cli_runner.run(*args)
 
 
 @pytest.fixture(scope="module")

@@ -15,8 +15,8 @@ from rigidid.core.timedomain import impulse_records
 from rigidid.errors import ElasticModeWarning, IdentificationError
 from rigidid.io.files import layout_arrays, load_body
 
+from .cli_runner import run
 from .conftest import SAMPLES
-from .test_cli import run
 from .tolerances import ELASTIC_MODE_CG_SPAN
 
 LAYOUT = SAMPLES / "four-mounts" / "layout.json"

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from .cli_runner import run
 from .core.test_force import AXES, CG, DRIVE, DRIVE_DIR, INERTIA, MASS, RATE, SENSORS, _records
-from .test_cli import run
 
 
 def _write(folder: Path, force_block: bool = True, noise: float = 0.0) -> list[Path]:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -14,16 +13,11 @@ from rigidid.api import frf as api_frf
 from rigidid.errors import InputError
 from rigidid.io.frf import frf_csv_text, load_frf_csv, load_frf_uff, load_references, reference_arrays
 
-from . import cli_runner
+from .cli_runner import run as run_here
 from .conftest import DATA, SAMPLES
 
 FOUR = SAMPLES / "four-mounts"
 REFS = DATA / "frf" / "references.json"
-
-
-def run_here(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
-    return cli_runner.run(*args)
 
 
 def test_frf_csv_round_trip_is_exact(tmp_path: Path) -> None:

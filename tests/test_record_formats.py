@@ -114,7 +114,7 @@ def test_convert_writes_npz_and_wav_records_that_modes_reads(tmp_path: Path) -> 
 
     from rigidid.io.uff import write_uff_test
 
-    from .test_cli import run
+    from .cli_runner import run
     from .test_cli_workflows import PAPER, PAPER_BODY
 
     body = tmp_path / "body.json"

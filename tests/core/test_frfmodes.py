@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +15,8 @@ from rigidid.core.simulate import body_modes, system_matrices
 from rigidid.errors import InputError
 from rigidid.io.files import load_modes
 
-from .. import cli_runner
 from ..bodies import corner_references, frf_test_on_mounts, random_body, random_layout
+from ..cli_runner import run
 from ..conftest import DATA, SAMPLES
 from ..tolerances import FRF_EQ18_STRUCTURED, SCALED_MODES_CSV
 
@@ -119,11 +118,6 @@ def test_lsfd_with_residual_terms_and_bad_poles() -> None:
     assert np.linalg.matrix_rank(np.linalg.lstsq(t, res[0], rcond=None)[0], tol=1e-6 * np.abs(res[0]).max()) == 1
     with pytest.raises(InputError, match="positive imaginary"):
         residues_lsfd(f, h, np.conj(poles))
-
-
-def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    """``rigidid ARGS`` (in this process: see :mod:`tests.cli_runner`)."""
-    return cli_runner.run(*args)
 
 
 def test_modes_from_frfs_on_the_command_line_feed_identify(tmp_path: Path) -> None:
