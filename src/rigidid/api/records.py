@@ -1186,7 +1186,6 @@ def _identify_test(
     modal = modal or ModalOptions()
     method = identify_options.get("method", "structured")
     src = input_source(layout, inputs)
-    _refuse_sensors_with_chain(layout, estimate_sensors, estimate_delays)
     check_uff_options(layout, units, geometry)
     if not records:
         _refuse_record_options(modal, refine)
@@ -1198,6 +1197,7 @@ def _identify_test(
         else load_test(layout, inputs or [], records=records, units=units, geometry=geometry)
     )
     _check_segments(data, resample)  # before any estimation: blame the option, not the records
+    _refuse_sensors_with_chain(data.layout, estimate_sensors, estimate_delays)
     force, data, mass_given = _force_setup(force, data, records, streamed, identify_options, inputs or [])
     paths = list(inputs or []) if streamed else None
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
@@ -1241,12 +1241,12 @@ def _identify_test(
     return TestRun(result, estimate, None if streamed else data.records, summed)
 
 
-def _refuse_sensors_with_chain(layout: PathLike, estimate_sensors: bool, estimate_delays: bool) -> None:
-    """``--estimate-sensors`` with a stated chain or ``--estimate-delays``: refused before any work (the
+def _refuse_sensors_with_chain(layout: LayoutFile, estimate_sensors: bool, estimate_delays: bool) -> None:
+    """``--estimate-sensors`` with a stated chain or ``--estimate-delays``: refused before any estimation (the
     sensors' signatures are the plain model's, :func:`rigidid.core.timedomain.refine.refine_prepared`)."""
     if not estimate_sensors:
         return
-    chain = chain_model(load_layout(layout)) if Path(layout).suffix.lower() == ".json" else None
+    chain = chain_model(layout)
     if estimate_delays or (chain is not None and not chain.identity):
         raise InputError(
             "the sensors' errors are not estimated with a modelled chain or fitted delays", source="estimate_sensors"
