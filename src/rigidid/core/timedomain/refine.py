@@ -1198,8 +1198,9 @@ def refine_prepared(
             (theta, std, misfit), (data, pos_l, dirs, omega, frame), (jm, r, grad), sensor_bounds, estimate_sensors,
             lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
         )  # fmt: skip
-        g, j, k, c = frame.physical(theta)
-        lam, *_ = _modes(theta, pos_l, dirs, False)
+        if correction is not None:  # the body moved with the sensors' correction
+            g, j, k, c = frame.physical(theta)
+            lam, *_ = _modes(theta, pos_l, dirs, False)
     elif estimate_sensors:
         raise InputError(
             "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
