@@ -10,11 +10,13 @@ EXACT_REL = 1e-11
 memory). Observed: passes at 1e-12, fails at 1e-13 (tests/core/test_identify.py,
 test_statespace.py)."""
 
-INVARIANCE_REL = 5e-11
+INVARIANCE_REL = 2e-10
 """Change of any result, relative to its largest entry, under a change of origin, axes,
 sensor order or mode scaling (hypothesis, noisy and exact data). Observed: about 3e-12
-over 12 hypothesis seeds, and 1.4e-11 on one example hypothesis shrank to (mode scaling
-2^-8; tests/test_properties.py)."""
+over 12 hypothesis seeds, 1.4e-11 on one example hypothesis shrank to (mode scaling
+2^-8), 1.7e-11 at worst over 300 random draws of the sensor-order test, and 5.7e-11 on
+the damping of the one hypothesis found in a fresh clone (seed 125027, exact data, modes
+scaled by up to 786; tests/test_properties.py): round-off, which the earlier 5e-11 pinned."""
 
 CSV_DIGITS_REL = 3e-9
 """Relative error of a body recovered after its modes went through modes.csv, written
