@@ -13,11 +13,12 @@ Figures
     over the responses, and each route's model of them (the mass line
     ``T M^-1 T_f^T``, the free rigid body of eq. (19) of [1] seen through the
     sensor transformation of eq. (3); the rigid body on its supports
-    ``-w^2 T (K + i w C - w^2 M)^-1 T_f^T`` for the scaled modes), the bands the
-    routes used shaded.
+    ``-w^2 T (K + i w C - w^2 M)^-1 T_f^T`` for the scaled modes and for the
+    mass line's exact support fit), the bands the routes used shaded.
 ``massline``
     The measured accelerances over the mass line, per reference: 1 where the body
-    moves as a free rigid mass, so the plateau shows where the mass line holds.
+    moves as a free rigid mass, so the plateau shows where the mass line holds;
+    with a route's fitted supports (``K``, ``C``), its model over the same line.
 ``stabilisation``
     Route residues without a modes file: the poles of the pLSCF sweep per order
     over the summed FRF power.
@@ -186,13 +187,24 @@ def rigid_model(data: MeasuredFrfs, mass_matrix: Array, stiffness: Array, dampin
 
 
 def _route_model(route: MassLineResult, data: MeasuredFrfs) -> CArray:
-    """The model a route fitted, on every line: the rigid body on supports (scaled modes) or the mass line."""
+    """The model a route fitted, on every line: the rigid body on supports (scaled modes, or the mass line's exact
+    support fit) or the mass line."""
+    ml = route.massline
     if route.scaled is not None:
         s = route.scaled
         return rigid_model(data, s.mass_matrix, s.stiffness_matrix, s.damping_matrix, s.center_of_gravity)
-    ml = route.massline
+    if ml.support_matrices is not None:
+        mass_matrix = np.zeros((6, 6))
+        mass_matrix[:3, :3] = ml.mass * np.eye(3)
+        mass_matrix[3:, 3:] = ml.inertia_tensor
+        return rigid_model(data, mass_matrix, *ml.support_matrices, ml.center_of_gravity)
     level = mass_line_model(data, ml.mass, ml.center_of_gravity, ml.inertia_tensor)
     return np.repeat(level[:, :, None].astype(complex), data.frequencies.size, axis=2)
+
+
+def _on_supports(route: MassLineResult) -> bool:
+    """Whether the route fitted the supports' stiffness and damping (scaled modes, or the exact support fit)."""
+    return route.scaled is not None or route.massline.support_matrices is not None
 
 
 def _frf_figure(
@@ -208,7 +220,7 @@ def _frf_figure(
         for route, model in zip(routes, models, strict=True):
             colour = _ROUTE_COLOURS.get(route.route, "#7d3c98")
             name = _ROUTE_NAMES.get(route.route, route.route)
-            kind = "mass line" if route.scaled is None else "rigid body on supports"
+            kind = "rigid body on supports" if _on_supports(route) else "mass line"
             ax.semilogy(f, np.abs(model[:, j, :]).sum(axis=0), "--", color=colour, lw=1.2, label=f"{name}: {kind}")
             lo, hi = route.massline.band
             ax.axvspan(lo, hi, color=colour, alpha=0.08, lw=0, label=f"{name}: band")
@@ -221,13 +233,14 @@ def _frf_figure(
     return fig
 
 
-def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult]) -> Figure:
-    """Measured accelerance over each route's mass line (summed over responses), per reference: 1 on the plateau."""
+def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult], models: Sequence[CArray]) -> Figure:
+    """Measured accelerance over each route's mass line (summed over responses), per reference: 1 on the plateau;
+    with a route's fitted supports, its model over the same mass line (thin black): where the supports lift it."""
     fig = new_figure(11.0, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     f = data.frequencies
     styles = ("-", "--", ":", "-.")
-    for route in routes:
+    for route, model in zip(routes, models, strict=True):
         ml = route.massline
         level = np.abs(mass_line_model(data, ml.mass, ml.center_of_gravity, ml.inertia_tensor)).sum(axis=0)
         colour = _ROUTE_COLOURS.get(route.route, "#7d3c98")
@@ -235,6 +248,11 @@ def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult]) -> Fi
         for j, ref in enumerate(data.reference_ids):
             ratio = np.abs(data.frf[:, j, :]).sum(axis=0) / level[j]
             ax.plot(f, ratio, styles[j % len(styles)], color=colour, lw=1.0, label=f"{name}, reference {ref}")
+        if _on_supports(route):
+            fitted = np.abs(model).sum(axis=0) / level[:, None]
+            for j in range(len(data.reference_ids)):
+                label = f"{name}: fitted on its supports (K, C)" if j == 0 else None
+                ax.plot(f, fitted[j], styles[j % len(styles)], color="#222222", lw=0.7, label=label)
         ax.axvspan(*ml.band, color=colour, alpha=0.08, lw=0)
     ax.axhline(1.0, color="#555555", lw=0.8)
     ax.set_yscale("log")
@@ -257,7 +275,7 @@ def frf_figures(
     step("drawing the report's figures", 0, 3)
     figures["frf"] = _frf_figure(data, routes, models, mass_unit)
     step("drawing the report's figures", 1, 3)
-    figures["massline"] = _massline_figure(data, routes)
+    figures["massline"] = _massline_figure(data, routes, models)
     if fitted is not None:
         entries = check_stabilisation(fitted.diagram)
         power = (np.abs(data.frf) ** 2).sum(axis=(0, 1))

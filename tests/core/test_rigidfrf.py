@@ -51,6 +51,14 @@ def test_bodies_on_soft_supports_near_the_band_are_exact():
     assert abs(r.mass / body.mass - 1.0) < RIGIDFRF_EXACT_REL
     np.testing.assert_allclose(r.center_of_gravity, body.center_of_gravity, atol=RIGIDFRF_EXACT_REL)
     np.testing.assert_allclose(r.inertia_tensor, body.inertia_tensor, atol=RIGIDFRF_EXACT_REL * 3.0)
+    # the fitted supports about the CG in layout units (what the report draws): the body on them is the FRFs
+    k_cg, c_cg = r.support_matrices
+    m_cg = np.zeros((6, 6))
+    m_cg[:3, :3], m_cg[3:, 3:] = r.mass * np.eye(3), r.inertia_tensor
+    t, tf = (sensor_matrix(p - r.center_of_gravity, d) for p, d in ((pos, dirs), (rpos, rdirs)))
+    w = 2 * np.pi * f
+    model = np.stack([-(wk**2) * t @ np.linalg.solve(k_cg + 1j * wk * c_cg - wk**2 * m_cg, tf.T) for wk in w], axis=2)
+    assert np.abs(model - h).max() < RIGIDFRF_EXACT_REL * np.abs(h).max()
 
 
 def _scaled(body, pos, dirs, rpos, rdirs, f, **kw):

@@ -372,6 +372,27 @@ def identify_frf_auto(
 ) -> MassLineResult:  # fmt: skip
     """Every FRF route the data allow, run; one chosen; a warning when two disagree beyond their intervals.
 
+    As :func:`frf_auto_routes`, the chosen route's answer alone.
+
+    Parameters
+    ----------
+    lay, refs, data, mass, band
+        As :func:`frf_auto_routes`.
+
+    Returns
+    -------
+    MassLineResult
+        The chosen route's answer; ``routes`` lists every route tried.
+    """
+    return frf_auto_routes(lay, refs, data, mass=mass, band=band)[0]
+
+
+def frf_auto_routes(
+    lay: LayoutFile, refs: ReferencesFile, data: FrfData, *, mass: float | None = None,
+    band: tuple[float, float] | None = None,
+) -> list[MassLineResult]:  # fmt: skip
+    """Every FRF route the data allow, run; one chosen; a warning when two disagree beyond their intervals.
+
     The residues route applies when six stable rigid-body modes are found in
     the band (:func:`rigidid.core.frfmodes.fit_frf_modes`); the mass line when
     a band above the rigid-body peaks and below the elastic ones is found
@@ -390,9 +411,10 @@ def identify_frf_auto(
 
     Returns
     -------
-    MassLineResult
-        The chosen route's answer; ``routes`` lists every route tried. The
-        choice: among routes whose misfit the noise explains (at most 1.5
+    list of MassLineResult
+        The chosen route's answer first (``routes`` lists every route tried),
+        then each other route that ran, in the order tried (the report draws
+        them without running them again). The choice: among routes whose misfit the noise explains (at most 1.5
         noise units) and that raised no warning of their own (clean
         diagnostics), the one with the narrowest 95 % mass interval (a route
         without intervals last); the reason is in ``reason``.
@@ -443,7 +465,7 @@ def identify_frf_auto(
         warnings.warn(w.message, w.category, stacklevel=2)
     _disagreement({k: v[0] for k, v in ran.items()}, flags)
     reason = f"method auto: {chosen} chosen ({why}); {result.reason}"
-    return MassLineResult(
+    first = MassLineResult(
         result.massline,
         result.units,
         result.mass_given,
@@ -453,6 +475,7 @@ def identify_frf_auto(
         tuple(answers),
         result.fitted,
     )
+    return [first, *(v[0] for k, v in ran.items() if k != chosen)]
 
 
 def _applies_because(result: MassLineResult) -> str:

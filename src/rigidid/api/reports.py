@@ -252,16 +252,21 @@ def _frf_routes(
     import dataclasses
     import warnings
 
-    from rigidid.api.frf import identify_frf_auto, identify_frf_route
+    from rigidid.api.frf import frf_auto_routes, identify_frf_route
     from rigidid.errors import IdentificationError
     from rigidid.results import RouteAnswer
 
+    ran: dict[str, Any] = {}  # routes auto already ran: reused, not run again
+
     def run(name: str) -> Any:
+        if name in ran:
+            return ran[name]
         modes = given["modes"] if name == "residues" else None
         return identify_frf_route(lay, refs, test, method=name, **{**given, "modes": modes})
 
     if method == "auto" and given["modes"] is None:
-        chosen = identify_frf_auto(lay, refs, test, mass=given["mass"], band=given["band"])
+        chosen, *others = frf_auto_routes(lay, refs, test, mass=given["mass"], band=given["band"])
+        ran.update((r.route, r) for r in others)
     else:
         chosen = run("residues" if method == "auto" else method)
     answers = list(chosen.routes) or [RouteAnswer(chosen.route, True, "asked for", chosen.massline)]

@@ -84,6 +84,10 @@ class MassLine:
         Where the misfit is largest (e.g. ``"response 3, reference 1"``), for messages.
     peak_shortfall : rigidid.core.frfmodes.PeakShortfall or None
         How far the FRFs fall short of the fit at the resonance peaks (residues only).
+    support_matrices : (ndarray, ndarray) or None
+        With `supports` ``"exact"``: the fitted stiffness and damping ``(K, C)``, each
+        (6, 6) about the CG (DOF x, y, z, rx, ry, rz; force / length, force s / length,
+        rotations in rad; angular frequency), as far as the band determines them.
     """
 
     mass: float
@@ -100,6 +104,7 @@ class MassLine:
     misfit_noise_units: float | None = None
     misfit_where: str = ""
     peak_shortfall: PeakShortfall | None = None
+    support_matrices: tuple[Array, Array] | None = None
 
 
 def peak_notice(result: MassLine, route: str) -> Notice | None:
@@ -331,10 +336,12 @@ def mass_line(
             support_model, why = _auto_supports(fit, residual, noise)
     units, where = _first_order_misfit(fitted - target, design.shape[1], q)
     intervals = None
+    supports_kc = None
     if support_model == "exact" and fit is not None:
         m, cg, inertia = _body_from_parameters(fit.parameters, origin, span)
         units, where, intervals = _exact_verdict(fit, origin, span)
         residual = fit.residual
+        supports_kc = _supports_at_cg(fit, cg - origin, span)
     else:
         m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
         intervals = _first_order_intervals(design, fitted - target, y0, tf, origin, span)
@@ -352,6 +359,7 @@ def mass_line(
         intervals=intervals,
         misfit_noise_units=units,
         misfit_where=where,
+        support_matrices=supports_kc,
     )
 
 
@@ -598,6 +606,20 @@ def _body_from_parameters(theta: Array, origin: Array, span: float) -> tuple[flo
     j_o = mass_matrix_from_parameters(theta)[3:, 3:]
     inertia = span**2 * (j_o + m * skew(c_scaled) @ skew(c_scaled))
     return m, origin + span * c_scaled, 0.5 * (inertia + inertia.T)
+
+
+def _supports_at_cg(fit: RigidFrfFit, cg_offset: Array, span: float) -> tuple[Array, Array]:
+    """The exact fit's ``K`` and ``C`` about the CG in layout lengths, from the scaled frame.
+
+    The scaled coordinates are ``(x_o, span theta)`` at the sensor centroid ``o``, so ``K_o = S K_s S``
+    with ``S = diag(1, 1, 1, span, span, span)``; about the CG ``x_o = x_cg - [o - cg]x theta``, so
+    ``K_cg = A^T K_o A`` with ``A = [[I, [cg - o]x], [0, I]]`` (eq. (2) of [1]; the same for ``C``).
+    """
+    s = np.diag([1.0, 1.0, 1.0, span, span, span])
+    a = np.eye(6)
+    a[:3, 3:] = skew(cg_offset)
+    k, c = (a.T @ s @ mat @ s @ a for mat in (fit.stiffness, fit.damping))
+    return 0.5 * (k + k.T), 0.5 * (c + c.T)
 
 
 RESIDUES_BAND_RATIO = 1.2
