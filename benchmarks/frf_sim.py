@@ -101,11 +101,13 @@ def make_rig(
     n_sensors: int = 8,
     n_refs: int = 3,
     free: bool = False,
+    mass_scale: float = 1.0,
+    size_scale: float = 1.0,
 ) -> Rig:
-    """A random box-like body (5-100 kg, about 1 m) on four mounts below it."""
-    mass = float(rng.uniform(5.0, 100.0))
-    cg = rng.uniform(-0.2, 0.2, 3)
-    half = np.array([0.6, 0.4, 0.25]) * rng.uniform(0.8, 1.2, 3)
+    """A random box-like body (5-100 kg, about 1 m; times `mass_scale` and `size_scale`) on four mounts below it."""
+    mass = float(rng.uniform(5.0, 100.0)) * mass_scale
+    cg = rng.uniform(-0.2, 0.2, 3) * size_scale
+    half = np.array([0.6, 0.4, 0.25]) * rng.uniform(0.8, 1.2, 3) * size_scale
     mom = mass / 3.0 * np.array([half[1] ** 2 + half[2] ** 2, half[0] ** 2 + half[2] ** 2, half[0] ** 2 + half[1] ** 2])
     r, _ = np.linalg.qr(rng.standard_normal((3, 3)) * 0.2 + np.eye(3))
     inertia = r @ np.diag(mom) @ r.T
@@ -117,7 +119,7 @@ def make_rig(
         kk = kk * 1e-4
     box = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half + cg
     sel = rng.permutation(8)[:n_sensors] if n_sensors <= 8 else np.arange(n_sensors) % 8
-    sensors = box[sel] + rng.uniform(-0.05, 0.05, (n_sensors, 3))
+    sensors = box[sel] + rng.uniform(-0.05, 0.05, (n_sensors, 3)) * size_scale
     sd = np.eye(3)[np.arange(n_sensors) % 3]
     sd = sd + rng.uniform(-0.2, 0.2, sd.shape)
     sd /= np.linalg.norm(sd, axis=1, keepdims=True)
