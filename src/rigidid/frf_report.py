@@ -235,7 +235,8 @@ def _frf_figure(
 
 def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult], models: Sequence[CArray]) -> Figure:
     """Measured accelerance over each route's mass line (summed over responses), per reference: 1 on the plateau;
-    with a route's fitted supports, its model over the same mass line (thin black): where the supports lift it."""
+    with a route's fitted supports, its model over the same mass line (broad grey, under the measured lines): where
+    the supports lift it."""
     fig = new_figure(11.0, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     f = data.frequencies
@@ -252,7 +253,8 @@ def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult], model
             fitted = np.abs(model).sum(axis=0) / level[:, None]
             for j in range(len(data.reference_ids)):
                 label = f"{name}: fitted on its supports (K, C)" if j == 0 else None
-                ax.plot(f, fitted[j], styles[j % len(styles)], color="#222222", lw=0.7, label=label)
+                ax.plot(f, fitted[j], styles[j % len(styles)], color="#222222", lw=2.4, alpha=0.25, zorder=1,
+                        label=label)  # fmt: skip
         ax.axvspan(*ml.band, color=colour, alpha=0.08, lw=0)
     ax.axhline(1.0, color="#555555", lw=0.8)
     ax.set_yscale("log")
