@@ -1,7 +1,7 @@
 """The FRF routes with their defaults across the regimes labs meet (issue 21).
 
 Run: ``OPENBLAS_NUM_THREADS=1 PYTHONPATH=src .venv/bin/python benchmarks/frf_regimes.py
-[--seeds 3] [--cells NAME,NAME] [--routes residues,massline,auto] [--coverage N]``
+[--seeds 3] [--cells NAME,NAME] [--routes residues,massline,auto] [--coverage N] [--h1-cost]``
 
 Route ``auto`` is ``identify --frf`` with its defaults (``--method auto``: every route the data
 allow, one chosen, a FrfRoutesDisagreeWarning counted as a warning). Per cell, the RMS errors of
@@ -26,6 +26,8 @@ inertia (largest element over trace/3). The oracle: the residues fitted with the
 ending at half an elastic mode inside it); free-free with every rigid mode below a third of the band's
 start (free_above): the mass line up to half the first elastic mode, with its true frequency.
 ``--coverage N``: coverage of the 95 % intervals over N draws on the default cell.
+``--h1-cost`` (with ``--cells h1_bias2%,h1_bias5% --seeds 8``): the H1-biased cells' RMS errors against the
+oracle on the same biased FRFs and on the same draw without the bias (what the bias costs).
 """
 
 from __future__ import annotations
@@ -223,13 +225,44 @@ def auto(rig: Rig, f: np.ndarray, h: np.ndarray) -> MassLine:
     return identify_frf_auto(lay, refs, data).massline
 
 
+def h1_cost(cells: list[str], seeds: int) -> None:
+    """What an H1 bias costs: ``auto`` against the oracle on the same biased FRFs and on the same draw unbiased."""
+    for name in cells:
+        errs: dict[str, list[tuple[float, float, float]]] = {"auto": [], "oracle": [], "oracle on unbiased": []}
+        zs = []
+        for seed in range(seeds):
+            rig, f, h = draw(CELLS[name], seed)
+            clean = draw({**CELLS[name], "h1": 0.0}, seed)[2]  # the same noise draw, without the bias
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                fits = {"auto": auto(rig, f, h), "oracle": oracle(rig, f, h)}
+                fits["oracle on unbiased"] = oracle(rig, f, clean)
+            for key, ml in fits.items():
+                errs[key].append(truth_errors(rig, ml.mass, ml.center_of_gravity, ml.inertia_tensor))
+            a = fits["auto"]
+            if a.intervals is not None:
+                zs.append(abs(a.mass - rig.mass) / float(a.intervals.mass.std))
+        rms = {k: np.sqrt(np.mean(np.square(v), axis=0)) for k, v in errs.items()}
+        print(
+            f"{name}: RMS over {seeds} seeds (mass, cg, inertia) auto {np.round(rms['auto'], 4)}; auto over the oracle "
+            f"on the same FRFs {np.round(rms['auto'] / rms['oracle'], 2)}, over the oracle on unbiased FRFs "
+            f"{np.round(rms['auto'] / rms['oracle on unbiased'], 2)}; auto's mass |z| median "
+            f"{np.median(zs):.2f}, largest {max(zs):.2f}",
+            flush=True,
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--cells", default=",".join(CELLS))
     ap.add_argument("--routes", default="residues,massline")
     ap.add_argument("--coverage", type=int, default=0)
+    ap.add_argument("--h1-cost", action="store_true", help="auto on H1-biased FRFs against the oracle on unbiased ones")
     a = ap.parse_args()
+    if a.h1_cost:
+        h1_cost([c for c in a.cells.split(",") if CELLS[c].get("h1")], a.seeds)
+        return
     which = a.routes.split(",")
     total = {"finished": 0, "warned": 0, "refused": 0, "silent": 0}
     for name in a.cells.split(","):
