@@ -193,7 +193,7 @@ def test_candidate_grid() -> None:
 def test_greedy_addition_reduces_predicted_uncertainty() -> None:
     positions, directions = good_layout()
     start_p, start_d = positions[:6], directions[:6]
-    plan = suggest_sensors(body(), start_p, start_d, candidates=positions[6:], add=2, noise=NOISE, draws=150)
+    plan = suggest_sensors(body(), start_p, start_d, candidates=positions[6:], add=2, noise=NOISE, draws=100)
     assert len(plan.steps) == 2
     assert plan.candidate_positions.shape == (18, 3)  # six positions x three axes
     first, second = plan.steps
