@@ -14,16 +14,16 @@
    the Monte Carlo's own relative error ``1 / sqrt(2 (draws - 1))``, and the share of tests the
    F test flags.
 
-Measured (main fe3e9eb + this change, 2 busy cores):
+Measured (fe3e9eb + issue 20's change, 2 busy cores, ``--mount-draws 200``):
 
 - suggestions: the same two sensors, with bit-identical figures, on all four cases (engine-test
   with cad-estimate.json and with body.json, engine-on-mounts, four-mounts); the Monte Carlo's
   choice has first-order rank 0-7 (short list 12); the five best agree in 6 of 8 steps (in the
   other two the 4th-5th entries have first-order ranks 12-19 and are replaced by the next best
-  of the short list). CPU: 2.6-3.2 s per case against 7-8 s.
-- mounts, engine-test (cad-estimate.json, mounts.json), 200 draws: first order / Monte Carlo
-  0.97-1.05 for the CG, 0.90-1.14 for the inertia diagonal (Monte Carlo error 5 %); flagged 0.010
-  against 0.010.
+  of the short list). CPU: 2.8-3.2 s per case against 9.2-9.8 s.
+- mounts, engine-test (cad-estimate.json, mounts.json), 200 refits (32 CPU s; first order 0.8):
+  first order / Monte Carlo 1.03, 0.97, 1.05 for the CG, 0.98, 0.90, 1.14 for the inertia
+  diagonal, 0.98-1.03 off it (the Monte Carlo's error 5 %); flagged 0.010 against 0.010.
 """
 
 from __future__ import annotations
@@ -64,6 +64,20 @@ def _suggest(body: object, pos: np.ndarray, dirs: np.ndarray, shortlist: int) ->
     return result, time.process_time() - start
 
 
+def _first_order_ranking(body: object, pos: np.ndarray, dirs: np.ndarray, chosen: list[int]) -> list[int]:
+    """Every remaining candidate of the default grid, best first by the first-order score."""
+    from rigidid.core.simulate import body_modes
+
+    c_pos = np.repeat(plan_module.candidate_grid(pos), 3, axis=0)
+    c_dir = np.tile(np.eye(3), (c_pos.shape[0] // 3, 1))
+    modes = body_modes(body, np.vstack([pos, c_pos]), np.vstack([dirs, c_dir]))  # type: ignore[arg-type]
+    p = pos.shape[0]
+    remaining = np.array([c for c in range(c_pos.shape[0]) if c not in chosen], dtype=np.intp)
+    lay = plan_module._layouts((pos, dirs, modes.shapes[:p]), (c_pos, c_dir, modes.shapes[p:]), chosen, remaining)
+    rough = plan_module._first_order_scores(body, *lay, modes.poles, DEFAULT_NOISE, 0.3)  # type: ignore[arg-type]
+    return [int(remaining[i]) for i in np.argsort(rough, kind="stable")]
+
+
 def suggestions() -> None:
     default = plan_module.SHORTLIST
     print(f"plan --add 2: short list of {default} against the Monte Carlo of every candidate")
@@ -73,10 +87,11 @@ def suggestions() -> None:
         _, pos, dirs, body = _load(case, body_file)
         short, t_short = _suggest(body, pos, dirs, default)
         full, t_full = _suggest(body, pos, dirs, 10**6)
-        first, _ = _suggest(body, pos, dirs, 1)  # the whole first-order ranking (one candidate judged)
-        for a, b, c in zip(short.steps, full.steps, first.steps, strict=True):  # type: ignore[attr-defined]
-            rank = [cand for cand, _ in c.ranking]
+        chosen: list[int] = []
+        for a, b in zip(short.steps, full.steps, strict=True):  # type: ignore[attr-defined]
+            rank = _first_order_ranking(body, pos, dirs, chosen)
             ranks = [rank.index(cand) for cand, _ in b.ranking[:5]]
+            chosen.append(b.candidate)
             print(f"| {case} {body_file} | {a.step} | {a.candidate} / {b.candidate} | "
                   f"{a.figures.score == b.figures.score} | {ranks} | {a.ranking[:5] == b.ranking[:5]} |")  # fmt: skip
         print(f"|   CPU s: short list {t_short:.2f}, every candidate {t_full:.2f} | | | | | |")
