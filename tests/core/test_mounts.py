@@ -255,12 +255,14 @@ def test_first_order_mount_prediction_is_the_spread_of_noisy_refits_and_flags_a_
     ``predict_mount_model``) and the share of tests the F test flags: its level with the right mounts, all
     of them with a hose the mounts omit."""
     from rigidid.core.mounts import ADEQUATE_P, predict_mount_model, predict_mount_model_linearised
-    from rigidid.core.noise import DEFAULT_NOISE
+    from rigidid.core.noise import DEFAULT_NOISE, NoiseLevels
 
     body, where, axes, _ = _body(3)
     pos, dirs = _sensors()
     first = predict_mount_model_linearised(body, pos, dirs, where, axes, noise=DEFAULT_NOISE)
     assert first.draws == 0 and first.flagged == pytest.approx(ADEQUATE_P)
+    exact = predict_mount_model_linearised(body, pos, dirs, where, axes, noise=NoiseLevels())
+    assert exact.flagged == 0.0 and not np.any(exact.center_of_gravity_std) and not np.any(exact.inertia_std)
     draws = 8
     mc = predict_mount_model(body, pos, dirs, where, axes, noise=DEFAULT_NOISE, draws=draws, seed=1)
     ratio = np.concatenate([mc.center_of_gravity_std / first.center_of_gravity_std,

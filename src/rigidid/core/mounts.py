@@ -1208,12 +1208,15 @@ def predict_mount_model_linearised(
     non-centrality of the F test's numerator (zero when the mounts describe the
     body's supports), so the share flagged is that of a non-central F (chi-square
     when the shape noise is below :data:`SHAPE_NOISE_FLOOR`) beyond the critical
-    value at :data:`ADEQUATE_P`.
+    value at :data:`ADEQUATE_P`. Without frequency, damping and shape noise every
+    test is the exact one: no spread, none flagged.
     """
     from rigidid.core.simulate import body_modes
 
     if modes not in (5, 6):
         raise InputError(f"need modes 5 or 6, got {modes}", source="modes")
+    if not (noise.frequency or noise.damping or noise.shape):  # every test is the exact one, which passes
+        return MountModelPrediction(np.zeros(3), np.zeros((3, 3)), 0.0, 0)
     exact = body_modes(body, positions, directions)
     fit = fit_mount_model(
         positions, directions, exact.poles[:modes], exact.shapes[:, :modes], mount_positions, mount_axes,
