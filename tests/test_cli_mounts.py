@@ -93,11 +93,11 @@ def test_report_draws_identified_mounts_and_the_torque_roll_axis(tmp_path: Path)
 
 
 def test_plan_predicts_the_mount_model_with_a_body_estimate() -> None:
-    """With --body and --mounts: the mount model's precision by Monte Carlo, finer than the free route's."""
+    """With --body and --mounts: the mount model's precision to first order, finer than the free route's."""
     from rigidid import api
 
     plan = api.plan(CASE / "layout.json", body=CASE / "body.json", mounts=CASE / "mounts.json", draws=6, seed=3)
     assert plan.prediction is not None and plan.mount_prediction is not None
-    assert plan.mount_prediction.draws == 6
+    assert plan.mount_prediction.draws == 0
     mounts_cg = np.linalg.norm(plan.mount_prediction.center_of_gravity_std)
     assert 0.0 < mounts_cg < np.linalg.norm(plan.prediction.center_of_gravity_std)

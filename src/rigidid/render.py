@@ -498,7 +498,7 @@ def plan_tables(plan: PlanResult) -> Group:
     if plan.mount_prediction is not None:
         mp = plan.mount_prediction
         summary.add_row(
-            f"mount model: predicted std ({mp.draws} draws)",
+            f"mount model: predicted std ({f'{mp.draws} draws' if mp.draws else 'first order'})",
             f"CG {', '.join(_fmt(float(v)) for v in mp.center_of_gravity_std)} {length}; inertia diagonal "
             f"{', '.join(_fmt(float(v)) for v in np.diag(mp.inertia_std))} {mass}·{length}^2",
         )

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import warnings
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -24,8 +23,6 @@ from rigidid.jsonout import uncertainty_to_dict
 from ..bodies import random_body, random_layout
 from ..tolerances import (
     BATCH_REL,
-    COVERAGE_MAX,
-    COVERAGE_MIN,
     NOISE_ESTIMATE_REL,
     SPREAD_SCALING_REL,
     ZERO_SPREAD_REL,
@@ -284,35 +281,29 @@ def _simulated_test(rng: np.random.Generator, noise: NoiseLevels) -> tuple[Body,
     return body, stated_pos, stated_dirs, noisy
 
 
-@pytest.mark.slow
-def test_calibration_of_95_percent_intervals(record_property: Callable[[str, object], None]) -> None:
-    """200 simulated tests: the intervals hold the true CG and principal moments 90-99 % of the time.
+def test_calibration_of_the_monte_carlo_spread() -> None:
+    """50 simulated tests: the draws' spread is the estimate's error, ``z = (truth - estimate) / std``.
 
-    150 draws per test: a percentile interval from N draws holds a little less than its
-    nominal 95 % (its end points are themselves Monte Carlo estimates); measured on these 200
-    tests, CG 0.952 and moments 0.933 with 150 draws against 0.962 and 0.947 with 300,
-    inside the band either way, at half the time.
+    The statistic is the median of the 300 ``|z|`` over its value for a normal error, 0.6745
+    (robust to the heavy tail of the principal moments' errors): 1.11 here, 0.91-1.03 with three
+    other seeds. Its standard deviation from ``n`` independent values is ``1.166 / sqrt(n)``
+    (0.067; 0.09 observed over the seeds, the figures of one test are correlated), so the band is
+    1 +- 3 of them; spreads 20 % too narrow give 1.38 here and fail. The coverage of the
+    percentile intervals over 200 tests and 150 draws (0.952 CG, 0.933 moments) is
+    ``benchmarks/mc_calibration.py``.
     """
     noise = NoiseLevels(frequency=0.001, damping=0.05, shape=0.01, position=0.01, angle_deg=1.0)
     rng = np.random.default_rng(2024)
-    hits_cg, hits_moments = [], []
-    for k in range(200):
+    z = []
+    for k in range(50):
         body, pos, dirs, modes = _simulated_test(rng, noise)
-        result = propagate(pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=150, seed=k)
-        truth = np.linalg.eigvalsh(body.inertia_tensor)
-        cg = result.center_of_gravity
-        hits_cg.append((cg.low <= body.center_of_gravity) & (body.center_of_gravity <= cg.high))
-        mom = result.principal_moments
-        hits_moments.append((mom.low <= truth) & (truth <= mom.high))
-    cg_cov, mom_cov = np.mean(hits_cg, axis=0), np.mean(hits_moments, axis=0)
-    print(f"coverage of 95 % intervals, 200 tests: CG {cg_cov} (all {cg_cov.mean():.3f}), "
-          f"principal moments {mom_cov} (all {mom_cov.mean():.3f})")  # fmt: skip
-    record_property("coverage_cg", cg_cov.tolist())
-    record_property("coverage_principal_moments", mom_cov.tolist())
-    assert COVERAGE_MIN <= cg_cov.mean() <= COVERAGE_MAX
-    assert COVERAGE_MIN <= mom_cov.mean() <= COVERAGE_MAX
-    # no single coordinate far off either (binomial sd at 200 tests is 1.5 %)
-    assert np.all(cg_cov >= COVERAGE_MIN - 0.03) and np.all(mom_cov >= COVERAGE_MIN - 0.03)
+        result = propagate(pos, dirs, modes.poles, modes.shapes, mass=body.mass, noise=noise, draws=30, seed=k)
+        truth = np.concatenate([body.center_of_gravity, np.linalg.eigvalsh(body.inertia_tensor)])
+        cg, mom = result.center_of_gravity, result.principal_moments
+        z.append((truth - np.concatenate([cg.estimate, mom.estimate])) / np.concatenate([cg.std, mom.std]))
+    scale = float(np.median(np.abs(z)) / 0.6745)
+    band = 3.0 * 1.166 / np.sqrt(np.size(z))
+    assert abs(scale - 1.0) < band, (scale, band)
 
 
 def test_progress_counts_the_draws_identified() -> None:

@@ -78,8 +78,9 @@ def plan(
         ``mounts.json`` (or a ``body.json``): whether this mount layout determines
         every per-mount rate (:func:`rigidid.core.mounts.split_uniqueness`),
         in :attr:`PlanResult.mount_split`; with `body`, also the mount model's
-        predicted precision (:func:`rigidid.core.mounts.predict_mount_model`,
-        at most 50 draws) in :attr:`PlanResult.mount_prediction`.
+        predicted precision to first order, from one fit of the body's exact modes
+        (:func:`rigidid.core.mounts.predict_mount_model_linearised`; ``draws`` 0)
+        in :attr:`PlanResult.mount_prediction`.
 
     Returns
     -------
@@ -129,13 +130,12 @@ def plan(
         )  # fmt: skip
     mount_prediction = None
     if mounts is not None and report.rank == 6:
-        from rigidid.core.mounts import predict_mount_model
+        from rigidid.core.mounts import predict_mount_model_linearised
 
         step("predicting the mount model", 0, 1)
-        mount_prediction = predict_mount_model(
-            core_body, positions, directions, where, axes, groups=mount_groups, noise=levels, draws=min(draws, 50),
-            seed=seed,
-        )  # fmt: skip
+        mount_prediction = predict_mount_model_linearised(
+            core_body, positions, directions, where, axes, groups=mount_groups, noise=levels
+        )
         step("predicting the mount model", 1, 1)
     suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
     budget = None if prediction is None else predicted_budget(core_body, lay, positions, directions, prediction)
