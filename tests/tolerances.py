@@ -47,13 +47,6 @@ ZERO_SPREAD_REL = 1e-12
 """Spread (std, interval width) of Monte Carlo draws when every noise level is zero,
 relative to the estimate."""
 
-COVERAGE_MIN = 0.90
-"""Lowest acceptable fraction of simulated tests whose 95 % interval holds the truth (a
-binomial band: 200 tests at 95 % coverage give 0.92-0.98 nineteen times in twenty)."""
-
-COVERAGE_MAX = 0.99
-"""Highest acceptable fraction (higher means the intervals are too wide)."""
-
 NOISE_ESTIMATE_REL = 0.15
 """Relative error allowed on the shape noise recovered from rigid-body fit residuals (a
 statistical estimate from a few hundred residual degrees of freedom)."""
