@@ -460,7 +460,7 @@ def with_refinement(
         Called with ``("refit", done, total)``.
     tolerances : SensorBounds, optional
         The sensors' error bounds (type B), propagated into the intervals with the
-        noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
+        noise (the refit's own linearisation, :func:`rigidid.core.timedomain.refine.sensor_terms`); default
         :func:`sensor_bounds` of a layout without ``tolerances``.
     chain : ChainModel, optional
         The channels' acquisition chain in layout order (:func:`chain_model`), modelled in the refit.
@@ -725,10 +725,10 @@ def _accept_refinement(
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     if refinement.sensor_correction is not None:
         implausible_sensors(refinement.sensor_correction, bounds, result.sensor_ids)
-    # the modal kernel's propagation (what plan predicts); the refit's own linearisation when it estimated the
-    # sensors. Without that estimate the refit's own came out up to 4x narrower on orientation than the kernel's
-    # while the refit's errors were 1.3-2x the kernel's floor (chain matrix, orient cell: coverage 0.83).
-    sensor_std = refinement.sensor_std if refinement.sensor_correction is not None else None
+    # the refit's own linearisation (sensor_terms): the refit weighs the channels by their noise, the kernel
+    # does not, so their errors are different combinations of the same sensor errors; the kernel's budget
+    # (what plan predicts) only when the refit has none (benchmarks/sensor_sensitivity.py).
+    sensor_std = refinement.sensor_std
     if sensor_std is None:
         sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
