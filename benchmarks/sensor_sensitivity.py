@@ -15,7 +15,9 @@ normal axis, 3 % transverse in a uniform direction, 3 mm per axis). Per source, 
 - ``refit/own``: that error over the refit's own linearised type-B std (``Refinement.sensor_std``);
 - ``kernel``: the kernel's error on the exact modes read through the same sensors (the floor);
 - ``kernel/own``: over the kernel's linearised std (``sensor_budget`` at those modes);
-- ``refit/kernel``: the RMS errors' ratio;
+- ``refit/kernel``: the RMS errors' ratio; ``own/kernel std``: the RMS linearised std's ratio;
+- ``mean/kernel``: the RMS error of the two estimates' mean over the kernel's (below 1: their errors differ
+  draw by draw, and a combination would gain);
 - ``--linear``: the refit's error with the errors scaled by 0.1, times 10, over the full one's (1: linear).
 
 Per quantity class: CG (3 coordinates, % of the sensor span) and J/m's diagonal (%).
@@ -141,7 +143,8 @@ def main() -> None:
     parser.add_argument("--runs", action="store_true", help="print each draw's largest errors")
     args = parser.parse_args()
     print(f"{'source':<11} {'class':<3} {'refit':>7} {'refit/own':>9} {'kernel':>7} {'kernel/own':>10} "
-          f"{'refit/kernel':>12} {'own/kernel std':>14}" + (f" {'linear':>7}" if args.linear else ""))  # fmt: skip
+          f"{'refit/kernel':>12} {'own/kernel std':>14} {'mean/kernel':>11}"
+          + (f" {'linear':>7}" if args.linear else ""))  # fmt: skip
     for source in args.sources.split(","):
         rng = np.random.default_rng(7)
         rows = []
@@ -165,8 +168,9 @@ def main() -> None:
         for name, cols in (("CG", slice(0, 3)), ("J", slice(3, 6))):
             rms = [float(np.sqrt(np.mean(x[:, cols] ** 2))) for x in (a[0], a[0] / a[1], a[2], a[2] / a[3])]
             own = float(np.sqrt(np.mean(a[1][:, cols] ** 2)) / np.sqrt(np.mean(a[3][:, cols] ** 2)))
+            mean = float(np.sqrt(np.mean(((a[0] + a[2])[:, cols] / 2) ** 2))) / rms[2]
             line = (f"{source:<11} {name:<3} {rms[0]:>7.3f} {rms[1]:>9.2f} {rms[2]:>7.3f} {rms[3]:>10.2f} "
-                    f"{rms[0] / rms[2]:>12.2f} {own:>14.2f}")  # fmt: skip
+                    f"{rms[0] / rms[2]:>12.2f} {own:>14.2f} {mean:>11.2f}")  # fmt: skip
             if args.linear:
                 line += f" {float(np.sqrt(np.mean(a[4][:, cols] ** 2)) / rms[0]):>7.2f}"
             print(line, flush=True)
