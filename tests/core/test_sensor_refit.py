@@ -122,6 +122,16 @@ def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_bod
     assert np.max(np.abs(err / std)) < 3.0  # observed 1.7
     # the inertia's error without the gains estimated is 2.8e-3 (J/m, kg m^2/kg); with them, a tenth of it
     assert np.max(np.abs(err[3:])) < 1e-3  # observed 0.76e-3 (CG 0.06 mm against 0.66)
+    # the JSON's sensor_corrections: per sensor id, as the result model validates them
+    from rigidid.api.records import corrections_by_sensor
+    from rigidid.models import SensorCorrectionEntry
+
+    ids = [f"s{i}" for i in range(8)]
+    entries = corrections_by_sensor(x, ids)
+    assert list(entries) == ids
+    gains = np.array([SensorCorrectionEntry(**entries[i]).gain for i in ids])
+    np.testing.assert_allclose(gains, x.value[0], rtol=0, atol=0)
+    assert all(entries[i]["determined"][0] for i in ids) and len(entries["s0"]["tilt_rad"]) == 2
 
 
 def test_a_determined_correction_beyond_three_tolerances_names_its_sensor() -> None:
