@@ -3,7 +3,7 @@
 Run from the worktree root (a few minutes; each cell runs ``rigidid identify --records`` with defaults)::
 
     PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...] [--runs]
-        [--floor-draws 200] [--estimate-sensors]
+        [--floor-draws 200] [--estimate-sensors] [--stated]
 
 The test, simulated here with a forward model that shares no code with rigidid (6-DOF body on
 mounts written afresh, zero-order-hold state transition from scipy.linalg.expm, half-sine hammer):
@@ -28,6 +28,11 @@ largest ratio of the cell's errors to its twin's (1: the effect costs nothing). 
 chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
 channel's delay); ``--estimate-delays`` passes that option (the delays then fitted, not stated).
 
+``--stated`` draws the orientation and transverse errors from the stated distribution (uniform within the
+tolerance: +-3 degrees per normal axis, transverse magnitude up to 3 % in a uniform direction) instead of at
+the bound (tilts of 2-3 degrees, transverse exactly 3 %); sensitivity and position draws are the stated
+distribution in both.
+
 Printed per cell: runs finished (exit 0) of all; the median and worst CG error (% of the sensor
 span, largest coordinate) and inertia error (largest relative error of the diagonal, %); runs
 whose refit was accepted; coverage of the reported 95 % intervals (CG and inertia diagonal: the
@@ -37,7 +42,10 @@ within 1.25 times the floor plus 6 standard errors of the noise alone (the clean
 ``sensor_budget.noise``); the layout states the sensor tolerances
 the errors were drawn within (zero in the cells without sensor errors). ``floor``: the same errors from the
 exact modes read through the same erroneous sensors (``rigidid.api.identify`` on perfect modal
-data), the floor the chain's sensor errors leave.
+data), the floor the chain's sensor errors leave. With two runs or more, the note adds the cell's RMS error
+over the floor's RMS on the same draws (CG, J), the RMS of the z scores (error over the reported std; 1 when
+calibrated), and the coverage and RMS z the same runs would have with the modal kernel's type-B std at the
+exact modes (``sensor_budget``, what ``plan`` predicts) in place of the reported one.
 """
 
 from __future__ import annotations
@@ -82,6 +90,9 @@ AA_ORDER, AA_CORNER = 8, 0.4 * RATE
 HP_CORNER = 2.0
 SKEWED = 4  # the channel one sample late
 SENSOR_EFFECTS = {"sens", "orient", "transverse", "position"}
+STATED_DRAWS = False
+"""``--stated``: orientation and transverse errors drawn from the stated distribution (uniform within the
+tolerance) rather than at its bound (tilts of 2-3 degrees, transverse sensitivity exactly 3 %)."""
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
@@ -129,19 +140,36 @@ def sensor_errors(effects: set[str], rng: np.random.Generator) -> dict[str, np.n
     n = SENSORS.shape[0]
     gain = 1.0 + (rng.uniform(-0.03, 0.03, n) if "sens" in effects else np.zeros(n))
     axes = AXES.copy()
-    if "orient" in effects:
+    if "orient" in effects and STATED_DRAWS:  # the stated distribution: uniform +-3 degrees per normal axis
+        e1, e2 = _normals()
+        tilt = np.radians(rng.uniform(-3.0, 3.0, (n, 2)))
+        axes = AXES + tilt[:, :1] * e1 + tilt[:, 1:] * e2
+        axes /= np.linalg.norm(axes, axis=1)[:, None]
+    elif "orient" in effects:
         tilt = np.radians(rng.uniform(2.0, 3.0, n))
         for i in range(n):
             perp = np.cross(AXES[i], rng.standard_normal(3))
             perp /= np.linalg.norm(perp)
             axes[i] = np.cos(tilt[i]) * AXES[i] + np.sin(tilt[i]) * perp
     reading = axes.copy()
-    if "transverse" in effects:
+    if "transverse" in effects and STATED_DRAWS:  # stated: magnitude uniform up to 3 %, direction uniform
+        e1, e2 = _normals()
+        tau, phase = rng.uniform(0.0, 0.03, (n, 1)), rng.uniform(0.0, 2 * np.pi, (n, 1))
+        reading = axes + tau * (np.cos(phase) * e1 + np.sin(phase) * e2)
+    elif "transverse" in effects:
         for i in range(n):
             perp = np.cross(AXES[i], rng.standard_normal(3))
             reading[i] = axes[i] + 0.03 * perp / np.linalg.norm(perp)
     pos = SENSORS + (rng.uniform(-0.003, 0.003, SENSORS.shape) if "position" in effects else 0.0)
     return {"gain": gain, "reading": reading * gain[:, None], "position": pos}
+
+
+def _normals() -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors normal to each stated axis and to each other."""
+    helper = np.where(np.abs(AXES[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    e1 = np.cross(AXES, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    return e1, np.cross(AXES, e1)
 
 
 def simulate(effects: set[str], rng: np.random.Generator, sensors: dict[str, np.ndarray]) -> list[np.ndarray]:
@@ -304,6 +332,17 @@ def floor(sensors: dict[str, np.ndarray]) -> tuple[float, float]:
     return errors(est.center_of_gravity[0], MASS * est.inertia_per_mass[0])
 
 
+def kernel_budget(effects: set[str]) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's type-B std of the CG and the inertia diagonal at the exact modes, the cell's stated bounds."""
+    from rigidid.core.sensor_budget import SensorBounds, sensor_budget
+
+    freq, zeta, q = modes()
+    lam = -zeta * 2 * np.pi * freq + 1j * 2 * np.pi * freq * np.sqrt(1 - zeta**2)
+    shapes = np.array([r @ _point(p - CG) for r, p in zip(AXES, SENSORS, strict=True)]) @ q
+    budget = sensor_budget(SENSORS, AXES, lam, shapes, SensorBounds(**stated_tolerances(effects)))
+    return budget.total["center_of_gravity"], MASS * np.diag(budget.total["inertia_per_mass"])
+
+
 def floor_coverage(effect: str, draws: int, seed: int = 0) -> tuple[float, float, float]:
     """Coverage of the type-B intervals on perfect modal data when the stated bounds are the true ones.
 
@@ -395,6 +434,16 @@ def run_cell(
         j_sd = np.diag(np.array(crb["inertia_tensor"]["std"]))
         z = np.concatenate([(cg - CG) / cg_sd, (np.diag(inertia) - np.diag(INERTIA)) / j_sd])
         row["covered"] = int(np.sum(np.abs(z) <= 1.959964))
+        row["z"] = z
+        budget = crb.get("sensor_budget")
+        if budget is not None:  # the alternative: the kernel's type-B std at the exact modes (what plan predicts)
+            kcg, kj = kernel_budget(effects)
+            ncg = np.array(budget["noise"]["center_of_gravity"])
+            nj = np.diag(np.array(budget["noise"]["inertia_tensor"]))
+            z_k = np.concatenate([(cg - CG) / np.hypot(ncg, kcg),
+                                  (np.diag(inertia) - np.diag(INERTIA)) / np.hypot(nj, kj)])  # fmt: skip
+            row["covered_kernel"] = int(np.sum(np.abs(z_k) <= 1.959964))
+            row["z_kernel"] = z_k
         row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
         noise = (crb.get("sensor_budget") or {}).get("noise")
         if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
@@ -416,7 +465,11 @@ def main() -> None:
     parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
     parser.add_argument("--runs", action="store_true", help="print each run's errors, floor and noise std")
     parser.add_argument("--estimate-sensors", action="store_true", help="run identify with --estimate-sensors")
+    parser.add_argument("--stated", action="store_true", help="draw orientation and transverse errors from the "
+                        "stated distribution (uniform within the tolerance), not at its bound")  # fmt: skip
     args = parser.parse_args()
+    global STATED_DRAWS
+    STATED_DRAWS = args.stated
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
         print(f"{'effect':<11} {'coverage':>8} {'median |err|/std':>16} {'median J err %':>14}")
@@ -455,6 +508,15 @@ def main() -> None:
             note = (f"clean twin CG/J med {np.median(twin_errs[:, 0]):.3f}/{np.median(twin_errs[:, 1]):.2f}, "
                     f"cell/twin max {top[0]:.2f}/{top[1]:.2f}  " + note)[:150]  # fmt: skip
         med, worst = np.median(errs, axis=0), np.max(errs, axis=0)
+        if len(done) > 1 and np.all(fl > 0):  # the cell's RMS error against the floor's over the same draws
+            rms = np.sqrt(np.mean(errs**2, axis=0)) / np.sqrt(np.mean(fl[[r["exit"] == 0 for r in rows]] ** 2, axis=0))
+            z_all = np.concatenate([r["z"] for r in fitted]) if fitted else np.zeros(0)
+            zk = [r for r in fitted if "z_kernel" in r]
+            z_k = np.concatenate([r["z_kernel"] for r in zk]) if zk else np.full(1, np.nan)
+            cover_k = sum(int(r["covered_kernel"]) for r in zk) / (6 * len(zk)) if zk else float("nan")
+            note = (f"RMS err/floor CG {rms[0]:.2f} J {rms[1]:.2f}, RMS z {np.sqrt(np.mean(z_all**2)):.2f}; "
+                    f"kernel budget: cover {cover_k:.2f} RMS z {np.sqrt(np.mean(z_k**2)):.2f}  "
+                    + note)[:170]  # fmt: skip
         print(f"{cell:<11} {len(done):>4}/{len(rows):<3} {med[0]:>8.3f}/{worst[0]:<8.3f} "
               f"{med[1]:>6.2f}/{worst[1]:<6.2f} "
               f"{np.max(fl[:, 0]):>5.2f}/{np.max(fl[:, 1]):<5.2f} {len(fitted):>5} {cover:>6.2f} {silent:>6} "

@@ -121,10 +121,15 @@ def test_the_records_intervals_carry_the_sensor_budget_stated_in_the_layout(
     # the noise part is the bound without tolerances; the estimate does not move
     np.testing.assert_allclose(budget["noise"]["center_of_gravity"], crb0["center_of_gravity"]["std"], rtol=1e-9)
     assert crb["center_of_gravity"]["estimate"] == crb0["center_of_gravity"]["estimate"]
-    # plan predicts the type-B parts before the test: the same propagation at the body's exact modes
+    # plan predicts the type-B parts before the test by the modal kernel's propagation at the body's exact
+    # modes. The refit reports its own linearisation, a different estimator's (calibrated: coverage 0.95 and
+    # 0.92 in benchmarks/chain_matrix.py's orient and transverse cells, where the kernel's gave 0.97-0.98,
+    # RMS z 0.81): here 0.25-1.28 of plan's (orientation narrowest, four-mounts' J is weakly observed by the
+    # kernel); the kernel's at the identified modes, which was reported before, was within 1.11 of plan's
     planned = api.plan(stated, body=FOUR / "body.json", draws=20).sensor_budget
     assert planned is not None and list(planned) == [*budget, "combined"]
-    for source in ("sensitivity", "orientation", "transverse", "position"):
-        for key in ("center_of_gravity", "inertia_tensor"):
-            # observed: within 11 % (the identified modes carry 1 % noise); 30 % allowed
-            np.testing.assert_allclose(planned[source][key], budget[source][key], rtol=0.3)
+    ratios = np.concatenate([np.ravel(np.divide(budget[source][key], planned[source][key]))
+                             for source in ("sensitivity", "orientation", "transverse", "position")
+                             for key in ("center_of_gravity", "inertia_tensor")])  # fmt: skip
+    assert np.max(ratios) < 1.6  # plan does not under-predict much (observed 1.28)
+    assert np.min(ratios) < 0.6  # the refit's own, not the kernel's (observed 0.25; the kernel's: 0.89)

@@ -464,7 +464,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     ``converged``, per quantity ``{"estimate", "std", "ci95"}``, with a pre-trigger the
     acceptance test's ``misfit_ratio``, ``misfit_p_value``, ``false_alarm_rate`` and ``misfit_expected``, with the
     delays estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
-    ``mains_hum_hz``, and, when the sensors' tolerances were propagated, ``sensor_budget`` (per source,
+    ``mains_hum_hz``, with the sensors' errors estimated ``sensor_corrections``, and, when the sensors'
+    tolerances were propagated, ``sensor_budget`` (per source,
     ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
@@ -485,6 +486,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         out["channel_delays"] = {name: {"delay_s": d, "std_s": sd} for name, (d, sd) in bound.delays.items()}
     if bound.hum_hz:
         out["mains_hum_hz"] = list(bound.hum_hz)
+    if bound.sensor_corrections is not None:
+        out["sensor_corrections"] = bound.sensor_corrections
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

@@ -492,6 +492,21 @@ class ForceUnitsResult(_Strict):
     damping: dict[str, str] = Field(description="units of the translation, coupling and rotation blocks")
 
 
+class SensorCorrectionEntry(_Strict):
+    """One sensor's errors estimated with the body by ``--estimate-sensors`` (issue 23)."""
+
+    gain: float = Field(description="relative gain error (0.01: the sensor reads 1 % high)")
+    gain_std: float = Field(description="its posterior standard deviation")
+    tilt_rad: list[float] = Field(
+        description="its axis turned towards the two unit normals e1 (normal to the axis and to x, or to y "
+        "for an axis near x) and e2 = axis x e1 (radians)"
+    )
+    tilt_std_rad: list[float] = Field(description="their posterior standard deviations (radians)")
+    determined: list[bool] = Field(
+        description="whether the records determine the gain and each tilt (else the tolerance's prior holds)"
+    )
+
+
 class RecordBoundResult(BaseModel):
     """Cramér-Rao intervals of the output-error refinement on the records (``--refine``, the default)."""
 
@@ -547,6 +562,10 @@ class RecordBoundResult(BaseModel):
     )
     mains_hum_hz: list[float] | None = Field(
         default=None, description="mains hum frequencies found in the records and modelled in the refit (Hz)"
+    )
+    sensor_corrections: dict[str, SensorCorrectionEntry] | None = Field(
+        default=None,
+        description="--estimate-sensors: per sensor id, its errors estimated with the body (positions are not)",
     )
 
 

@@ -177,8 +177,9 @@ def predicted_budget(
     Notes
     -----
     The type-B parts are :func:`rigidid.core.sensor_budget.sensor_budget` at the body's exact modes:
-    the propagation ``identify`` applies to the modes it identified (the records' intervals), so on a
-    test of this body the two agree to the modes' estimation error. The per-mass parts are scaled by
+    the identification from the modes' propagation. ``identify --records`` reports the refit's own
+    (:func:`rigidid.core.timedomain.refine.sensor_terms`), a different estimator's: on four-mounts
+    0.25-1.28 of this prediction (``tests/test_clipping.py``). The per-mass parts are scaled by
     the body's mass.
     """
     import numpy as np

@@ -460,7 +460,7 @@ def with_refinement(
         Called with ``("refit", done, total)``.
     tolerances : SensorBounds, optional
         The sensors' error bounds (type B), propagated into the intervals with the
-        noise (:func:`rigidid.core.sensor_budget.sensor_budget`); default
+        noise (the refit's own linearisation, :func:`rigidid.core.timedomain.refine.sensor_terms`); default
         :func:`sensor_bounds` of a layout without ``tolerances``.
     chain : ChainModel, optional
         The channels' acquisition chain in layout order (:func:`chain_model`), modelled in the refit.
@@ -725,10 +725,10 @@ def _accept_refinement(
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     if refinement.sensor_correction is not None:
         implausible_sensors(refinement.sensor_correction, bounds, result.sensor_ids)
-    # the modal kernel's propagation (what plan predicts); the refit's own linearisation when it estimated the
-    # sensors. Without that estimate the refit's own came out up to 4x narrower on orientation than the kernel's
-    # while the refit's errors were 1.3-2x the kernel's floor (chain matrix, orient cell: coverage 0.83).
-    sensor_std = refinement.sensor_std if refinement.sensor_correction is not None else None
+    # the refit's own linearisation (sensor_terms): the refit weighs the channels by their noise, the kernel
+    # does not, so their errors are different combinations of the same sensor errors; the kernel's budget
+    # (what plan predicts) only when the refit has none (benchmarks/sensor_sensitivity.py).
+    sensor_std = refinement.sensor_std
     if sensor_std is None:
         sensor_std = _sensor_std(result, bounds)
     bound = record_bound(refinement, ident.mass, sensor_std, dict(vars(bounds)) if sensor_std is not None else None)
@@ -737,7 +737,38 @@ def _accept_refinement(
         bound = replace(bound, delays={name: (float(d), float(sd)) for name, d, sd in pairs})
     if refinement.hum:
         bound = replace(bound, hum_hz=tuple(hz for hz, _, _ in refinement.hum))
+    if refinement.sensor_correction is not None:
+        named = ids if ids else result.sensor_ids
+        bound = replace(bound, sensor_corrections=corrections_by_sensor(refinement.sensor_correction, named))
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
+
+
+def corrections_by_sensor(correction: Any, ids: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The sensors' estimated errors per sensor id, as the JSON's ``sensor_corrections`` holds them.
+
+    Parameters
+    ----------
+    correction : SensorCorrection
+        :class:`rigidid.core.timedomain.refine.SensorCorrection` (rows gain, two tilts, three shifts).
+    ids : sequence of str
+        The fitted sensors' ids, in the correction's column order.
+
+    Returns
+    -------
+    dict of str to dict
+        Per id: ``gain``, ``gain_std``, ``tilt_rad`` and ``tilt_std_rad`` (two each) and ``determined``
+        (gain, tilt 1, tilt 2); positions are not estimated and not listed.
+    """
+    out = {}
+    for i, name in enumerate(ids):
+        out[name] = {
+            "gain": float(correction.value[0, i]),
+            "gain_std": float(correction.std[0, i]),
+            "tilt_rad": [float(v) for v in correction.value[1:3, i]],
+            "tilt_std_rad": [float(v) for v in correction.std[1:3, i]],
+            "determined": [bool(v) for v in correction.determined[:3, i]],
+        }
+    return out
 
 
 def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str]) -> list[str]:

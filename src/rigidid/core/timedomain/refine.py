@@ -935,7 +935,9 @@ def _sensor_correction(
     """The sensor errors estimated with the body (maximum a posteriori, linearised at the refit's minimum).
 
     Minimises ``|r + J d - G~ x|^2 + x^T V^-1 x`` (``V`` the errors' stated variances): ``x =
-    (V Q + I)^-1 V G~^T r`` (``Q`` as in :func:`_sensor_outcome`), the body's parameters moved by
+    (V Q + I)^-1 V G~^T r`` (``Q`` as in :func:`_sensor_outcome`); on a later pass, with the sensors
+    already corrected by ``x0`` (`bounds` a :class:`_Centred`), the prior is on the total ``x0 + x``:
+    ``x = (V Q + I)^-1 (V G~^T r - x0)``. The body's parameters move by
     ``d = (J^T J)^+ J^T G~ x``. What a true error ``x`` still costs the body is
     ``(J^T J)^+ J^T G~ (V Q + I)^-1 x``; the noise in ``x`` adds
     ``(V Q + I)^-1 V Q V (V Q + I)^-T`` through the same map.
@@ -957,7 +959,9 @@ def _sensor_correction(
     v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
     v_all, v = v, np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)  # positions: prior only
     system = v[:, None] * q + np.eye(v.size)
-    x: Array = np.linalg.solve(system, v * terms.data).astype(float)
+    earlier = getattr(bounds, "earlier", None)  # a later pass: the prior stays on the total (_Centred)
+    rhs = v * terms.data if earlier is None else v * terms.data - np.where(v > 0.0, earlier, 0.0)
+    x: Array = np.linalg.solve(system, rhs).astype(float)
     x_var: Array = np.where(v > 0.0, np.diag(np.linalg.solve(system, np.diag(v))), v_all)
     left = grad @ move @ np.linalg.solve(system, np.eye(v.size))  # physical value per unit true error, remaining
     std = {source: _physical_std(np.sqrt((left**2) @ var)) for source, var in per_source.items()}
@@ -1382,6 +1386,20 @@ def _with_sensors(
     return theta, std, misfit, sensor_std, correction
 
 
+@dataclass(frozen=True)
+class _Centred:
+    """Stated bounds on a later Gauss-Newton pass of the sensors' correction: ``earlier`` (6 p,) the
+    correction the passes before applied, on which the prior's centre (zero total error) now lies at minus."""
+
+    bounds: Any
+    earlier: Array
+
+    def moments(self) -> dict[str, tuple[float, float]]:
+        """The stated bounds' moments (:meth:`rigidid.core.sensor_budget.SensorBounds.moments`)."""
+        out: dict[str, tuple[float, float]] = self.bounds.moments()
+        return out
+
+
 def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, Array], bounds: Any,
                max_evaluations: int, passes: int) -> Refinement:  # fmt: skip
     """The refit again with the sensors as `first` corrected them (gains out of the records, axes and
@@ -1399,8 +1417,10 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     second = refine_prepared(
         data2, dt, pos + x.value[3:].T, dirs2, center_of_gravity=first.center_of_gravity,
         inertia_per_mass=first.inertia_per_mass, stiffness_per_mass=first.stiffness_per_mass,
-        damping_per_mass=first.damping_per_mass, max_evaluations=max_evaluations, sensor_bounds=bounds,
-        estimate_sensors=True, sensor_passes=passes,
+        damping_per_mass=first.damping_per_mass, max_evaluations=max_evaluations,
+        sensor_bounds=_Centred(getattr(bounds, "bounds", bounds), getattr(bounds, "earlier", 0.0) + x.value.ravel()),
+        estimate_sensors=True,
+        sensor_passes=passes,
     )  # fmt: skip
     y = second.sensor_correction
     assert y is not None
@@ -1645,6 +1665,10 @@ class RecordBound:
         channel and its standard error (:attr:`Refinement.delays`).
     hum_hz : tuple of float
         Mains hum frequencies modelled (:attr:`Refinement.hum`).
+    sensor_corrections : dict or None
+        With the sensors' errors estimated: per sensor id, ``gain`` (relative), ``tilt_rad`` (its axis
+        turned towards the two normals of :func:`rigidid.core.sensor_budget.axis_normals`), their
+        ``gain_std`` and ``tilt_std_rad``, and ``determined`` (gain, tilt 1, tilt 2; :class:`SensorCorrection`).
     """
 
     center_of_gravity: Any
@@ -1663,6 +1687,7 @@ class RecordBound:
     misfit: MisfitTest | None = None
     delays: dict[str, tuple[float, float]] | None = None
     hum_hz: tuple[float, ...] = ()
+    sensor_corrections: dict[str, dict[str, Any]] | None = None
 
 
 def record_bound(
