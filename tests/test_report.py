@@ -199,6 +199,9 @@ def test_report_per_unit_mass_without_options(
 def test_save_pngs_writes_the_figures(
     tmp_path: Path, paper: tuple[Identification, list[str], np.ndarray, np.ndarray]
 ) -> None:
+    """Every figure by name, no temporary file left; files replaced get the usual permissions (umask 022)."""
+    import os
+
     ident, ids, pos, dirs = paper
     paths = save_pngs(tmp_path, ident, pos, dirs, ids, UNITS, mounts=MOUNTS, stabilisation=stabilisation(ident))
     assert [p.name for p in paths] == ["layout.png", "modes.png", "decoupling.png", "stabilisation.png"]
@@ -206,8 +209,13 @@ def test_save_pngs_writes_the_figures(
     for p in paths:
         width, height = png_size(p.read_bytes())
         assert width >= 600 and height >= 300
-    again = save_pngs(tmp_path, ident, pos, dirs, ids, UNITS)
+    mask = os.umask(0o022)
+    try:
+        again = save_pngs(tmp_path, ident, pos, dirs, ids, UNITS)
+    finally:
+        os.umask(mask)
     assert [p.name for p in again] == ["layout.png", "modes.png", "decoupling.png"]
+    assert all(p.stat().st_mode & 0o777 == 0o644 for p in again)
     with pytest.raises(InputError, match="not an existing folder"):
         save_pngs(tmp_path / "missing", ident, pos, dirs, ids, UNITS)
 
@@ -253,17 +261,3 @@ def test_stabilisation_accepts_order_poles_of_the_time_domain_estimator() -> Non
     assert order == 8
     np.testing.assert_allclose(freq, np.abs(poles) / (2 * np.pi))
     assert stable.tolist() == [True, False]
-
-
-def test_save_pngs_files_get_the_usual_permissions(
-    tmp_path: Path, paper: tuple[Identification, list[str], np.ndarray, np.ndarray]
-) -> None:
-    import os
-
-    ident, ids, pos, dirs = paper
-    mask = os.umask(0o022)
-    try:
-        paths = save_pngs(tmp_path, ident, pos, dirs, ids, UNITS)
-    finally:
-        os.umask(mask)
-    assert all(p.stat().st_mode & 0o777 == 0o644 for p in paths)

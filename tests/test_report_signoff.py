@@ -46,14 +46,27 @@ def test_records_route_report_has_its_cramer_rao_intervals_in_table_units(
     assert "normalised cost" in table and re.search(r"\d\.\d{4,}e?", table.split("</caption>")[0]) is None
 
 
-def test_test_block_of_the_layout_is_in_the_report(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def mounted(tmp_path_factory: pytest.TempPathFactory) -> api.IdentifyResult:
+    """The sample's modes with a ``test`` block in its layout, the mounts identified, the torque roll axis along y."""
     layout = json.loads((CASE / "layout.json").read_text())
     layout["test"] = {"id": "T-0815", "specimen": "engine E4 s/n 2231 <prototype>", "date": "2026-11-20",
                       "operator": "A. Tester", "notes": "mounts new; 21 °C"}  # fmt: skip
-    (tmp_path / "layout.json").write_text(json.dumps(layout))
-    result = api.identify(tmp_path / "layout.json", CASE / "modes.csv")
+    path = tmp_path_factory.mktemp("signoff") / "layout.json"
+    path.write_text(json.dumps(layout))
+    identified = api.identify(path, CASE / "modes.csv")
+    return api.with_mounts(identified, CASE / "mounts.json", torque_axis=(0.0, 1.0, 0.0))
+
+
+@pytest.fixture(scope="module")
+def mounted_report(mounted: api.IdentifyResult) -> str:
+    """One report of `mounted`, read by every test of its tables (drawn once)."""
+    return api.report(mounted)
+
+
+def test_test_block_of_the_layout_is_in_the_report(mounted: api.IdentifyResult, mounted_report: str) -> None:
+    result, html = mounted, mounted_report
     assert result.test is not None and result.test.operator == "A. Tester"
-    html = api.report(result)
     block = html[html.index('<table class="test">') :]
     block = block[: block.index("</table>")]
     for text in ("T-0815", "engine E4 s/n 2231 &lt;prototype&gt;", "2026-11-20", "A. Tester", "mounts new; 21 °C"):
@@ -71,18 +84,14 @@ def test_unknown_test_field_is_refused(tmp_path: Path) -> None:
         api.load_layout(tmp_path / "layout.json")
 
 
-def test_report_prints_cleanly() -> None:
-    from rigidid.reporting import render_report  # noqa: F401  (the stylesheet is part of every report)
-
-    result = api.identify(CASE / "layout.json", CASE / "modes.csv")
-    html = api.report(result)
+def test_report_prints_cleanly(mounted_report: str) -> None:
+    html = mounted_report  # the stylesheet is part of every report
     css = html[html.index("<style>") : html.index("</style>")]
     assert "@media print" in css and "@page" in css and "break-inside: avoid" in css
 
 
-def test_mount_tables_read_the_typed_result() -> None:
-    result = api.with_mounts(api.identify(CASE / "layout.json", CASE / "modes.csv"), CASE / "mounts.json")
-    html = api.report(result)
+def test_mount_tables_read_the_typed_result(mounted_report: str) -> None:
+    html = mounted_report
     table = _section(html, "<h2>Mounts (identified)</h2>")
     mounts = json.loads((CASE / "mounts.json").read_text())["mounts"]
     assert "stiffness [N/mm]" in table and "damping [N s/mm]" in table
@@ -119,13 +128,11 @@ def _layout_figure_of(result: api.IdentifyResult) -> object:
     )  # fmt: skip
 
 
-def test_layout_labels_do_not_overlap_and_are_legible_at_800_px() -> None:
+def test_layout_labels_do_not_overlap_and_are_legible_at_800_px(mounted: api.IdentifyResult) -> None:
     """In every 2D view no two labels overlap and none sits on a marker; every text is >= 9 px at 800 px wide."""
     from matplotlib.text import Annotation
 
-    identified = api.identify(CASE / "layout.json", CASE / "modes.csv")
-    result = api.with_mounts(identified, CASE / "mounts.json", torque_axis=(0.0, 1.0, 0.0))
-    fig: Any = _layout_figure_of(result)
+    fig: Any = _layout_figure_of(mounted)
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     scale = 800.0 / fig.bbox.width  # the page shows the figure 800 px wide

@@ -212,7 +212,8 @@ def _frf_figure(
 ) -> Figure:
     """Summed FRF magnitudes per reference: measured, each route's model, each route's band."""
     q = len(data.reference_ids)
-    fig = new_figure(11.0, 3.0 + 2.2 * q)
+    height = 3.0 + 2.2 * q  # fixed margins (inches over the height): the legend below, the titles above
+    fig = new_figure(11.0, height, {"left": 0.08, "right": 0.98, "bottom": 1.0 / height, "top": 1 - 0.3 / height})
     axes = fig.subplots(q, 1, sharex=True, squeeze=False)[:, 0]
     f = data.frequencies
     for j, ax in enumerate(axes):
@@ -237,7 +238,7 @@ def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult], model
     """Measured accelerance over each route's mass line (summed over responses), per reference: 1 on the plateau;
     with a route's fitted supports, its model over the same mass line (broad grey, under the measured lines): where
     the supports lift it."""
-    fig = new_figure(11.0, 4.2)
+    fig = new_figure(11.0, 4.2, {"left": 0.08, "right": 0.98, "bottom": 0.23, "top": 0.97})
     ax = fig.add_subplot(1, 1, 1)
     f = data.frequencies
     styles = ("-", "--", ":", "-.")

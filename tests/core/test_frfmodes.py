@@ -273,3 +273,25 @@ def test_a_high_max_order_stops_once_six_modes_are_stable() -> None:
     np.testing.assert_allclose(high.poles, default.poles, rtol=1e-12)
     truth = np.sort_complex(body_modes(body, pos, dirs).poles)
     np.testing.assert_allclose(np.sort_complex(high.poles), truth, rtol=1e-2)
+
+
+def test_prominent_peaks_are_scipy_find_peaks_on_frfs_noise_and_flat_tops() -> None:
+    """frfmodes.prominent_peaks (numpy, spares importing scipy.signal) finds the peaks and prominences of
+    scipy.signal.find_peaks: on a noisy summed accelerance (the peak splitter's input), on noise, and on
+    coarse data full of flat tops and ties between a peak and its neighbours' heights."""
+    from scipy.signal import find_peaks
+
+    from rigidid.core.frfmodes import prominent_peaks, summed_power
+
+    *_, h = _test(3, noise=0.05)
+    rng = np.random.default_rng(7)
+    cases = [np.log(summed_power(h)), rng.normal(size=200), np.array([0.0, 1.0, 1.0, 0.0, 2.0, 2.0, 2.0, 1.0, 2.0])]
+    cases += [rng.integers(0, 4, size=int(rng.integers(3, 40))).astype(float) for _ in range(200)]
+    found = 0
+    for x in cases:
+        for prominence in (0.0, 1.0, float(np.log(2.0))):
+            expected, _ = find_peaks(x, prominence=prominence)
+            np.testing.assert_array_equal(prominent_peaks(x, prominence), expected)
+            found += expected.size
+    assert found > 1000
+    assert prominent_peaks(np.array([1.0, 2.0]), 0.0).size == 0

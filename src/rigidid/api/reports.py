@@ -29,6 +29,7 @@ def report(
     records: Sequence[tuple[NDArray[np.float64], float]] | None = None,
     progress: ProgressCallback | None = None,
     spectrum: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    png: PathLike | None = None,
 ) -> str:
     """A self-contained HTML report of an identification (tables and pictures).
 
@@ -54,6 +55,9 @@ def report(
     spectrum : (ndarray, ndarray), optional
         That summed spectrum computed already (frequency in Hz, power), e.g. from record files read in row
         blocks (:func:`rigidid.io.records.spectrum.summed_spectrum_streamed`); used instead of `records`.
+    png : path-like, optional
+        A folder (made if missing) to write the same figures into as PNG files, as
+        :func:`report_pngs` does, from the images the page embeds (drawn once).
 
     Returns
     -------
@@ -63,6 +67,8 @@ def report(
     from rigidid.reporting import render_report
 
     stiffness = None
+    if png is not None:
+        Path(png).mkdir(parents=True, exist_ok=True)
     if body is not None:
         mounts = [m.position for m in body.mounts]
         stiffness = [np.asarray(m.stiffness, dtype=float) for m in body.mounts]
@@ -89,6 +95,7 @@ def report(
         progress=progress,
         identified_mounts=result.mounts,
         torque_roll_axis=result.torque_roll_axis,
+        png=png,
     )
 
 

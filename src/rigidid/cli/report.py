@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -155,29 +155,23 @@ def _write_report(
     """The HTML report (and the PNG figures) of `result`, every file or none."""
     from rigidid import api
     from rigidid.io.atomic import OutputSet, write_text_atomic
+    from rigidid.progress import terminal_progress
+    from rigidid.reporting import FIGURE_NAMES
 
     diagram = None if run.estimate is None else run.estimate.diagram
-    from rigidid.progress import terminal_progress
-
-    with terminal_progress() as progress:
-        text = api.report(
-            result, stabilisation=diagram, title=title, inputs=inputs,
-            force_unit=force_unit, body=spec, records=run.records, progress=progress,
-            spectrum=run.spectrum,
-        )  # fmt: skip
-    paths: list[Any] = []
-    with OutputSet() as outs:  # every output or none
+    with OutputSet() as outs:  # every output or none; the figures drawn once for the page and the PNG files
+        folder = None if png is None else outs.folder(png, option="--png")
+        with terminal_progress() as progress:
+            text = api.report(
+                result, stabilisation=diagram, title=title, inputs=inputs,
+                force_unit=force_unit, body=spec, records=run.records, progress=progress,
+                spectrum=run.spectrum, png=folder,
+            )  # fmt: skip
         write_text_atomic(output, text)
-        if png is not None:
-            outs.folder(png, option="--png")
-            with terminal_progress() as progress:
-                paths = api.report_pngs(
-                    result, png, stabilisation=diagram, force_unit=force_unit, body=spec,
-                    records=run.records, progress=progress, spectrum=run.spectrum,
-                )  # fmt: skip
     sys.stderr.write(f"rigidid: wrote {output}\n")
     if png is not None:
-        sys.stderr.write(f"rigidid: wrote {len(paths)} figures to {png}\n")
+        drawn = [name for name in FIGURE_NAMES if name != "stabilisation" or diagram is not None]
+        sys.stderr.write(f"rigidid: wrote {len(drawn)} figures to {png}\n")
 
 
 def _uff_of_frfs(layout: Path, inputs: list[Path] | None, records: bool) -> bool:
