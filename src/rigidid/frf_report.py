@@ -263,6 +263,8 @@ def _massline_figure(data: MeasuredFrfs, routes: Sequence[MassLineResult], model
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("Σ|H| / Σ|mass line|", fontsize=9)
     ax.grid(True, which="both", color="#e3e7ec", lw=0.6)
+    rows = -(-len(ax.get_legend_handles_labels()[1]) // 3)
+    fig.subplots_adjust(bottom=(0.55 + 0.17 * rows) / 4.2)  # the axis label clear of the legend's rows
     fig.legend(loc="outside lower center", ncols=3, fontsize=8, frameon=False)
     return fig
 
