@@ -382,12 +382,12 @@ class StreamingDecimation:
     capture : sequence of int, optional
         Read the refit's data on the way (:class:`CapturedDecay`, in ``finish().captured``): the
         rows of the test's other records as known before reading. The impact the head holds
-        (:func:`find_impact`) places a window of raw rows, from a few pulse widths before its
-        onset to :data:`READ_CONTENT_ROWS` after its decay start (so the second stage is chosen
-        before the fit's factor is asked); the fit's factor is then
-        :func:`~rigidid.core.timedomain.refine.fit_factor` of these rows and this record's decay
-        (``rows`` less the head's decay start), up to the total factor by then, and the rest is
-        :class:`DecayScan`. Memory: that window, whatever the record's length.
+        (:func:`find_impact`) is the guess of :class:`DecayScan`, which proves it at the end on
+        the raw rows from a few pulse widths before its onset to :data:`AFTER_ROWS` after its
+        decay start. The fit's factor is :func:`~rigidid.core.timedomain.refine.fit_factor` of
+        these rows and this record's decay (``rows`` less the head's decay start), up to the
+        total factor once the second stage is chosen (the decay's rows are held until then, at
+        most :data:`READ_CONTENT_ROWS`). Memory: those rows, whatever the record's length.
 
     Notes
     -----
@@ -477,11 +477,13 @@ class StreamingDecimation:
             return
         pulse = max(2, round(PULSE_WIDTH / dt))
         lo = max(0, impact.onset - 4 * pulse - 2 * FIR_HALF_LENGTH)
-        hi = impact.start + max(READ_CONTENT_ROWS, AFTER_ROWS)
         lengths = [max(0, self.hint - impact.start), *self.capture]
         cap = MAX_ROWS // self.channels + 1  # no decay keeps more (cut_decays)
-        self.scan = DecayScan(self.channels, dt, lo, hi, cap,
-                              lambda: fit_factor(lengths, self.channels, max(1, self.total)))  # fmt: skip
+
+        def factor(final: bool) -> int | None:  # once the second stage is chosen (or will not be)
+            return None if self.auto and not final else fit_factor(lengths, self.channels, max(1, self.total))
+
+        self.scan = DecayScan(self.channels, dt, lo, impact.start + AFTER_ROWS, cap, factor, guess=impact)
 
     def _second_stage(self, welch: ContentWelch) -> None:
         spectrum = welch.spectrum()
@@ -842,14 +844,14 @@ def located_decay(
     the rows before `lo` as they arrive and the held ones before the onset at the end
     (:class:`DecayScan`).
     """
-    scan = DecayScan(channels, dt, lo, hi, cap, lambda: factor)
+    scan = DecayScan(channels, dt, lo, hi, cap, lambda final: factor)
     for values in blocks:
         scan.push(values)
     return scan.finish()
 
 
 class DecayScan:
-    """:func:`located_decay` fed block by block, its fit factor asked for only once rows ``lo:hi`` are held.
+    """:func:`located_decay` fed block by block; the fit's factor asked for as the decay arrives.
 
     Parameters
     ----------
@@ -862,17 +864,24 @@ class DecayScan:
     cap : int
         Decimated decay rows kept at most.
     factor : callable
-        ``factor()``: the fit's decimation factor, called once, when the rows up to `hi` have been
-        fed (a first read decides it while reading: :class:`StreamingDecimation`'s capture).
+        ``factor(final)``: the fit's decimation factor, or None while it is not known yet (the
+        decay's rows are then held until it is; with ``final`` true it must answer). A first read
+        decides it while reading (:class:`StreamingDecimation`'s capture).
+    guess : Impact, optional
+        Where the impact is expected (the head's, found on the same raw rows): its decay is read
+        from the first block on, and kept when the impact proved at the end is this one.
+        Default: found in rows ``lo:hi`` once they are held (:func:`located_decay`).
     """
 
-    def __init__(self, channels: int, dt: float, lo: int, hi: int, cap: int, factor: Callable[[], int]) -> None:
+    def __init__(self, channels: int, dt: float, lo: int, hi: int, cap: int,
+                 factor: Callable[[bool], int | None], guess: Impact | None = None) -> None:  # fmt: skip
         self.scan = _WindowScan(channels, lo, hi)
         self.pre = _Moments(channels)
         self.dt, self.lo, self.hi, self.cap, self.ask = dt, lo, hi, cap, factor
         self.feed: _DecayFeed | None = None
-        self.guess: Impact | None = None
-        self.factor = 0  # the factor asked for (0: not yet)
+        self.guess = guess
+        self.pending: list[Array] = []  # decay rows held until the factor is known
+        self.factor = 0  # the factor the decay is read at (0: not yet)
 
     def push(self, values: Array) -> None:
         """Take the next block of raw rows (in order)."""
@@ -880,14 +889,41 @@ class DecayScan:
         row = scan.add(values)
         if row < lo:
             self.pre.add(values[: min(scan.row, lo) - row])
-        if self.feed is not None:
-            self.feed.push(values[max(0, hi - row) :])
-        elif self.guess is None and scan.row >= hi and scan.held:
-            self.factor = self.ask()
-            self.guess, self.feed = _decay_from(np.concatenate(scan.held), scan.peaks, self.dt, lo, self.factor,
-                                                self.cap)  # fmt: skip
-            if self.feed is not None:
-                self.feed.push(values[hi - row :])
+        if self.guess is not None:
+            self._decay(values, row)
+        elif scan.row >= hi and scan.held:
+            self._guess(np.concatenate(scan.held))
+            self._decay(values[hi - row :], hi)
+
+    def _guess(self, window: Array) -> None:
+        """The impact found in the rows held, its decay among them read."""
+        found = _in_window(window, self.scan.peaks, self.dt, self.lo)
+        self.guess = Impact(-1, -1, -1) if found is None else found[0]  # none: nothing is read
+        if found is not None:
+            self._decay(window, self.lo)
+
+    def _decay(self, values: Array, first: int) -> None:
+        """Rows ``first ...`` of the record: those of the guessed decay read (held until the factor is known)."""
+        assert self.guess is not None
+        if self.guess.start < 0:
+            return
+        part = values[max(0, self.guess.start - first) :]
+        if part.shape[0] == 0 or (self.feed is not None and self.feed.held >= self.cap):
+            return
+        if self.feed is None:
+            q = self.ask(False)
+            if q is None:
+                self.pending.append(np.array(part, dtype=float))
+                return
+            self._start(q)
+        assert self.feed is not None
+        self.feed.push(part)
+
+    def _start(self, q: int) -> None:
+        self.factor, self.feed = q, _DecayFeed(q, self.scan.peaks.shape[0], self.cap)
+        for part in self.pending:
+            self.feed.push(part)
+        self.pending.clear()
 
     def finish(self, dt: float | None = None) -> LocatedDecay | None:
         """The end of the record: :func:`located_decay`'s answer (`dt`: the interval to prove the impact with)."""
@@ -896,8 +932,9 @@ class DecayScan:
             return None
         window = np.concatenate(scan.held)
         if self.guess is None:  # the record ended inside the window
-            self.factor = self.ask()
-            self.guess, self.feed = _decay_from(window, scan.peaks, self.dt, lo, self.factor, self.cap)
+            self._guess(window)
+        if self.feed is None and self.guess is not None and self.guess.start >= 0:
+            self._start(int(self.ask(True) or 1))
         impact = _proved(window, scan.peaks, scan.before, scan.after, self.dt if dt is None else dt, lo)
         if impact is None:
             return None
@@ -905,18 +942,6 @@ class DecayScan:
             return LocatedDecay(impact, None)
         self.pre.add(window[: impact.onset - 2 - lo])
         return LocatedDecay(impact, DecayPass(scan.row, self.pre.count, self.pre.m2, self.feed.finish()))
-
-
-def _decay_from(
-    window: Array, peaks: Array, dt: float, lo: int, factor: int, cap: int
-) -> tuple[Impact, _DecayFeed | None]:
-    """The impact found in the rows held and a :class:`_DecayFeed` fed its decay's rows among them."""
-    found = _in_window(window, peaks, dt, lo)
-    if found is None:
-        return Impact(-1, -1, -1), None
-    feed = _DecayFeed(factor, window.shape[1], cap)
-    feed.push(window[found[0].start - lo :])
-    return found[0], feed
 
 
 def located_decays(
