@@ -912,6 +912,12 @@ def refine_records(
     CSV whose rows are estimated from its size, by up to a tenth). That pass
     also reads the decays (:func:`rigidid.io.records.refit.locate_and_read`): each
     file is read once for the refit, rarely twice.
+
+    When `estimate` carries the decays its own reading captured
+    (:attr:`~rigidid.core.timedomain.estimate.ModalEstimate.decays`, what
+    :func:`identify_test` asks for when a refit follows), the files are not read again:
+    :func:`rigidid.core.timedomain.streaming.captured_decays` accepts them (the impacts
+    proved on the raw rows, the fit's factor at most the estimate's) or the pass above runs.
     """
 
     import warnings
