@@ -385,8 +385,8 @@ class StreamingDecimation:
         (:func:`find_impact`) is the guess of :class:`DecayScan`, which proves it at the end on
         the raw rows from a few pulse widths before its onset to :data:`AFTER_ROWS` after its
         decay start. The fit's factor is :func:`~rigidid.core.timedomain.refine.fit_factor` of
-        these rows and this record's decay (``rows`` less the head's decay start), up to the
-        total factor once the second stage is chosen (the decay's rows are held until then, at
+        these rows and `rows` (the same for every record of the test, so they share it), up to
+        the total factor once the second stage is chosen (the decay's rows are held until then, at
         most :data:`READ_CONTENT_ROWS`). Memory: those rows, whatever the record's length.
 
     Notes
@@ -477,7 +477,7 @@ class StreamingDecimation:
             return
         pulse = max(2, round(PULSE_WIDTH / dt))
         lo = max(0, impact.onset - 4 * pulse - 2 * FIR_HALF_LENGTH)
-        lengths = [max(0, self.hint - impact.start), *self.capture]
+        lengths = [self.hint, *self.capture]  # every record of the test the same: one factor for all
         cap = MAX_ROWS // self.channels + 1  # no decay keeps more (cut_decays)
 
         def factor(final: bool) -> int | None:  # once the second stage is chosen (or will not be)
