@@ -1410,25 +1410,10 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
 
 
-_COARSE_ROWS = 8_000
-"""Residuals (samples x channel combinations) of the coarse fit that starts the full one (:func:`_fit`);
-at most every :func:`_coarse_cap`-th sample is taken. 24000 until issue 23's last stop: 8000 takes a
-third of the refit's time off on 32 x 10^6 rows (the coarse fit is cheaper and the full one starts as
-near), the answer the same to a fraction of its convergence test (CG 0.13 standard error at most)."""
-_COARSE_PERIOD = 4  # the coarse fit keeps at least this many samples per period of the highest mode
+_COARSE_ROWS = 24_000
+"""Residuals (samples x channel combinations) of the coarse fit that starts the full one (:func:`_fit`)."""
 _COARSE_STEP = 3  # the coarse fit runs only when it takes at most every third sample
 _FINE_DAMPING = 1e-9  # initial damping of the full fit after the coarse one (Gauss-Newton steps from a near start)
-
-
-def _coarse_cap(theta: Array, data: PreparedDecays, pos: Array, dirs: Array, omega: float) -> int:
-    """The largest sample step of the coarse fit: :data:`_COARSE_PERIOD` samples per period of the fastest mode
-    at `theta` (no aliasing of a mode onto another frequency in the coarse fit's cost)."""
-    try:
-        lam = _modes(theta, pos, dirs, False)[0]
-    except (np.linalg.LinAlgError, ValueError):
-        return 1
-    per_sample = float(np.max(np.abs(lam))) * data.dt * omega  # radians per sample of the fastest mode
-    return max(1, int(2.0 * math.pi / (_COARSE_PERIOD * per_sample))) if per_sample > 0.0 else 1
 
 
 @dataclass(frozen=True)
@@ -1503,9 +1488,7 @@ def _fit(
     # a modelled chain, delay or hum leaves the rigid span per channel: no reduction then
     basis = _channel_basis(data.sigma, pos, dirs) if link is None else None
     columns = data.sigma.size if basis is None else basis.shape[1]
-    step = min(
-        sum(d.shape[0] for d in data.decays) * columns // _COARSE_ROWS, _coarse_cap(theta0, data, pos, dirs, omega)
-    )
+    step = sum(d.shape[0] for d in data.decays) * columns // _COARSE_ROWS
     scale = sum(float(np.sum((d / data.sigma) ** 2)) for d in data.decays)
     theta, nfev, converged = theta0, 0, False
     r, jm = np.zeros(0), np.zeros((0, theta0.size))
