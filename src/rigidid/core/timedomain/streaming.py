@@ -573,16 +573,31 @@ class _WindowScan:
     def add(self, values: Array) -> int:
         """Take the next block; return the row it starts at."""
         row, stop, lo, hi = self.row, self.row + values.shape[0], self.lo, self.hi
-        mags = np.abs(values)
-        self.peaks = np.maximum(self.peaks, mags.max(axis=0))
         if row < lo:
-            self.before.append(chunk_maxima(mags[: min(stop, lo) - row]))
+            self.before.append(_abs_chunk_maxima(values[: min(stop, lo) - row]))
+            self.peaks = np.maximum(self.peaks, self.before[-1].max(axis=0, initial=0.0))
         if stop > lo and row < hi:
             self.held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
+            self.peaks = np.maximum(self.peaks, np.abs(self.held[-1]).max(axis=0, initial=0.0))
         if stop > hi:
-            self.after.append(chunk_maxima(mags[max(0, hi - row) :]))
+            self.after.append(_abs_chunk_maxima(values[max(0, hi - row) :]))
+            self.peaks = np.maximum(self.peaks, self.after[-1].max(axis=0, initial=0.0))
         self.row = stop
         return row
+
+
+def _abs_chunk_maxima(x: Array) -> Array:
+    """:func:`chunk_maxima` of ``|x|`` from each chunk's largest and smallest value (no ``|x|`` made: the
+    capture's pass over every row of the record, issue 23)."""
+    n, p = x.shape
+    whole = n // _CHUNK * _CHUNK
+    parts = []
+    if whole:
+        chunks = x[:whole].reshape(-1, _CHUNK, p)
+        parts.append(np.maximum(chunks.max(axis=1), -chunks.min(axis=1)))
+    if whole < n:
+        parts.append(np.maximum(x[whole:].max(axis=0), -x[whole:].min(axis=0))[None, :])
+    return np.concatenate(parts) if parts else np.zeros((0, p))
 
 
 def _in_window(window: Array, peaks: Array, dt: float, lo: int) -> tuple[Impact, float] | None:
