@@ -4,9 +4,9 @@ For each case (the records ``modes_speed.py --floor ... --keep DIR`` writes, ``.
 fresh processes, interleaved ``--repeat`` times:
 
 - ``row blocks``: ``identify --records`` as shipped: the modes estimated from the files read block by
-  block and decimated as they arrive (as ``rigidid modes``), then the files read again in row blocks
-  for the refit (``api.refine_records``: the impacts located on the raw rows, the pre-trigger
-  statistics and the decays at the fit's rate, nothing else held);
+  block and decimated as they arrive (as ``rigidid modes``), the refit's impacts, pre-trigger
+  statistics and decays at the fit's rate captured in the same read (issue 23; the files read again
+  in row blocks, ``api.refine_records``, only when that capture is refused);
 - ``whole``: the same with ``api.STREAM_REFIT_VALUES`` raised so far that the refit reads the raw
   records whole (the refit's numbers of a whole read);
 - ``before`` (with ``--before-src DIR``, the ``src`` folder of an older checkout, e.g.
@@ -17,7 +17,9 @@ fresh processes, interleaved ``--repeat`` times:
 It prints medians of wall time (start-up included), of CPU time (user + system of the child: on a
 shared machine the figure to compare) and of peak resident memory (the child's VmHWM), each
 route's times over ``modes``'s, how the peak grows from the first case to the last (same
-channels), and the CG, its standard error and the normalised cost of every identify route.
+channels), and the CG, its standard error and the normalised cost of every identify route, and the
+CG's largest error against the simulated body in its noise standard errors (``sensor_budget.noise``,
+the sensors' tolerances aside).
 
 Run: ``python benchmarks/identify_records_memory.py --cases-dir /tmp/cases --cases 8x1000000,8x10000000``
 (``--suffix .csv --modes`` for the issue's CSV figures; the records as ``modes_speed.py --keep`` writes them)
@@ -39,6 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from modes_speed import CLI_CODE, PEAK_PREAMBLE
+from records_scenario import CG
 
 WHOLE_CODE = (
     PEAK_PREAMBLE
@@ -120,7 +123,11 @@ def main() -> None:
             cg = np.round(data["center_of_gravity"], 7).tolist()
             std = np.round(crb["center_of_gravity"]["std"], 8).tolist()
             cost = crb["normalised_cost"]
-            print(f"{name:<16} {wall:>7.2f} {cpu:>7.2f} {peak:>8.0f}  {ratio}  {cg} +- {std}, {cost:.3f}")
+            # the CG's error against the simulated body in its noise standard errors (the sensors' budget aside)
+            noise = crb.get("sensor_budget", {}).get("noise", {}).get("center_of_gravity")
+            err = np.abs(np.subtract(data["center_of_gravity"], CG))
+            z = "" if noise is None else f", |error| / noise SE {np.max(err / np.asarray(noise)):.2f}"
+            print(f"{name:<16} {wall:>7.2f} {cpu:>7.2f} {peak:>8.0f}  {ratio}  {cg} +- {std}, {cost:.3f}{z}")
     for name, values in peaks.items():
         if len(values) > 1:
             print(f"peak growth, {name}: {values[0]:.0f} -> {values[-1]:.0f} MB ({values[-1] / values[0]:.2f}x)")

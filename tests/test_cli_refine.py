@@ -180,12 +180,15 @@ def test_the_refit_on_files_read_in_row_blocks_gives_the_whole_read_answer(
 def test_identify_records_refits_from_the_files_read_in_row_blocks(
     long_records: list[Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """identify --records (default refit) reads long record files twice in row blocks, never whole (issue 14):
-    the JSON keys of the whole read, the impacts in the files' rows."""
+    """identify --records (default refit) reads long record files once in row blocks, never whole (issues 14, 23):
+    the refit's decays are read with the modes' reading; the JSON keys of the whole read, its body within the
+    noise's standard errors, the impacts in the files' rows. (The refit's data read again in row blocks equal
+    the whole read's exactly: test_refine_records_above_the_threshold_never_holds_the_raw_records.)"""
     from typer.testing import CliRunner
 
     from rigidid.cli import app
     from rigidid.core.timedomain import refine
+    from rigidid.io.records import refit
 
     monkeypatch.setattr(refine, "MAX_ROWS", 16_000)  # a smaller fit (still decimated and cut), for the suite's time
     args = ["identify", str(FOUR / "layout.json"), "--records", *map(str, long_records), "--json", "-"]
@@ -198,6 +201,7 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
         raise AssertionError("records loaded whole")
 
     _patch(monkeypatch, "load_records", refuse)
+    monkeypatch.setattr(refit, "locate_and_read", refuse)  # no second reading for the refit
     out = CliRunner().invoke(app, args)
     assert out.exit_code == 0, out.output
     data, expected = json.loads(out.stdout), json.loads(whole.stdout)
@@ -205,8 +209,10 @@ def test_identify_records_refits_from_the_files_read_in_row_blocks(
     assert sorted(data["uncertainty_records_crb"]) == sorted(expected["uncertainty_records_crb"])
     crb, crb_whole = data["uncertainty_records_crb"], expected["uncertainty_records_crb"]
     assert crb["noise_from"] == "pretrigger" and 0.5 < crb["normalised_cost"] < 2.0
-    assert crb["normalised_cost"] == pytest.approx(crb_whole["normalised_cost"], rel=STREAMED_REFIT_REL)
-    np.testing.assert_allclose(data["center_of_gravity"], expected["center_of_gravity"], rtol=STREAMED_REFIT_REL)
+    # the decays at a finer rate over a shorter span (the reader's factor: streaming.captured_decays), so the
+    # same answer within noise: observed at most 1.7 of the noise's standard errors (the sensors' are common)
+    se = np.maximum(*(np.asarray(c["sensor_budget"]["noise"]["center_of_gravity"]) for c in (crb, crb_whole)))
+    assert np.all(np.abs(np.subtract(data["center_of_gravity"], expected["center_of_gravity"])) < 5.0 * se)
     factor = data["modal_estimation"]["decimation"]
     for impact in data["modal_estimation"]["impacts"]:  # file rows: 0.1 s (1000 rows) in, as fine as the factor
         assert 990 <= impact["onset"] <= 1000 + factor and impact["start"] > impact["peak"] >= impact["onset"]

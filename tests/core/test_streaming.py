@@ -8,6 +8,7 @@ whole-record counterpart on the same samples, cut into blocks of uneven sizes.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -196,3 +197,32 @@ def test_impacts_and_decays_read_in_one_pass_equal_the_whole_record_routines() -
     np.testing.assert_allclose(data.sigma, ref.sigma, rtol=1e-12)
     for a, b in zip(data.decays, ref.decays, strict=True):
         np.testing.assert_allclose(a, b, rtol=0.0, atol=STREAMED_DECIMATION)
+
+
+def test_the_decay_captured_while_decimating_is_the_refits_pass_at_its_factor() -> None:
+    # issue 23: the modes' reading keeps the refit's impact and decay (StreamingDecimation's capture), so the
+    # file is parsed once: the same impact as find_impact on the whole record, the same pre-trigger statistics
+    # and decimated decay as a pass of its own at the factor the capture chose (fit_factor of the rows, up to
+    # the reader's total factor)
+    from rigidid.core.timedomain.refine import MAX_ROWS, fit_factor
+
+    dt = DT / 10.0  # 40 kHz: decimated while read
+    x = _record(300000, 3000, seed=9, dt=dt)  # past the window held (2^18 rows of decay)
+    whole = find_impact(x, dt)
+    stream = streaming.StreamingDecimation(x.shape[0], 4, cascade=True, capture=[])
+    stream.run(_timed(x, (16000, 1613), dt))
+    done = stream.finish(dt)
+    captured = done.captured
+    assert captured is not None and captured.impact == whole
+    assert captured.factor == fit_factor([x.shape[0]], 4, done.factor) > 1
+    ref = streaming.decay_pass(_blocks(x, (5000,)), 4, whole.start, whole.onset - 2, captured.factor,
+                               MAX_ROWS // 4 + 1)  # fmt: skip
+    assert captured.decay.rows == ref.rows and captured.decay.pre_count == ref.pre_count
+    np.testing.assert_allclose(captured.decay.pre_m2, ref.pre_m2, rtol=1e-12)
+    np.testing.assert_allclose(captured.decay.decay, ref.decay, rtol=0.0, atol=STREAMED_DECIMATION)
+    near = [replace(whole, onset=whole.onset + 30, start=whole.start - 20)]
+    assert streaming.captured_decays([captured], 4, 4 * captured.factor, near, 100) is not None
+    # the estimate decimated less than the capture: the band would be cut, read again
+    assert streaming.captured_decays([captured], 4, captured.factor - 1, near, 100) is None
+    # the estimate's impact elsewhere (the head held another hit): read again
+    assert streaming.captured_decays([captured], 4, 4 * captured.factor, [replace(whole, start=9000)], 100) is None

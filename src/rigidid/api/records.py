@@ -4,6 +4,7 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
+import contextvars
 import math
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -317,6 +318,12 @@ def estimate_rigid_modes(
     return table7, estimate7
 
 
+_READ_DECAYS: contextvars.ContextVar[bool] = contextvars.ContextVar("read_decays", default=False)
+"""True while the modes are estimated for a refit that follows: the record files' first read keeps the
+refit's impacts and decays (:attr:`~rigidid.core.timedomain.estimate.ModalEstimate.decays`), so that the
+refit need not read them again (:func:`refine_records`)."""
+
+
 def _estimate_streamed(
     lay: LayoutFile,
     paths: Sequence[PathLike],
@@ -345,7 +352,8 @@ def _estimate_streamed(
     # second decimation stage while reading (memory of the decimated record only), unless the user fixed the
     # factor; read_records_streamed reads again without it when all records' content asks another factor
     cascade = cascade and decimate is None
-    streamed, content = read_records_streamed(paths, ids, decimate, f_limit, progress, cascade=cascade)
+    streamed, content = read_records_streamed(paths, ids, decimate, f_limit, progress, cascade=cascade,
+                                              capture=_READ_DECAYS.get())  # fmt: skip
     factor = streamed[0].factor
     dts = [r.dt for r in streamed]
     cascaded = streamed[0].stages[1] > 1
@@ -385,6 +393,8 @@ def _estimate_streamed(
     _warn_hits(result.impacts, [str(p) for p in paths], dts[0] / factor)
     if any(r.trend is not None for r in streamed):
         result = replace(result, trends=tuple(r.trend for r in streamed))
+    elif all(r.captured is not None for r in streamed):  # the refit's reading, done on the way
+        result = replace(result, decays=tuple(r.captured for r in streamed))
     table = ModeTable.numbered(result.frequency_hz, result.damping_ratio, [ids[c] for c in columns], result.shapes)
     return chain_corrected(table, lay), result
 
@@ -933,6 +943,12 @@ def refine_records(
     CSV whose rows are estimated from its size, by up to a tenth). That pass
     also reads the decays (:func:`rigidid.io.records.refit.locate_and_read`): each
     file is read once for the refit, rarely twice.
+
+    When `estimate` carries the decays its own reading captured
+    (:attr:`~rigidid.core.timedomain.estimate.ModalEstimate.decays`, what
+    :func:`identify_test` asks for when a refit follows), the files are not read again:
+    :func:`rigidid.core.timedomain.streaming.captured_decays` accepts them (the impacts
+    proved on the raw rows, the fit's factor at most the estimate's) or the pass above runs.
     """
 
     import warnings
@@ -954,8 +970,10 @@ def refine_records(
         from rigidid.io.records.refit import locate_and_read
 
         reach = (2 * FIR_HALF_LENGTH + 2) * max(1, estimate.decimation) + round(0.005 / dt) + 2
-        located = locate_and_read(paths, ids, dt, estimate.impacts, reach, factor=estimate.decimation,
-                                  progress=progress, trends=estimate.trends)  # fmt: skip
+        located = _captured(estimate, len(ids), dt, reach)
+        if located is None:
+            located = locate_and_read(paths, ids, dt, estimate.impacts, reach, factor=estimate.decimation,
+                                      progress=progress, trends=estimate.trends)  # fmt: skip
         impacts, read = (None, None) if located is None else located
     if impacts is None or read is None:
         # read whole; the impacts where the raw records put them (as their estimation would)
@@ -988,6 +1006,19 @@ def refine_records(
 
     bounds = sensor_bounds(lay)
     return _refit(result, fit, progress, bounds, _kept_ids(result, estimate.channels))
+
+
+def _captured(estimate: ModalEstimate, channels: int, dt: float, reach: int) -> tuple[list[Any], Any] | None:
+    """The impacts and ``read()`` of the decays the modes' reading captured (None: read the files again)."""
+    if estimate.decays is None or estimate.trends is not None:
+        return None
+    from rigidid.core.timedomain.streaming import captured_decays, prepared_from
+
+    found = captured_decays(estimate.decays, channels, estimate.decimation, estimate.impacts, reach)
+    if found is None:
+        return None
+    impacts, passes, q = found
+    return impacts, lambda: prepared_from(passes, channels, dt, q)
 
 
 def records_spectrum(
@@ -1237,7 +1268,12 @@ def _identify_test(
     with named_source(src), noted(notes, ElasticModeWarning, ClippedChannelWarning):
         if records:
             rigid_six = identify_options.get("modes_used") is None
-            modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six, progress=progress)
+            token = _READ_DECAYS.set(refine and method == "structured")
+            try:
+                modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six,
+                                                      progress=progress)  # fmt: skip
+            finally:
+                _READ_DECAYS.reset(token)
     assert modes is not None
     summed = None
     if spectrum and paths:  # after the estimation, which checked the files

@@ -106,6 +106,10 @@ class ModalEstimate:
         Per record, the DC offset and drift taken out of it before the estimation
         (:class:`~rigidid.core.timedomain.trend.Trend`, in the records' rows; None for a
         record where none mattered); None when none was taken out of any record.
+    decays : tuple or None
+        Per record, the refit's impact and decay read with the records when they were read in
+        blocks (:class:`~rigidid.core.timedomain.streaming.CapturedDecay`); None: not read on
+        the way (the refit reads the records again).
     """
 
     poles: CArray
@@ -124,6 +128,7 @@ class ModalEstimate:
     impacts: tuple[Impact, ...]
     channels: tuple[int, ...] | None = None
     trends: tuple[Any, ...] | None = None
+    decays: tuple[Any, ...] | None = None
 
 
 def _check_records(records: Sequence[ArrayLike], dt: float) -> tuple[list[Array], list[tuple[Array, Array, int]]]:

@@ -67,11 +67,14 @@ __all__ = [
     "PULSE_SAMPLES",
     "PULSE_WIDTH",
     "READ_CONTENT_ROWS",
+    "CapturedDecay",
     "ContentWelch",
     "DecayPass",
+    "DecayScan",
     "Decimated",
     "LocatedDecay",
     "StreamingDecimation",
+    "captured_decays",
     "chunk_maxima",
     "decay_pass",
     "hann_window",
@@ -201,15 +204,21 @@ def head_content(head: Array, time: Array) -> tuple[float, Spectrum, int] | None
     time : ndarray, shape (n,)
         Their sample times (s).
     """
+    found = _head_impact(head, time)
+    return None if found is None else (found[0], found[1], found[2].start)
+
+
+def _head_impact(head: Array, time: Array) -> tuple[float, Spectrum, Impact] | None:
+    """:func:`head_content` with the whole impact the head holds."""
     dt = float(time[-1] - time[0]) / (time.shape[0] - 1)
     if not dt > 0.0:
         return None
     try:
-        start = find_impact(head, dt).start
+        impact = find_impact(head, dt)
     except InputError:  # an all-zero head: the checks after reading will say what is wrong
         return None
-    freqs, total = content_spectrum([head[start:]], dt)
-    return (dt, (freqs, total), start) if total.size else None
+    freqs, total = content_spectrum([head[impact.start :]], dt)
+    return (dt, (freqs, total), impact) if total.size else None
 
 
 def pre_factor(dt: float, spectrum: Spectrum, f_limit: float | None) -> int:
@@ -325,6 +334,26 @@ class Decimated:
     stages: tuple[int, int]
     energy: Array
     spectrum: Spectrum | None
+    captured: CapturedDecay | None = None
+
+
+@dataclass(frozen=True)
+class CapturedDecay:
+    """The refit's reading of a record, done during :class:`StreamingDecimation`'s (its ``capture`` option).
+
+    Attributes
+    ----------
+    impact : Impact
+        As :func:`locate_impact` finds it on the raw record.
+    decay : DecayPass
+        ``decay_pass(record, ..., impact.start, impact.onset - 2, factor, cap)``.
+    factor : int
+        The fit's decimation factor the decay was taken at.
+    """
+
+    impact: Impact
+    decay: DecayPass
+    factor: int
 
 
 class StreamingDecimation:
@@ -350,6 +379,15 @@ class StreamingDecimation:
         A second-stage factor fixed by the caller, applied from the first row.
     keep_rows : int, optional
         An automatic pre-factor leaves at least this many of `rows`.
+    capture : sequence of int, optional
+        Read the refit's data on the way (:class:`CapturedDecay`, in ``finish().captured``): the
+        rows of the test's other records as known before reading. The impact the head holds
+        (:func:`find_impact`) is the guess of :class:`DecayScan`, which proves it at the end on
+        the raw rows from a few pulse widths before its onset to :data:`AFTER_ROWS` after its
+        decay start. The fit's factor is :func:`~rigidid.core.timedomain.refine.fit_factor` of
+        these rows and `rows` (the same for every record of the test, so they share it), up to
+        the total factor once the second stage is chosen (the decay's rows are held until then, at
+        most :data:`READ_CONTENT_ROWS`). Memory: those rows, whatever the record's length.
 
     Notes
     -----
@@ -369,9 +407,12 @@ class StreamingDecimation:
         cascade: bool = False,
         second: int | None = None,
         keep_rows: int | None = None,
+        capture: Sequence[int] | None = None,
     ) -> None:
         self.hint, self.channels, self.factor, self.f_limit = rows, channels, factor, f_limit
         self.cascade, self.second, self.keep_rows = cascade, second, keep_rows
+        self.capture = None if capture is None else list(capture)
+        self.scan: DecayScan | None = None
         self.rows = 0  # raw rows fed
         self.welch: ContentWelch | None = None
         self.stage2: Decimator | None = None
@@ -399,10 +440,11 @@ class StreamingDecimation:
         """Choose the pre-factor from the head (longer records only) and set up the stages."""
         if held > HEAD_ROWS:  # longer than the head (a shorter record is fed whole, not pre-decimated)
             head = np.concatenate([v for _, v in pending])[:HEAD_ROWS]
-            found = head_content(head, np.concatenate([t for t, _ in pending])[:HEAD_ROWS])
+            found = _head_impact(head, np.concatenate([t for t, _ in pending])[:HEAD_ROWS])
             del head
             if found is not None:
-                self.welch = ContentWelch(found[2], found[0], self.channels)
+                self.welch = ContentWelch(found[2].start, found[0], self.channels)
+                self._capture(found[0], found[2])
                 if self.factor is None:
                     self.factor = pre_factor(found[0], found[1], self.f_limit)
                     if self.keep_rows is not None:
@@ -426,6 +468,22 @@ class StreamingDecimation:
         if self.auto and self.welch is not None and self.welch.complete(self.rows):
             self.auto = False  # the content is known: start the second stage on what is held
             self._second_stage(self.welch)
+        if self.scan is not None:  # after the second stage is chosen: the fit's factor may be asked
+            self.scan.push(values)
+
+    def _capture(self, dt: float, impact: Impact) -> None:
+        """Start the refit's reading (the `capture` option) around the impact the head holds."""
+        if self.capture is None:
+            return
+        pulse = max(2, round(PULSE_WIDTH / dt))
+        lo = max(0, impact.onset - 4 * pulse - 2 * FIR_HALF_LENGTH)
+        lengths = [self.hint, *self.capture]  # every record of the test the same: one factor for all
+        cap = MAX_ROWS // self.channels + 1  # no decay keeps more (cut_decays)
+
+        def factor(final: bool) -> int | None:  # once the second stage is chosen (or will not be)
+            return None if self.auto and not final else fit_factor(lengths, self.channels, max(1, self.total))
+
+        self.scan = DecayScan(self.channels, dt, lo, impact.start + AFTER_ROWS, cap, factor, guess=impact)
 
     def _second_stage(self, welch: ContentWelch) -> None:
         spectrum = welch.spectrum()
@@ -440,8 +498,8 @@ class StreamingDecimation:
             self.out = _Rows(max(self.hint // self.total + 2 * FIR_HALF_LENGTH + 16, held.shape[0]), self.channels)
             self.out.add(held)
 
-    def finish(self) -> Decimated:
-        """End of the record: the decimated rows and where they sit.
+    def finish(self, dt: float | None = None) -> Decimated:
+        """End of the record: the decimated rows and where they sit (`dt`: the record's checked interval).
 
         Raises
         ------
@@ -458,7 +516,11 @@ class StreamingDecimation:
             offset += FIR_HALF_LENGTH * self.total
         spectrum = self.welch.spectrum() if self.welch is not None else None
         stages = (factor, self.total // factor)
-        return Decimated(data, self.total, offset, stages, channel_energy(data), spectrum)
+        located = None if self.scan is None else self.scan.finish(dt)
+        captured = None
+        if located is not None and located.decay is not None:
+            captured = CapturedDecay(located.impact, located.decay, self.scan.factor)  # type: ignore[union-attr]
+        return Decimated(data, self.total, offset, stages, channel_energy(data), spectrum, captured)
 
 
 def chunk_maxima(mags: Array) -> Array:
@@ -511,16 +573,31 @@ class _WindowScan:
     def add(self, values: Array) -> int:
         """Take the next block; return the row it starts at."""
         row, stop, lo, hi = self.row, self.row + values.shape[0], self.lo, self.hi
-        mags = np.abs(values)
-        self.peaks = np.maximum(self.peaks, mags.max(axis=0))
         if row < lo:
-            self.before.append(chunk_maxima(mags[: min(stop, lo) - row]))
+            self.before.append(_abs_chunk_maxima(values[: min(stop, lo) - row]))
+            self.peaks = np.maximum(self.peaks, self.before[-1].max(axis=0, initial=0.0))
         if stop > lo and row < hi:
             self.held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
+            self.peaks = np.maximum(self.peaks, np.abs(self.held[-1]).max(axis=0, initial=0.0))
         if stop > hi:
-            self.after.append(chunk_maxima(mags[max(0, hi - row) :]))
+            self.after.append(_abs_chunk_maxima(values[max(0, hi - row) :]))
+            self.peaks = np.maximum(self.peaks, self.after[-1].max(axis=0, initial=0.0))
         self.row = stop
         return row
+
+
+def _abs_chunk_maxima(x: Array) -> Array:
+    """:func:`chunk_maxima` of ``|x|`` from each chunk's largest and smallest value (no ``|x|`` made: the
+    capture's pass over every row of the record, issue 23)."""
+    n, p = x.shape
+    whole = n // _CHUNK * _CHUNK
+    parts = []
+    if whole:
+        chunks = x[:whole].reshape(-1, _CHUNK, p)
+        parts.append(np.maximum(chunks.max(axis=1), -chunks.min(axis=1)))
+    if whole < n:
+        parts.append(np.maximum(x[whole:].max(axis=0), -x[whole:].min(axis=0))[None, :])
+    return np.concatenate(parts) if parts else np.zeros((0, p))
 
 
 def _in_window(window: Array, peaks: Array, dt: float, lo: int) -> tuple[Impact, float] | None:
@@ -779,46 +856,107 @@ def located_decay(
     far (the impact's own, usually the record's) and its decay is decimated from there as the
     rest arrives; at the end the impact is proved as :func:`locate_impact` proves it, and the
     decay kept when it started where the proved impact starts. The pre-trigger statistics merge
-    the rows before `lo` as they arrive and the held ones before the onset at the end.
+    the rows before `lo` as they arrive and the held ones before the onset at the end
+    (:class:`DecayScan`).
     """
-    scan = _WindowScan(channels, lo, hi)
-    pre = _Moments(channels)
-    feed: _DecayFeed | None = None
-    guess: Impact | None = None
+    scan = DecayScan(channels, dt, lo, hi, cap, lambda final: factor)
     for values in blocks:
+        scan.push(values)
+    return scan.finish()
+
+
+class DecayScan:
+    """:func:`located_decay` fed block by block; the fit's factor asked for as the decay arrives.
+
+    Parameters
+    ----------
+    channels : int
+        Columns of every block.
+    dt : float
+        Sample interval (s).
+    lo, hi : int
+        The raw rows held (where the impact and the largest energy must lie).
+    cap : int
+        Decimated decay rows kept at most.
+    factor : callable
+        ``factor(final)``: the fit's decimation factor, or None while it is not known yet (the
+        decay's rows are then held until it is; with ``final`` true it must answer). A first read
+        decides it while reading (:class:`StreamingDecimation`'s capture).
+    guess : Impact, optional
+        Where the impact is expected (the head's, found on the same raw rows): its decay is read
+        from the first block on, and kept when the impact proved at the end is this one.
+        Default: found in rows ``lo:hi`` once they are held (:func:`located_decay`).
+    """
+
+    def __init__(self, channels: int, dt: float, lo: int, hi: int, cap: int,
+                 factor: Callable[[bool], int | None], guess: Impact | None = None) -> None:  # fmt: skip
+        self.scan = _WindowScan(channels, lo, hi)
+        self.pre = _Moments(channels)
+        self.dt, self.lo, self.hi, self.cap, self.ask = dt, lo, hi, cap, factor
+        self.feed: _DecayFeed | None = None
+        self.guess = guess
+        self.pending: list[Array] = []  # decay rows held until the factor is known
+        self.factor = 0  # the factor the decay is read at (0: not yet)
+
+    def push(self, values: Array) -> None:
+        """Take the next block of raw rows (in order)."""
+        scan, lo, hi = self.scan, self.lo, self.hi
         row = scan.add(values)
         if row < lo:
-            pre.add(values[: min(scan.row, lo) - row])
-        if feed is not None:
-            feed.push(values[max(0, hi - row) :])
-        elif guess is None and scan.row >= hi and scan.held:
-            guess, feed = _decay_from(np.concatenate(scan.held), scan.peaks, dt, lo, factor, cap)
-            if feed is not None:
-                feed.push(values[hi - row :])
-    if not scan.held:
-        return None
-    window = np.concatenate(scan.held)
-    if guess is None:  # the record ended inside the window
-        guess, feed = _decay_from(window, scan.peaks, dt, lo, factor, cap)
-    impact = _proved(window, scan.peaks, scan.before, scan.after, dt, lo)
-    if impact is None:
-        return None
-    if feed is None or guess != impact or impact.onset - 2 < lo:
-        return LocatedDecay(impact, None)
-    pre.add(window[: impact.onset - 2 - lo])
-    return LocatedDecay(impact, DecayPass(scan.row, pre.count, pre.m2, feed.finish()))
+            self.pre.add(values[: min(scan.row, lo) - row])
+        if self.guess is not None:
+            self._decay(values, row)
+        elif scan.row >= hi and scan.held:
+            self._guess(np.concatenate(scan.held))
+            self._decay(values[hi - row :], hi)
 
+    def _guess(self, window: Array) -> None:
+        """The impact found in the rows held, its decay among them read."""
+        found = _in_window(window, self.scan.peaks, self.dt, self.lo)
+        self.guess = Impact(-1, -1, -1) if found is None else found[0]  # none: nothing is read
+        if found is not None:
+            self._decay(window, self.lo)
 
-def _decay_from(
-    window: Array, peaks: Array, dt: float, lo: int, factor: int, cap: int
-) -> tuple[Impact, _DecayFeed | None]:
-    """The impact found in the rows held and a :class:`_DecayFeed` fed its decay's rows among them."""
-    found = _in_window(window, peaks, dt, lo)
-    if found is None:
-        return Impact(-1, -1, -1), None
-    feed = _DecayFeed(factor, window.shape[1], cap)
-    feed.push(window[found[0].start - lo :])
-    return found[0], feed
+    def _decay(self, values: Array, first: int) -> None:
+        """Rows ``first ...`` of the record: those of the guessed decay read (held until the factor is known)."""
+        assert self.guess is not None
+        if self.guess.start < 0:
+            return
+        part = values[max(0, self.guess.start - first) :]
+        if part.shape[0] == 0 or (self.feed is not None and self.feed.held >= self.cap):
+            return
+        if self.feed is None:
+            q = self.ask(False)
+            if q is None:
+                self.pending.append(np.array(part, dtype=float))
+                return
+            self._start(q)
+        assert self.feed is not None
+        self.feed.push(part)
+
+    def _start(self, q: int) -> None:
+        self.factor, self.feed = q, _DecayFeed(q, self.scan.peaks.shape[0], self.cap)
+        for part in self.pending:
+            self.feed.push(part)
+        self.pending.clear()
+
+    def finish(self, dt: float | None = None) -> LocatedDecay | None:
+        """The end of the record: :func:`located_decay`'s answer (`dt`: the interval to prove the impact with)."""
+        scan, lo = self.scan, self.lo
+        if not scan.held:
+            return None
+        window = np.concatenate(scan.held)
+        if self.guess is None:  # the record ended inside the window
+            self._guess(window)
+        if self.feed is None and self.guess is not None and self.guess.start >= 0:
+            self._start(int(self.ask(True) or 1))
+        impact = _proved(window, scan.peaks, scan.before, scan.after, self.dt if dt is None else dt, lo)
+        if impact is None:
+            return None
+        if self.feed is None or self.guess != impact or impact.onset - 2 < lo:
+            return LocatedDecay(impact, None)
+        self.pre.add(window[: impact.onset - 2 - lo])
+        return LocatedDecay(impact, DecayPass(scan.row, self.pre.count, self.pre.m2, self.feed.finish()))
 
 
 def located_decays(
@@ -866,6 +1004,56 @@ def located_decays(
         return found, None, q
     counted = fit_factor([p.rows - f.start for p, f in zip(passes, found, strict=True)], channels, max(1, factor))
     return found, (passes if abs(counted - q) <= _FACTOR_SLACK * counted else None), q
+
+
+def captured_decays(
+    captured: Sequence[CapturedDecay], channels: int, factor: int, near: Sequence[Impact], reach: int
+) -> tuple[list[Impact], list[DecayPass], int] | None:
+    """:func:`located_decays`'s answer from the decays a first read captured (None: read the records again).
+
+    Parameters
+    ----------
+    captured : sequence of CapturedDecay
+        Each record's, from :class:`StreamingDecimation` (its `capture` option).
+    channels : int
+        Columns of every record.
+    factor : int
+        The modal estimate's total decimation factor.
+    near : sequence of Impact
+        Where the modal estimate put each impact (raw rows).
+    reach : int
+        Raw rows the captured impact may lie from `near`'s (:func:`locate_impacts`).
+
+    Returns
+    -------
+    (list of Impact, list of DecayPass, int) or None
+        The impacts, the passes and their common factor, as :func:`located_decays` gives them; None
+        when the records' factors differ, an impact lies farther than `reach` from the estimate's
+        (the head held another hit), the factor read exceeds `factor` (it would cut into the band),
+        or it exceeds the one the rows counted ask by more than :data:`_FACTOR_SLACK` (a CSV's rows
+        overestimated from its size: the decays would be shorter than the row budget).
+
+    Notes
+    -----
+    The factor read may be smaller than the rows counted ask: the first read chose it before
+    the estimation decimated beyond the reader's own factor (:class:`StreamingDecimation`'s
+    `capture`). The decays are then cut at the row budget
+    (:func:`~rigidid.core.timedomain.refine.cut_decays`), as a whole read cuts them when its
+    factor is capped by the estimate's: the same rows budget, at a finer rate over a shorter
+    span of the decay (its end, which holds the least signal).
+    """
+    if len(captured) != len(near) or not captured:
+        return None
+    q = captured[0].factor
+    if any(c.factor != q for c in captured):
+        return None
+    if any(abs(c.impact.start - n.start) > reach or abs(c.impact.onset - n.onset) > reach
+           for c, n in zip(captured, near, strict=True)):  # fmt: skip
+        return None
+    counted = fit_factor([c.decay.rows - c.impact.start for c in captured], channels, max(1, factor))
+    if q > max(1, factor) or q - counted > _FACTOR_SLACK * counted:
+        return None
+    return [c.impact for c in captured], [c.decay for c in captured], q
 
 
 _FACTOR_SLACK = 0.1

@@ -30,7 +30,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from rigidid.core.timedomain.streaming import Decimated, StreamingDecimation, second_factor, spectra_content
+from rigidid.core.timedomain.streaming import (
+    CapturedDecay,
+    Decimated,
+    StreamingDecimation,
+    second_factor,
+    spectra_content,
+)
 from rigidid.core.timedomain.trend import Trend
 from rigidid.errors import InputError
 from rigidid.io.records.checks import MIN_ROWS, TimeCheck, check_decay, layout_ids, take_out_trend
@@ -89,6 +95,10 @@ class StreamedRecord:
         0 unless the first block with a nonzero value peaks outside ``[2^-200, 2^200]``, so that
         squares neither overflow nor underflow (records of 1e300 or 1e-300). Every estimate of
         :mod:`rigidid.core.timedomain` is unchanged by a factor common to the records of one test.
+    captured : CapturedDecay or None
+        The refit's impact and decay, read on the way (the `capture` option of
+        :func:`read_record_streamed`); None when not asked, when the head held no impact that
+        the whole record proves, or when a trend was taken out (the capture saw the rows with it).
     """
 
     data: Array
@@ -103,6 +113,7 @@ class StreamedRecord:
     clipped: NDArray[np.bool_] | None = None
     trend: Trend | None = None
     scale_exponent: int = 0
+    captured: CapturedDecay | None = None
 
 
 def read_record_streamed(
@@ -116,6 +127,7 @@ def read_record_streamed(
     second: int | None = None,
     keep_rows: int | None = None,
     scale_exponent: int | None = None,
+    capture: Sequence[int] | None = None,
 ) -> StreamedRecord:
     """Read one impact record block by block, checking it and decimating it as it arrives.
 
@@ -151,6 +163,10 @@ def read_record_streamed(
     scale_exponent : int, optional
         Multiply the values by ``2**scale_exponent`` (another record's, so that the records of one
         test share it); default: chosen from the record (see :class:`StreamedRecord`).
+    capture : sequence of int, optional
+        Read the refit's impact and decay on the way (``captured``): the rows of the test's
+        other records as known before reading
+        (:class:`~rigidid.core.timedomain.streaming.StreamingDecimation`'s `capture`).
 
     Returns
     -------
@@ -175,25 +191,25 @@ def read_record_streamed(
         tops.add(values)
 
     stream = StreamingDecimation(source.rows, len(wanted), factor=factor, f_limit=f_limit,
-                                 cascade=cascade, second=second, keep_rows=keep_rows)  # fmt: skip
+                                 cascade=cascade, second=second, keep_rows=keep_rows, capture=capture)  # fmt: skip
     blocks, exponent = in_range(source.blocks, scale_exponent)
     stream.run(blocks, check)
     dt = _checked_dt(source, times, tops.peak, wanted, src)
     try:
-        done = stream.finish()
+        done = stream.finish(dt)
     except InputError as exc:
         raise InputError(exc.message, source=src) from None
     data, trend = take_out_trend(done.data, src, wanted)
     if trend is not None:
         from rigidid.core.timedomain.preprocess import channel_energy
 
-        done = replace(done, data=data, energy=channel_energy(data))
+        done = replace(done, data=data, energy=channel_energy(data), captured=None)
         trend = trend.rescaled(done.offset, done.factor)
     _check_streamed_decay(done, source.line_of(times.rows), src)
     dt_error = _stamp_uncertainty(source, times) if source.dt is None else 0.0
     return StreamedRecord(
         done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages,
-        dt_error * done.factor, tops.clipped(), trend, exponent,
+        dt_error * done.factor, tops.clipped(), trend, exponent, done.captured,
     )  # fmt: skip
 
 
@@ -233,6 +249,7 @@ def read_records_streamed(
     *,
     cascade: bool = False,
     keep_rows: int | None = None,
+    capture: bool = False,
 ) -> tuple[list[StreamedRecord], tuple[float, float] | None]:
     """The records of one estimation, read with :func:`read_record_streamed` at one rate.
 
@@ -256,6 +273,8 @@ def read_records_streamed(
     keep_rows : int, optional
         See :func:`read_record_streamed` (the first record's pre-factor is
         everyone's).
+    capture : bool
+        Read the refit's impacts and decays on the way (each record's ``captured``).
 
     Returns
     -------
@@ -270,12 +289,16 @@ def read_records_streamed(
     InputError
         As :func:`read_record_streamed`; records of different sample intervals.
     """
+    others = _others(paths, sensor_ids) if capture else None
     first = read_record_streamed(paths[0], sensor_ids, factor=factor, f_limit=f_limit, progress=progress,
-                                 cascade=cascade and factor is None, keep_rows=keep_rows)  # fmt: skip
+                                 cascade=cascade and factor is None, keep_rows=keep_rows,
+                                 capture=None if others is None else others(0))  # fmt: skip
     q0, q2 = first.stages
     streamed = [first]
     streamed += [read_record_streamed(p, sensor_ids, factor=q0, second=q2, progress=progress,
-                                      scale_exponent=first.scale_exponent) for p in paths[1:]]  # fmt: skip
+                                      scale_exponent=first.scale_exponent,
+                                      capture=None if others is None else others(i + 1))
+                 for i, p in enumerate(paths[1:])]  # fmt: skip
     from rigidid.core.timedomain.stamps import common_interval, different_intervals
 
     total = streamed[0].factor
@@ -289,5 +312,12 @@ def read_records_streamed(
     content = spectra_content([r.spectrum for r in streamed], dts[0] / total)
     if q2 > 1 and (content is None or second_factor(content[1], dts[0] / total, q0, f_limit) != q2):
         del streamed, first
-        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False, keep_rows=keep_rows)
+        return read_records_streamed(paths, sensor_ids, factor, f_limit, progress, cascade=False, keep_rows=keep_rows,
+                                     capture=capture)  # fmt: skip
     return streamed, content
+
+
+def _others(paths: Sequence[str | os.PathLike[str]], sensor_ids: Sequence[str]) -> Callable[[int], list[int]]:
+    """``others(i)``: the rows of every record but ``i`` as their headers or sizes tell (a CSV's from its size)."""
+    rows = [open_source(Path(p), layout_ids(sensor_ids, str(p)), None).rows for p in paths]
+    return lambda i: rows[:i] + rows[i + 1 :]
