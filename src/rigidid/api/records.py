@@ -648,6 +648,7 @@ def _refit_skewed(
     skewed = _run_fit(result, fit, True, f"the plain refit was rejected ({first}); with the channels' delays "
                       f"estimated (a skew on {where}), ")  # fmt: skip
     if skewed is None:
+        _warn_delays(plain, ids, plain.frequency_hz, late)
         return result
     keep, _, reason = refit_verdict(skewed)
     if not keep:
