@@ -514,7 +514,7 @@ def with_refinement(
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     return _refit(
         result,
-        lambda: refine_body(
+        lambda delays: refine_body(
             arrays,
             records[0][1],
             result.positions,
@@ -528,13 +528,14 @@ def with_refinement(
             damping_per_mass=ident.damping_per_mass,
             drift=estimate.trends is not None,
             chain=_kept(chain, estimate.channels),
-            estimate_delays=estimate_delays,
+            estimate_delays=delays,
             sensor_bounds=bounds,
             estimate_sensors=estimate_sensors,
         ),
         progress,
         bounds,
         _kept_ids(result, estimate.channels),
+        delays=estimate_delays,
     )
 
 
@@ -593,35 +594,113 @@ def _refit(
     progress: ProgressCallback | None,
     tolerances: SensorBounds | None = None,
     ids: Sequence[str] = (),
+    delays: bool = False,
 ) -> IdentifyResult:
-    """Run `fit` (a refinement on the records) and accept it, or keep `result` with a RefinementWarning."""
+    """Run `fit` (a refinement on the records: ``fit(delays)``, the channels' delays estimated or not) and
+    accept it, or keep `result` with a RefinementWarning.
+
+    A plain refit (`delays` False) that is not kept and whose residual's score test names a skew (a channel's
+    delay step beyond :data:`_SKEW_Z` standard errors) is fitted again with the delays estimated
+    (``--estimate-delays``, eq. (19) with a delay per channel); that refit is kept when its own misfit test
+    keeps it (:func:`refit_verdict`), the skew's fitted delays named in a ChainWarning.
+    """
+    refinement = _run_fit(result, fit, delays)
+    if progress is not None:
+        progress("refit", 1, 1)
+    if refinement is None:
+        return result
+    late = _late_channels(refinement, ids)
+    if late and not delays and not refit_verdict(refinement)[0]:
+        return _refit_skewed(result, fit, refinement, tolerances, (ids, late))
+    _warn_delays(refinement, ids, refinement.frequency_hz, late)
+    return _accept_refinement(result, refinement, tolerances, ids)
+
+
+def _run_fit(result: IdentifyResult, fit: Any, delays: bool, why: str = "") -> Any:
+    """``fit(delays)``, or None with a RefinementWarning (`why` before its reason) when it fails."""
     import warnings
 
     from rigidid.errors import RefinementWarning
 
     try:
-        refinement = fit()
+        return fit(delays)
     except (np.linalg.LinAlgError, InputError, ValueError) as exc:
         warnings.warn(
-            f"refinement on the records failed ({exc}); kept the answer from the modes"
+            f"{why}refinement on the records failed ({exc}); kept the answer from the modes"
             + suspect_mode(result.identification),
+            RefinementWarning,
+            stacklevel=4,
+        )
+        return None
+
+
+def _refit_skewed(
+    result: IdentifyResult,
+    fit: Any,
+    plain: Any,
+    tolerances: SensorBounds | None,
+    named: tuple[Sequence[str], list[tuple[int, str]]],
+) -> IdentifyResult:
+    """The refit with the channels' delays estimated, after the plain refit `plain` was rejected and its score
+    test named the channels `named[1]` late (index, text); kept if its misfit test keeps it, else `result`
+    with both refits' reasons.
+
+    Its sensor budget is the --estimate-delays path's (:func:`_accept_refinement`: the refit has no
+    signatures of its own with delays free, so the kernel's budget at the modes).
+    """
+    import warnings
+
+    from rigidid.errors import ChainWarning, RefinementWarning
+
+    ids, late = named
+    where = ", ".join(text for _, text in late) + " relative to " + (ids[0] if ids else "the first channel")
+    first = refit_verdict(plain)[2]
+    skewed = _run_fit(result, fit, True, f"the plain refit was rejected ({first}); with the channels' delays "
+                      f"estimated (a skew on {where}), ")  # fmt: skip
+    if skewed is None:
+        _warn_delays(plain, ids, plain.frequency_hz, late)
+        return result
+    keep, _, reason = refit_verdict(skewed)
+    if not keep:
+        _warn_delays(plain, ids, plain.frequency_hz, late)
+        warnings.warn(
+            f"{first}; refitted with the channels' delays estimated (the residual shows a skew on {where}): "
+            f"{reason}" + suspect_mode(result.identification),
             RefinementWarning,
             stacklevel=3,
         )
         return result
-    finally:
-        if progress is not None:
-            progress("refit", 1, 1)
-    _warn_delays(refinement, ids, refinement.frequency_hz)
-    return _accept_refinement(result, refinement, tolerances, ids)
+    fitted = [
+        f"{ids[i]} {skewed.delays[i]:.3g} s (std {skewed.delays_std[i]:.2g} s)"
+        for i, _ in late
+        if skewed.delays is not None and i < len(skewed.delays)
+    ]
+    warnings.warn(
+        f"the refit's residual showed a delay on channel(s) {where}: refitted with the channels' delays "
+        f"estimated and kept that refit (fitted delay {', '.join(fitted)}); state the chain's delays in the "
+        "layout's chain block",
+        ChainWarning,
+        stacklevel=3,
+    )
+    _warn_delays(skewed, ids, skewed.frequency_hz, [])
+    return _accept_refinement(result, skewed, tolerances, ids)
 
 
 _SKEW_Z = 5.0  # a delay step this many standard errors from zero: an unmodelled skew
 
 
-def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any) -> None:
-    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score;
-    a HumWarning naming the mains hum the refit modelled."""
+def _late_channels(refinement: Any, ids: Sequence[str]) -> list[tuple[int, str]]:
+    """The channels (index, text) whose delay step in `refinement`'s score test is beyond :data:`_SKEW_Z`."""
+    if refinement.delay_score is None:
+        return []
+    step, z = refinement.delay_score
+    return [(i, f"{name} ({d:.3g} s, z = {zz:.1f})") for i, (name, d, zz) in enumerate(zip(ids, step, z, strict=False))
+            if abs(zz) > _SKEW_Z]  # fmt: skip
+
+
+def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: list[tuple[int, str]]) -> None:
+    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score
+    (the channels `late`, :func:`_late_channels`); a HumWarning naming the mains hum the refit modelled."""
     import warnings
 
     from rigidid.errors import ChainWarning
@@ -646,20 +725,16 @@ def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any) -> None
             HumWarning,
             stacklevel=3,
         )
-    if refinement.delay_score is not None:
-        step, z = refinement.delay_score
-        late = [f"{name} ({d:.3g} s, z = {zz:.1f})" for name, d, zz in zip(ids, step, z, strict=False)
-                if abs(zz) > _SKEW_Z]  # fmt: skip
-        if late:
-            warnings.warn(
-                "the refit's residual shows a delay (a phase growing with frequency) on channel(s) "
-                + ", ".join(late)
-                + " relative to "
-                + (ids[0] if ids else "the first channel")
-                + ": state the chain's delays in the layout's chain block or use --estimate-delays",
-                ChainWarning,
-                stacklevel=3,
-            )
+    if late:
+        warnings.warn(
+            "the refit's residual shows a delay (a phase growing with frequency) on channel(s) "
+            + ", ".join(text for _, text in late)
+            + " relative to "
+            + (ids[0] if ids else "the first channel")
+            + ": state the chain's delays in the layout's chain block or use --estimate-delays",
+            ChainWarning,
+            stacklevel=3,
+        )
 
 
 def sensor_bounds(layout: LayoutFile | None, length: str = "m") -> SensorBounds:
@@ -992,20 +1067,23 @@ def refine_records(
     if progress is not None:
         progress("refit", 0, 1)
 
-    def fit() -> Any:
-        data = read()  # the decays, read with the impacts when they could be (io.records.refit.locate_and_read)
-        if estimate.channels is not None:  # clipped channels left out
-            data = columns_of(data, estimate.channels)
+    held: list[Any] = []  # the decays, read once for both refits (a skew's second one: _refit)
+
+    def fit(delays: bool) -> Any:
+        if not held:  # the decays, read with the impacts when they could be (io.records.refit.locate_and_read)
+            data = read()
+            held.append(data if estimate.channels is None else columns_of(data, estimate.channels))  # clipped out
+        data = held[0]
         return refine_prepared(
             data, dt, result.positions, result.directions, center_of_gravity=ident.center_of_gravity,
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None, sensor_bounds=bounds,
-            chain=_kept(chain_model(lay), estimate.channels), estimate_delays=estimate_delays,
+            chain=_kept(chain_model(lay), estimate.channels), estimate_delays=delays,
             estimate_sensors=estimate_sensors,
         )  # fmt: skip
 
     bounds = sensor_bounds(lay)
-    return _refit(result, fit, progress, bounds, _kept_ids(result, estimate.channels))
+    return _refit(result, fit, progress, bounds, _kept_ids(result, estimate.channels), delays=estimate_delays)
 
 
 def _captured(estimate: ModalEstimate, channels: int, dt: float, reach: int) -> tuple[list[Any], Any] | None:

@@ -1,0 +1,56 @@
+"""A channel one sample late, no chain stated: the default refit fits its delay (issue 23).
+
+Records simulated by rigidid's impulse simulator (a closed-form impulse response, no code shared with
+the refit's Gauss-Newton model), then one channel shifted by a sample.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from rigidid import api
+from rigidid.api import body_from_file
+from rigidid.core.sensor_budget import SensorBounds
+from rigidid.core.timedomain import impulse_records
+from rigidid.errors import ChainWarning
+from rigidid.io.files import layout_arrays, load_body, load_layout
+
+SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "four-mounts"
+IMPACTS = [((0.3, 0.2, 0.15), (0.3, -0.5, -1.0)), ((-0.3, -0.1, 0.0), (1.0, 0.6, 0.2))]
+RATE = 1024.0
+SKEWED = 2
+DELAY_SAMPLES = 0.03  # the fitted delay's error in samples (observed 0.009, 2.8 of its std)
+OTHER_Z = 5.0  # the other channels' fitted delays in their std (observed up to 1.75)
+INTERVAL_Z = 3.0  # CG and inertia errors in their reported std (observed up to 0.9)
+
+
+def test_a_skewed_channel_is_fitted_by_default_and_the_truth_is_within_the_intervals() -> None:
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    layout = load_layout(SAMPLE / "layout.json")
+    ids, pos, dirs = layout_arrays(layout)
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=0.5, pretrigger=0.1, noise=0.002,
+                            seed=3)  # fmt: skip
+    records = []
+    for r in clean:
+        r[1:, SKEWED] = r[:-1, SKEWED].copy()  # one sample late
+        records.append((r, 1.0 / RATE))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        modes, estimate = api.estimate_rigid_modes(layout, records)
+        start = api.identify(layout, modes)
+        result = api.with_refinement(start, records, estimate, tolerances=SensorBounds(0.0, 0.0, 0.0, 0.0))
+    chain = [str(w.message) for w in caught if issubclass(w.category, ChainWarning)]
+    assert len(chain) == 1 and "kept that refit" in chain[0] and f"{ids[SKEWED]} 0.00" in chain[0], chain
+    bound = result.record_bound
+    assert bound is not None and bound.delays is not None  # the refit kept, with the delays fitted
+    delay, std = bound.delays[ids[SKEWED]]
+    assert abs(delay - 1.0 / RATE) < DELAY_SAMPLES / RATE and std < DELAY_SAMPLES / RATE
+    others = [abs(d) / s for name, (d, s) in bound.delays.items() if name not in (ids[0], ids[SKEWED])]
+    assert max(others) < OTHER_Z
+    cg = bound.center_of_gravity
+    assert np.all(np.abs(cg.estimate - body.center_of_gravity) < INTERVAL_Z * cg.std)
+    inertia = bound.inertia
+    assert np.all(np.abs(inertia.estimate - body.inertia_tensor) <= INTERVAL_Z * inertia.std + 1e-12)
