@@ -182,3 +182,9 @@ def test_fit_on_the_rigid_combinations_gives_the_per_channel_residual_jacobian_a
     plain, fast = _bound(*args), _bound(*args[:-5], r, [90, 90], 2, None, grad, reduced)
     for key, value in plain.items():
         np.testing.assert_allclose(fast[key], value, rtol=1e-8, atol=0.0)
+    from rigidid.core.timedomain.refine import _residual
+
+    at_start = _evaluate(theta0, data, pos_l, dirs, 60.0, False)[0]
+    np.testing.assert_allclose(
+        _residual(theta0, data, pos_l, dirs, 60.0, None), at_start, atol=1e-9 * np.abs(at_start).max()
+    )

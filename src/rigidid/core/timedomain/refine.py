@@ -1177,7 +1177,7 @@ def refine_prepared(
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
     if data.noise_from == "residual":
-        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
+        r0 = _residual(theta0, data, pos_l, dirs, omega, link)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
         data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
@@ -1284,7 +1284,7 @@ def _with_hum(
     from rigidid.core.timedomain.hum import find_hum
 
     pos_l, dirs, omega, chain, estimate_delays, _ = model
-    r0 = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0]
+    r0 = _residual(theta0, data, pos_l, dirs, omega, link)
     parts, row, p = [], 0, pos_l.shape[0]
     for d in data.decays:
         parts.append(r0[row : row + d.size].reshape(-1, p))
@@ -1497,13 +1497,32 @@ def _expanded(red: _Reduced, basis: Array, r: Array, jm: Array) -> tuple[Array, 
     residual and none of its Jacobian's.
     """
     m, k = basis.shape[1], jm.shape[1]
-    res_parts, jac_parts, row = [], [], 0
+    jac_parts, row = [], 0
     for rest in red.rest:
         n = rest.shape[0]
-        res_parts.append((r[row : row + n * m].reshape(n, m) @ basis.T + rest).reshape(-1))
         jac_parts.append(np.matmul(basis, jm[row : row + n * m].reshape(n, m, k)).reshape(-1, k))
         row += n * m
-    return np.concatenate(res_parts), np.concatenate(jac_parts)
+    return _expanded_residual(red, basis, r), np.concatenate(jac_parts)
+
+
+def _expanded_residual(red: _Reduced, basis: Array, r: Array) -> Array:
+    """The weighted residual on every channel from the reduced one (:func:`_expanded`)."""
+    m, parts, row = basis.shape[1], [], 0
+    for rest in red.rest:
+        n = rest.shape[0]
+        parts.append((r[row : row + n * m].reshape(n, m) @ basis.T + rest).reshape(-1))
+        row += n * m
+    return np.concatenate(parts)
+
+
+def _residual(theta: Array, data: PreparedDecays, pos: Array, dirs: Array, omega: float, link: _Link | None) -> Array:
+    """The weighted residual on every channel (:func:`_evaluate`); from the rigid combinations where they hold it."""
+    basis = _channel_basis(data.sigma, pos, dirs) if link is None else None
+    if basis is None:
+        return _evaluate(theta, data, pos, dirs, omega, False, link)[0]
+    red = _reduced(data, basis)
+    r = _evaluate(theta, red.data, pos, dirs, omega, False, None, red.mix)[0]
+    return _expanded_residual(red, basis, r)
 
 
 def _fit(
