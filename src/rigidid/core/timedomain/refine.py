@@ -1545,8 +1545,9 @@ def _fit(
     (about :data:`_COARSE_ROWS` residuals: the model is exact at any sample times) gives the
     full fit its start, a fraction of a standard error from the minimum, so the full fit ends
     in a few iterations. The full fit's end, its convergence test and the cost are those of the
-    fit on every channel and sample; its residual and Jacobian are evaluated there on every
-    channel (the intervals and the acceptance test are per channel).
+    fit on every channel and sample; its residual and Jacobian on every channel (the acceptance
+    test and the sensors' terms are per channel) are expanded from the combinations' own
+    (:func:`_expanded`, exact), and the intervals take the combinations' Jacobian.
 
     Returns
     -------
