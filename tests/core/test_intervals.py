@@ -46,6 +46,34 @@ def test_rows_correlated_by_the_truncated_toeplitz_matrix() -> None:
     expected = np.einsum("ij,jkl->ikl", dense, block)
     np.testing.assert_allclose(_correlate_rows(block, rho), expected, rtol=0.0, atol=1e-12)
     np.testing.assert_allclose(_correlate_rows(block, np.ones(1)), block, rtol=0.0, atol=0.0)
+    # the same through scipy's pass (large blocks) and through shifted copies (small ones)
+    import rigidid.core.timedomain.intervals as intervals
+
+    saved = intervals._SHIFTED_COPIES
+    try:
+        intervals._SHIFTED_COPIES = 0
+        np.testing.assert_allclose(_correlate_rows(block, rho), expected, rtol=0.0, atol=1e-12)
+    finally:
+        intervals._SHIFTED_COPIES = saved
+
+
+def test_covariance_from_the_rigid_combinations_is_the_per_channel_one() -> None:
+    # J_n = Q A_n per sample (Q orthonormal, p x 6): the sandwich from the rows A_n with the residual per
+    # channel (its levels differ between channels and impacts) is the one from J's rows, to rounding
+    rng = np.random.default_rng(3)
+    p, lengths, n_par = 9, [60, 45], 5
+    q = np.linalg.qr(rng.standard_normal((p, 6)))[0]
+    a = rng.standard_normal((sum(lengths), 6, n_par))
+    full_j = np.matmul(q, a).reshape(-1, n_par)
+    level = np.concatenate([np.full((n, p), 1.0 + i) * rng.uniform(0.3, 3.0, p) for i, n in enumerate(lengths)])
+    r = (rng.standard_normal((sum(lengths), p)) * level).reshape(-1)
+    full = parameter_covariance(full_j, r, lengths, p, 4, 30)
+    reduced = parameter_covariance(a.reshape(-1, n_par), r, lengths, p, 4, 30, combinations=q)
+    np.testing.assert_allclose(reduced.matrix, full.matrix, rtol=1e-10, atol=1e-14 * np.abs(full.matrix).max())
+    np.testing.assert_allclose(reduced.step, full.step, rtol=1e-10, atol=1e-14)
+    assert reduced.decrement == pytest.approx(full.decrement, rel=1e-10)
+    with pytest.raises(ValueError, match="channels"):
+        parameter_covariance(full_j, r, lengths, p, 4, 30, combinations=q)
 
 
 def test_remaining_step_is_added_to_the_covariance() -> None:

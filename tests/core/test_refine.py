@@ -156,3 +156,35 @@ def test_exact_records_refit_reports_converged(rig) -> None:  # type: ignore[no-
     )  # fmt: skip
     assert ref.converged and ref.evaluations < 240
     np.testing.assert_allclose(ref.center_of_gravity, body.center_of_gravity, atol=REFINE_NOISE_FREE_ABS)
+
+
+def test_fit_on_the_rigid_combinations_gives_the_per_channel_residual_jacobian_and_errors(rig) -> None:  # type: ignore[no-untyped-def]
+    # the fit runs on six combinations of the weighted channels; its residual and Jacobian on every
+    # channel, and the calibrated standard errors from the combinations' rows, are those of a full
+    # evaluation on every channel at the same parameters (exact, to rounding)
+    from rigidid.core.timedomain.refine import _bound, _fit, _output_gradient
+
+    body, pos, dirs = rig
+    records = impulse_records(body, pos, dirs, IMPACTS, sample_rate=128.0, duration=1.0, noise=0.02, seed=4)
+    lf = layout_frame(pos)
+    frame = _Frame(lf.centre, lf.scale, 60.0)
+    theta0 = frame.to_theta(body.center_of_gravity, *_truth_per_mass(body))
+    sigma = np.sqrt(np.mean(records[0] ** 2, axis=0)) * np.linspace(0.01, 0.03, pos.shape[0])
+    data = _Data([r[:90] for r in records], sigma, 1.0 / 128.0, "pretrigger")
+    pos_l = lf.to_local(pos)
+    theta, _, r, jm, _, reduced = _fit(data, pos_l, dirs, 60.0, theta0, 8)
+    assert reduced is not None and reduced[1].shape == (pos.shape[0], 6)
+    r_full, j_full = _evaluate(theta, data, pos_l, dirs, 60.0, True)
+    np.testing.assert_allclose(r, r_full, rtol=0.0, atol=1e-9 * np.abs(r_full).max())
+    np.testing.assert_allclose(jm, j_full, rtol=0.0, atol=1e-9 * np.abs(j_full).max())
+    grad = _output_gradient(theta, frame, pos_l, dirs)
+    args = (theta, j_full, 1.0, frame, pos_l, dirs, r_full, [90, 90], 2, None, grad)
+    plain, fast = _bound(*args), _bound(*args[:-5], r, [90, 90], 2, None, grad, reduced)
+    for key, value in plain.items():
+        np.testing.assert_allclose(fast[key], value, rtol=1e-8, atol=0.0)
+    from rigidid.core.timedomain.refine import _residual
+
+    at_start = _evaluate(theta0, data, pos_l, dirs, 60.0, False)[0]
+    np.testing.assert_allclose(
+        _residual(theta0, data, pos_l, dirs, 60.0, None), at_start, atol=1e-9 * np.abs(at_start).max()
+    )

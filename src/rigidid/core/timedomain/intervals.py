@@ -109,14 +109,25 @@ def noise_correlation(factor: int) -> Array:
     return result
 
 
+_SHIFTED_COPIES = 4_000_000  # values below which _correlate_rows sums shifted copies (no scipy import)
+
+
 def _correlate_rows(block: Array, rho: Array) -> Array:
     """``P X`` along axis 0 with ``P`` the symmetric Toeplitz matrix of `rho`, truncated at the ends.
 
     One pass of ``scipy.ndimage.correlate1d`` with zeros beyond the ends (a fifth of the time
-    of a sum of shifted copies, lag by lag, on the refit's Jacobian).
+    of a sum of shifted copies, lag by lag, on the refit's Jacobian per channel); below
+    :data:`_SHIFTED_COPIES` values (the rigid combinations' Jacobian), the sum of shifted copies,
+    which costs less than importing ``scipy.ndimage`` (about 0.15 s).
     """
     if rho.size == 1:
         return block * float(rho[0])
+    if block.size <= _SHIFTED_COPIES:
+        shifted: Array = block * float(rho[0])
+        for lag in range(1, min(rho.size, block.shape[0])):
+            shifted[lag:] += float(rho[lag]) * block[:-lag]
+            shifted[:-lag] += float(rho[lag]) * block[lag:]
+        return shifted
     from scipy.ndimage import correlate1d
 
     out: Array = correlate1d(block, np.concatenate([rho[:0:-1], rho]), axis=0, mode="constant", cval=0.0)
@@ -130,6 +141,8 @@ def parameter_covariance(
     channels: int,
     factor: int,
     n_linear: int,
+    *,
+    combinations: Array | None = None,
 ) -> ParameterCovariance:
     """Robust (sandwich) covariance of a weighted least-squares fit to decimated records.
 
@@ -151,6 +164,11 @@ def parameter_covariance(
     n_linear : int
         Linear parameters solved inside the residual (amplitudes, offsets), for
         the degrees of freedom.
+    combinations : ndarray, shape (channels, m), optional
+        An orthonormal basis ``Q`` whose span holds every sample's Jacobian rows
+        (the refit's rigid combinations of the weighted channels): `jacobian` then
+        holds ``Q^T J_n`` per sample (``m * sum(lengths)`` rows) and `residual` is still
+        per channel. The same covariance at ``m / channels`` of the cost (Notes).
 
     Returns
     -------
@@ -173,29 +191,42 @@ def parameter_covariance(
     channels and stationary within an impact's decay (its level may differ
     between impacts and channels). Cost: about ``N n (n + 2 L)`` operations,
     ``L`` the correlation's lags (20).
+
+    With `combinations` ``Q`` and ``J_n = Q A_n`` (``A_n`` the rows given):
+    ``sum_c v_ic J_nc^T J_mc = A_n^T S_i A_m`` with ``S_i = Q^T diag(v_i) Q``
+    (m x m); writing ``S_i = L_i L_i^T`` (its eigen-decomposition), the meat is
+    the same sum over the m columns of ``L_i^T A_n``, ``J^T J = A^T A`` and
+    ``J^T r = sum_n A_n^T Q^T r_n``: exact, no row of ``J`` formed.
     """
     j = np.asarray(jacobian, dtype=float)
     r = np.asarray(residual, dtype=float)
-    n_rows, n_par = j.shape
-    if r.shape != (n_rows,) or n_rows != channels * int(sum(lengths)):
+    n_rows, n_par = r.size, j.shape[1]
+    width = channels if combinations is None else int(np.shape(combinations)[1])
+    if r.shape != (n_rows,) or n_rows != channels * int(sum(lengths)) or j.shape[0] != width * int(sum(lengths)):
         raise ValueError("jacobian and residual rows must be channels * sum(lengths)")
     info = j.T @ j
     binv, rank = pseudo_inverse(info, symmetric=True)
     dof = max(n_rows - rank - n_linear, 1)
     s2 = float(r @ r) / dof
     rho = noise_correlation(factor)
-    meat = np.zeros((n_par, n_par))
+    meat, gradient = np.zeros((n_par, n_par)), np.zeros(n_par)
     first = 0
     for n in lengths:
-        rows = slice(first, first + int(n) * channels)
-        first += int(n) * channels
-        blk = j[rows].reshape(int(n), channels, n_par)
-        res = r[rows].reshape(int(n), channels)
-        w = np.sqrt(np.mean(res**2, axis=0) * (n_rows / dof))[None, :, None]
-        scaled = (blk * w).reshape(-1, n_par)
-        meat += scaled.T @ (_correlate_rows(blk, rho) * w).reshape(-1, n_par)
+        blk = j[first * width : (first + int(n)) * width].reshape(int(n), width, n_par)
+        res = r[first * channels : (first + int(n)) * channels].reshape(int(n), channels)
+        first += int(n)
+        v = np.mean(res**2, axis=0) * (n_rows / dof)
+        if combinations is not None:
+            q = np.asarray(combinations, dtype=float)
+            e, u = np.linalg.eigh(q.T @ (v[:, None] * q))
+            blk_w = np.matmul(np.sqrt(np.maximum(e, 0.0))[:, None] * u.T, blk)
+            res = res @ q
+        else:
+            blk_w = blk * np.sqrt(v)[None, :, None]
+        gradient += blk.reshape(-1, n_par).T @ res.reshape(-1)
+        meat += blk_w.reshape(-1, n_par).T @ _correlate_rows(blk_w, rho).reshape(-1, n_par)
     meat = 0.5 * (meat + meat.T)
-    step = -binv @ (j.T @ r)
+    step = -binv @ gradient
     cov = binv @ meat @ binv + np.outer(step, step)
     decrement = float(step @ info @ step) / s2 if s2 > 0 else 0.0
     return ParameterCovariance(matrix=cov, bound=s2 * binv, step=step, decrement=decrement)

@@ -792,13 +792,14 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
         n = sig.shape[0]
         # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
-        sg = np.einsum("ncm,nkc->mkc", scaled, sig).reshape(-1, k)
-        block = np.einsum("nkc,nlc->ckl", sig, sig)
+        sig_c = sig.transpose(2, 0, 1)  # (c, n, kind): batched products per channel (BLAS, not einsum loops)
+        sg = np.matmul(scaled.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(-1, k)
+        block = np.matmul(sig_c.transpose(0, 2, 1), sig_c)
         own = np.zeros((p, 6, p, 6))
         own[np.arange(p), :, np.arange(p), :] = block
         gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
         jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
-        cross += np.einsum("ncj,nkc->jkc", jr, sig).reshape(N_PARAMETERS, k)
+        cross += np.matmul(jr.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(N_PARAMETERS, k)
         proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
         row += n * p
     return SensorTerms(cross, gram, proj)
@@ -825,11 +826,12 @@ def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, ome
         design, ex = _design(lam, phi * w[:, None], t, data.drift)
         norms = np.sqrt(np.einsum("ij,ij->j", design, design))
         norms = np.where(norms > 0.0, norms, 1.0)
-        scaled = (design / norms).reshape(n, p, -1)
-        inv = pseudo_inverse(np.einsum("ncm,ncl->ml", scaled, scaled), symmetric=True)[0]
-        beta = inv @ np.einsum("ncm,nc->m", scaled, y * w) / norms
-        sig = np.einsum("nm,kcm->nkc", ex * (beta[:6] + 1j * beta[6:12]), phi_v).real * w  # (n, kind, sensor)
-        yield scaled, inv, sig
+        flat = design / norms
+        inv = pseudo_inverse(flat.T @ flat, symmetric=True)[0]
+        beta = inv @ (flat.T @ (y * w).reshape(-1)) / norms
+        modal = ex * (beta[:6] + 1j * beta[6:12])  # (n, 6)
+        sig = (modal.real @ phi_v.real.reshape(-1, 6).T - modal.imag @ phi_v.imag.reshape(-1, 6).T).reshape(n, 6, p) * w
+        yield flat.reshape(n, p, -1), inv, sig  # sig: (n, kind, sensor)
 
 
 def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]]:
@@ -1175,15 +1177,15 @@ def refine_prepared(
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
     if data.noise_from == "residual":
-        r0, _ = _evaluate(theta0, data, pos_l, dirs, omega, False, link)
+        r0 = _residual(theta0, data, pos_l, dirs, omega, link)
         per = r0.reshape(-1, pos.shape[0])
         sigma = np.sqrt(np.mean(per**2, axis=0))
         data = replace(data, sigma=np.where(sigma > 0, sigma, 1.0))
 
     if max_evaluations > 0:
-        theta, nfev, r, jm, converged = _fit(data, pos_l, dirs, omega, theta0, max_evaluations, link)
+        theta, nfev, r, jm, converged, reduced = _fit(data, pos_l, dirs, omega, theta0, max_evaluations, link)
     else:
-        theta, nfev, converged = theta0, 0, False
+        theta, nfev, converged, reduced = theta0, 0, False, None
         r, jm = _evaluate(theta, data, pos_l, dirs, omega, True, link)
     n_res = r.size
     n_linear = _linear_per_impact(p, data.drift) + (0 if link is None else link.extra_columns())
@@ -1194,7 +1196,8 @@ def refine_prepared(
     lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
     grad = _output_gradient(theta, frame, pos_l, dirs)
-    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, [d.shape[0] for d in data.decays], q_fit, n_linear, grad)
+    lengths = [d.shape[0] for d in data.decays]
+    std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
     sensor_std, correction = None, None
     if sensor_bounds is not None and link is None:  # the sensors' signatures are the plain model's
@@ -1281,7 +1284,7 @@ def _with_hum(
     from rigidid.core.timedomain.hum import find_hum
 
     pos_l, dirs, omega, chain, estimate_delays, _ = model
-    r0 = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0]
+    r0 = _residual(theta0, data, pos_l, dirs, omega, link)
     parts, row, p = [], 0, pos_l.shape[0]
     for d in data.decays:
         parts.append(r0[row : row + d.size].reshape(-1, p))
@@ -1433,7 +1436,12 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
 _COARSE_ROWS = 24_000
 """Residuals (samples x channel combinations) of the coarse fit that starts the full one (:func:`_fit`)."""
 _COARSE_STEP = 3  # the coarse fit runs only when it takes at most every third sample
-_FINE_DAMPING = 1e-9  # initial damping of the full fit after the coarse one (Gauss-Newton steps from a near start)
+_FINE_DAMPING = 1e-9
+"""Initial Levenberg-Marquardt damping of the refit's stages: Gauss-Newton steps at once. The modal
+estimate's body is near the minimum (its cost about 1.3 residual variances per residual on the
+issue-23 records): Gauss-Newton ends there in three Jacobians, where Marquardt's 1e-3, cut by at
+most 3 per accepted step, took eleven. A far start loses little: each refused step multiplies the
+damping by 2, 4, 8, ..., to 1e-3 after six refusals."""
 
 
 @dataclass(frozen=True)
@@ -1443,6 +1451,7 @@ class _Reduced:
     data: PreparedDecays  # the columns fitted, weights one
     mix: Array | None  # (m, p): the channels' shapes to the columns' (None: the channels themselves)
     constant: float  # the part of |r|^2 no parameter moves
+    rest: tuple[Array, ...] = ()  # per impact (n, p): the weighted residual's part no parameter moves
 
 
 def _channel_basis(sigma: Array, pos: Array, dirs: Array) -> Array | None:
@@ -1468,18 +1477,57 @@ def _reduced(data: PreparedDecays, basis: Array | None, step: int = 1) -> _Reduc
     if basis is None:
         return _Reduced(replace(data, decays=[d[::step] for d in data.decays], dt=data.dt * step), None, 0.0)
     w = 1.0 / data.sigma
-    decays, constant = [], 0.0
+    decays, constant, left = [], 0.0, []
     for y in data.decays:
         yw = y[::step] * w
         cols = yw @ basis
         rest = yw - cols @ basis.T
         n = rest.shape[0]
         trend = np.column_stack([np.ones(n), np.arange(n, dtype=float)]) if data.drift else np.ones((n, 1))
-        coef = np.linalg.lstsq(trend, rest, rcond=None)[0]
-        constant += float(np.sum((rest - trend @ coef) ** 2))
+        rest -= trend @ np.linalg.lstsq(trend, rest, rcond=None)[0]
+        constant += float(np.sum(rest**2))
         decays.append(cols)
+        left.append(rest)
     reduced = replace(data, decays=decays, sigma=np.ones(basis.shape[1]), dt=data.dt * step, pre_m2=None)
-    return _Reduced(reduced, basis.T * w[None, :], constant)
+    return _Reduced(reduced, basis.T * w[None, :], constant, tuple(left))
+
+
+def _expanded(red: _Reduced, basis: Array, r: Array, jm: Array) -> tuple[Array, Array]:
+    """The weighted residual and Jacobian on every channel from the reduced fit's (:func:`_reduced`, step 1).
+
+    The model's weighted shapes and their derivatives lie in the span of ``Q`` (`basis`) at every
+    sample, and so does the projected Jacobian: the full one is ``Q A_n`` per sample ``n`` (``A_n``
+    the reduced one's rows). The residual is ``Q r_n`` plus the part orthogonal to ``Q`` that only
+    the offsets (and drifts) fit (``red.rest``). Exact, at ``p / 6`` of the cost of a full evaluation's
+    residual and none of its Jacobian's.
+    """
+    m, k = basis.shape[1], jm.shape[1]
+    jac_parts, row = [], 0
+    for rest in red.rest:
+        n = rest.shape[0]
+        jac_parts.append(np.matmul(basis, jm[row : row + n * m].reshape(n, m, k)).reshape(-1, k))
+        row += n * m
+    return _expanded_residual(red, basis, r), np.concatenate(jac_parts)
+
+
+def _expanded_residual(red: _Reduced, basis: Array, r: Array) -> Array:
+    """The weighted residual on every channel from the reduced one (:func:`_expanded`)."""
+    m, parts, row = basis.shape[1], [], 0
+    for rest in red.rest:
+        n = rest.shape[0]
+        parts.append((r[row : row + n * m].reshape(n, m) @ basis.T + rest).reshape(-1))
+        row += n * m
+    return np.concatenate(parts)
+
+
+def _residual(theta: Array, data: PreparedDecays, pos: Array, dirs: Array, omega: float, link: _Link | None) -> Array:
+    """The weighted residual on every channel (:func:`_evaluate`); from the rigid combinations where they hold it."""
+    basis = _channel_basis(data.sigma, pos, dirs) if link is None else None
+    if basis is None:
+        return _evaluate(theta, data, pos, dirs, omega, False, link)[0]
+    red = _reduced(data, basis)
+    r = _evaluate(theta, red.data, pos, dirs, omega, False, None, red.mix)[0]
+    return _expanded_residual(red, basis, r)
 
 
 def _fit(
@@ -1490,20 +1538,22 @@ def _fit(
     theta0: Array,
     max_evaluations: int,
     link: _Link | None = None,
-) -> tuple[Array, int, Array, Array, bool]:
+) -> tuple[Array, int, Array, Array, bool, tuple[Array, Array] | None]:
     """:func:`_levenberg_marquardt` on the channels' rigid combinations (:func:`_reduced`), from a coarse fit's end.
 
     When the decays hold more than ``3 _COARSE_ROWS`` residuals, a fit on every k-th sample
     (about :data:`_COARSE_ROWS` residuals: the model is exact at any sample times) gives the
     full fit its start, a fraction of a standard error from the minimum, so the full fit ends
     in a few iterations. The full fit's end, its convergence test and the cost are those of the
-    fit on every channel and sample; its residual and Jacobian are evaluated there on every
-    channel (the intervals and the acceptance test are per channel).
+    fit on every channel and sample; its residual and Jacobian on every channel (the acceptance
+    test and the sensors' terms are per channel) are expanded from the combinations' own
+    (:func:`_expanded`, exact), and the intervals take the combinations' Jacobian.
 
     Returns
     -------
-    theta, evaluations, residual, jacobian, converged
-        Evaluations of both fits.
+    theta, evaluations, residual, jacobian, converged, reduced
+        Evaluations of both fits; residual and Jacobian on every channel (:func:`_expanded`);
+        `reduced` the reduced fit's Jacobian and the basis ``Q`` (None without a reduction).
     """
     # a modelled chain, delay or hum leaves the rigid span per channel: no reduction then
     basis = _channel_basis(data.sigma, pos, dirs) if link is None else None
@@ -1523,14 +1573,15 @@ def _fit(
             return _evaluate(th, red.data, pos, dirs, omega, False, link, red.mix)[0]
 
         n_k = sum(d.shape[0] for d in red.data.decays) * data.sigma.size
-        damping = _FINE_DAMPING if nfev else 1e-3
+        damping = _FINE_DAMPING
         theta, used, r, jm, converged = _levenberg_marquardt(
             fun, both, theta, budget, n_k, scale / k, red.constant, damping
         )
         nfev += used
-    if basis is not None:
-        r, jm = _evaluate(theta, data, pos, dirs, omega, True)
-    return theta, nfev, r, jm, converged
+    if basis is None:
+        return theta, nfev, r, jm, converged, None
+    r_full, j_full = _expanded(red, basis, r, jm)
+    return theta, nfev, r_full, j_full, converged, (jm, basis)
 
 
 def _misfit(
@@ -1585,6 +1636,7 @@ def _bound(
     factor: int = 1,
     n_linear: int | None = None,
     grad: Array | None = None,
+    reduced: tuple[Array, Array] | None = None,
 ) -> dict[str, Array]:
     """Standard errors of the physical values (delta method) from the parameters' covariance.
 
@@ -1594,13 +1646,17 @@ def _bound(
     correlation, the remaining Gauss-Newton step). Without: the textbook bound
     ``s2 (J^T J)^+``. `n_linear`: linear unknowns per impact (default: 12 and an offset per channel).
     Parameters beyond the body's (the channels' delays) get the key ``"delay"``. `grad`:
-    :func:`_output_gradient` at `theta` when computed already.
+    :func:`_output_gradient` at `theta` when computed already. `reduced`: the reduced fit's
+    Jacobian and basis (:func:`_fit`): the same covariance from the rigid combinations' rows.
     """
     if residual is not None and lengths is not None:
         from rigidid.core.timedomain.intervals import parameter_covariance
 
         per = _linear_per_impact(pos_l.shape[0], False) if n_linear is None else n_linear
-        cov = parameter_covariance(jm, residual, lengths, pos_l.shape[0], factor, len(lengths) * per).matrix
+        j_rows, mix = (jm, None) if reduced is None else reduced
+        cov = parameter_covariance(
+            j_rows, residual, lengths, pos_l.shape[0], factor, len(lengths) * per, combinations=mix
+        ).matrix
     else:
         cov = s2 * pseudo_inverse(jm.T @ jm, symmetric=True)[0]  # pseudo-inverse of the information
     if grad is None:
