@@ -249,3 +249,25 @@ def test_mass_standard_error_matches_the_spread_over_noise_draws_above_the_mount
     est, se = np.array(est), np.array(se)
     assert 0.5 < np.sqrt(np.mean(((est - m) / se) ** 2)) < 1.66
     assert 0.5 < np.std(est, ddof=1) / np.mean(se) < 1.6
+
+
+def test_leverage_adjusted_sandwich_is_unbiased_where_few_clusters_carry_many_parameters():
+    """The exact fit's clustered sandwich with each cluster's misfit times ``(I - H_cc)^(-1/2)`` (CR2) is unbiased
+    under equal noise: 30 parameters over 20 clusters of 12 misfits (femtools' cases: 52 over 126), 200 draws
+    of a linear least-squares fit, the variance estimates average 0.99 of the true ``(J^T J)^-1`` (0.93-1.07
+    allowed); the plain sandwich times ``N / (N - k)``, the correction before, averaged 0.80."""
+    from rigidid.core.rigidfrf import _leverage_adjusted
+
+    rng = np.random.default_rng(0)
+    q, n, k = 2, 10, 30
+    jac = rng.standard_normal((12 * q * n, k)) * np.exp(rng.standard_normal((12 * q * n, 1)))
+    u = np.linalg.svd(jac, full_matrices=False)[0]
+    bread = np.linalg.inv(jac.T @ jac)
+    estimate = np.zeros(k)
+    for _ in range(200):
+        e = rng.standard_normal(12 * q * n)
+        r = (e - u @ (u.T @ e)).reshape(12, q, n)
+        adjusted = _leverage_adjusted(u.reshape(12, q, n, k), np.zeros((q, n)), r)
+        scores = np.einsum("cqnp,qnc->qnp", jac.reshape(12, q, n, k), adjusted).reshape(q * n, k)
+        estimate += np.diag(bread @ (scores.T @ scores) @ bread) / 200
+    assert 0.93 < np.mean(estimate / np.diag(bread)) < 1.07
