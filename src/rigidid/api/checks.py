@@ -327,16 +327,11 @@ def checked(
     return replace(ident, diagnostics=replace(diag, warnings=(*diag.warnings, *(t for _, t in found))))
 
 
-def _chi2_quantile(dof: int, z: float = 3.09) -> float:
-    """Wilson-Hilferty approximation of the chi-square quantile (z = 3.09: 0.999)."""
-    a = 2.0 / (9.0 * max(dof, 1))
-    return float(max(dof, 1) * (1.0 - a + z * np.sqrt(a)) ** 3)
-
-
 def rates_verdict(
     errors: StandardErrors | None, ident: Identification, positions: Array, rates: MountRates
 ) -> list[tuple[type[Warning], str]]:
     """Warnings about per-mount rates: a split that is not unique, rates at zero, mounts that miss the stiffness."""
+    from rigidid.core.massline import chi2_quantile
     from rigidid.core.mounts import split_misfit
     from rigidid.errors import PhysicalPlausibilityWarning
 
@@ -356,7 +351,7 @@ def rates_verdict(
     iu = np.triu_indices(6)
     cov = errors.inflation**2 * errors.linearised.covariance(lambda e: e.stiffness_per_mass[:, iu[0], iu[1]])
     chi2, dof = split_misfit(ident.stiffness_per_mass, cov, ident.center_of_gravity, positions, rates.axes)
-    if dof > 0 and chi2 > _chi2_quantile(dof):
+    if dof > 0 and chi2 > chi2_quantile(dof, 3.09):  # 0.1 %
         found.append((PhysicalPlausibilityWarning, (
             f"the mounts in mounts.json do not explain the identified stiffness: it misses their best fit by "
             f"{np.sqrt(chi2 / dof):.2g} times its standard errors (chi-square {chi2:.3g} on {dof} degrees of "

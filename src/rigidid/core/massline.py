@@ -339,7 +339,6 @@ def mass_line(
         if support_model == "auto":
             support_model, why = _auto_supports(fit, residual, noise)
     units, where = _first_order_misfit(fitted - target, design.shape[1], q)
-    intervals = None
     supports_kc = None
     if support_model == "exact" and fit is not None:
         m, cg, inertia = _body_from_parameters(fit.parameters, origin, span)
@@ -350,21 +349,10 @@ def mass_line(
         m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
         intervals = _first_order_intervals(design, fitted - target, y0, tf, origin, span)
     return MassLine(
-        mass=m,
-        center_of_gravity=cg,
-        inertia_tensor=inertia,
-        band=(lo, hi),
-        band_source=band_source,
-        frequencies_used=n_f,
-        residual=residual,
-        corrections=extra,
-        supports=support_model,
-        supports_reason=why,
-        intervals=intervals,
-        misfit_noise_units=units,
-        misfit_where=where,
-        support_matrices=supports_kc,
-    )
+        mass=m, center_of_gravity=cg, inertia_tensor=inertia, band=(lo, hi), band_source=band_source,
+        frequencies_used=n_f, residual=residual, corrections=extra, supports=support_model, supports_reason=why,
+        intervals=intervals, misfit_noise_units=units, misfit_where=where, support_matrices=supports_kc,
+    )  # fmt: skip
 
 
 def _band_lines(f: Array, lo: float, hi: float) -> NDArray[np.bool_]:
