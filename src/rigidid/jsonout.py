@@ -28,12 +28,13 @@ if TYPE_CHECKING:
     from rigidid.core.record_spread import RecordSpread
     from rigidid.core.timedomain import ModalEstimate
     from rigidid.core.timedomain.force import ForceMass
-    from rigidid.core.timedomain.refine import RecordBound
+    from rigidid.core.timedomain.refine import RecordBound, SensorCorrection
     from rigidid.core.timedomain.stabilisation import OrderPoles
     from rigidid.core.uncertainty import IntervalEstimate, Uncertainty
     from rigidid.results import IdentifyResult, MassLineResult, PlanResult
 
 __all__ = [
+    "corrections_by_sensor",
     "estimate_to_dict",
     "interval_to_dict",
     "layout_report_to_dict",
@@ -458,6 +459,34 @@ def _body_intervals(source: RecordSpread | RecordBound) -> dict[str, Any]:
     }
 
 
+def corrections_by_sensor(correction: SensorCorrection, ids: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """JSON form of the sensors' estimated errors per sensor id (``sensor_corrections``).
+
+    Parameters
+    ----------
+    correction : SensorCorrection
+        :class:`rigidid.core.timedomain.refine.SensorCorrection` (rows gain, two tilts, three shifts).
+    ids : sequence of str
+        The fitted sensors' ids, in the correction's column order.
+
+    Returns
+    -------
+    dict of str to dict
+        Per id: ``gain``, ``gain_std``, ``tilt_rad`` and ``tilt_std_rad`` (two each) and ``determined``
+        (gain, tilt 1, tilt 2); positions are not estimated and not listed.
+    """
+    out = {}
+    for i, name in enumerate(ids):
+        out[name] = {
+            "gain": float(correction.value[0, i]),
+            "gain_std": float(correction.std[0, i]),
+            "tilt_rad": [float(v) for v in correction.value[1:3, i]],
+            "tilt_std_rad": [float(v) for v in correction.std[1:3, i]],
+            "determined": [bool(v) for v in correction.determined[:3, i]],
+        }
+    return out
+
+
 def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     """JSON form of the Cramér-Rao intervals of the refinement on the records: ``method``,
     ``normalised_cost``, ``noise_from``, ``residuals``, ``variance_from``, ``evaluations``,
@@ -486,8 +515,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         out["channel_delays"] = {name: {"delay_s": d, "std_s": sd} for name, (d, sd) in bound.delays.items()}
     if bound.hum_hz:
         out["mains_hum_hz"] = list(bound.hum_hz)
-    if bound.sensor_corrections is not None:
-        out["sensor_corrections"] = bound.sensor_corrections
+    if bound.sensor_correction is not None:
+        out["sensor_corrections"] = corrections_by_sensor(bound.sensor_correction, bound.corrected_sensors)
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

@@ -123,7 +123,7 @@ def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_bod
     # the inertia's error without the gains estimated is 2.8e-3 (J/m, kg m^2/kg); with them, a tenth of it
     assert np.max(np.abs(err[3:])) < 1e-3  # observed 0.76e-3 (CG 0.06 mm against 0.66)
     # the JSON's sensor_corrections: per sensor id, as the result model validates them
-    from rigidid.api.records import corrections_by_sensor
+    from rigidid.jsonout import corrections_by_sensor
     from rigidid.models import SensorCorrectionEntry
 
     ids = [f"s{i}" for i in range(8)]

@@ -824,36 +824,8 @@ def _accept_refinement(
         bound = replace(bound, hum_hz=tuple(hz for hz, _, _ in refinement.hum))
     if refinement.sensor_correction is not None:
         named = ids if ids else result.sensor_ids
-        bound = replace(bound, sensor_corrections=corrections_by_sensor(refinement.sensor_correction, named))
+        bound = replace(bound, sensor_correction=refinement.sensor_correction, corrected_sensors=tuple(named))
     return replace(result, identification=refined, record_bound=bound, standard_errors=None)
-
-
-def corrections_by_sensor(correction: Any, ids: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """The sensors' estimated errors per sensor id, as the JSON's ``sensor_corrections`` holds them.
-
-    Parameters
-    ----------
-    correction : SensorCorrection
-        :class:`rigidid.core.timedomain.refine.SensorCorrection` (rows gain, two tilts, three shifts).
-    ids : sequence of str
-        The fitted sensors' ids, in the correction's column order.
-
-    Returns
-    -------
-    dict of str to dict
-        Per id: ``gain``, ``gain_std``, ``tilt_rad`` and ``tilt_std_rad`` (two each) and ``determined``
-        (gain, tilt 1, tilt 2); positions are not estimated and not listed.
-    """
-    out = {}
-    for i, name in enumerate(ids):
-        out[name] = {
-            "gain": float(correction.value[0, i]),
-            "gain_std": float(correction.std[0, i]),
-            "tilt_rad": [float(v) for v in correction.value[1:3, i]],
-            "tilt_std_rad": [float(v) for v in correction.std[1:3, i]],
-            "determined": [bool(v) for v in correction.determined[:3, i]],
-        }
-    return out
 
 
 def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str]) -> list[str]:

@@ -1721,10 +1721,10 @@ class RecordBound:
         channel and its standard error (:attr:`Refinement.delays`).
     hum_hz : tuple of float
         Mains hum frequencies modelled (:attr:`Refinement.hum`).
-    sensor_corrections : dict or None
-        With the sensors' errors estimated: per sensor id, ``gain`` (relative), ``tilt_rad`` (its axis
-        turned towards the two normals of :func:`rigidid.core.sensor_budget.axis_normals`), their
-        ``gain_std`` and ``tilt_std_rad``, and ``determined`` (gain, tilt 1, tilt 2; :class:`SensorCorrection`).
+    sensor_correction : SensorCorrection or None
+        With the sensors' errors estimated: the estimate (:attr:`Refinement.sensor_correction`).
+    corrected_sensors : tuple of str
+        The ids of `sensor_correction`'s columns.
     """
 
     center_of_gravity: Any
@@ -1743,7 +1743,8 @@ class RecordBound:
     misfit: MisfitTest | None = None
     delays: dict[str, tuple[float, float]] | None = None
     hum_hz: tuple[float, ...] = ()
-    sensor_corrections: dict[str, dict[str, Any]] | None = None
+    sensor_correction: SensorCorrection | None = None
+    corrected_sensors: tuple[str, ...] = ()
 
 
 def record_bound(
