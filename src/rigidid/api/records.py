@@ -4,7 +4,6 @@ on the records, record-spread intervals, the records' spectrum, and :func:`ident
 
 from __future__ import annotations
 
-import contextvars
 import math
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -45,6 +44,7 @@ def estimate_modes(
     max_order: int | None = None,
     decimate: int | None = None,
     progress: ProgressCallback | None = None,
+    keep_decays: bool = False,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modal parameters from impact records (the paper's time-domain step).
 
@@ -68,6 +68,11 @@ def estimate_modes(
         Decimation factor (default chosen from the records' spectrum).
     progress : ProgressCallback, optional
         Progress of the decimation and the model-order sweep.
+    keep_decays : bool
+        For record files read in row blocks: keep, during that one read, the impacts and decays
+        the output-error refit needs (:attr:`ModalEstimate.decays
+        <rigidid.core.timedomain.estimate.ModalEstimate.decays>`), so that :func:`refine_records`
+        need not read the files again.
 
     Returns
     -------
@@ -98,7 +103,8 @@ def estimate_modes(
         else:
             paths.append(item)
     if paths and not arrays:
-        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress)
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress,
+                                  keep_decays=keep_decays)  # fmt: skip
     records_given = bool(arrays)
     arrays += load_records(paths, lay)
     dts = [dt for _, dt in arrays]
@@ -226,6 +232,7 @@ def estimate_rigid_modes(
     max_order: int | None = None,
     decimate: int | None = None,
     progress: ProgressCallback | None = None,
+    keep_decays: bool = False,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Six modes from the records, or seven when one of the six looks elastic.
 
@@ -240,7 +247,7 @@ def estimate_rigid_modes(
 
     Parameters
     ----------
-    layout, records, method, band, max_order, decimate, progress
+    layout, records, method, band, max_order, decimate, progress, keep_decays
         As for :func:`estimate_modes`.
 
     Returns
@@ -271,7 +278,8 @@ def estimate_rigid_modes(
 
     lay = layout if isinstance(layout, LayoutFile) else load_layout(layout)
     options: dict[str, Any] = {
-        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress
+        "method": method, "band": band, "max_order": max_order, "decimate": decimate, "progress": progress,
+        "keep_decays": keep_decays,
     }  # fmt: skip
     table, estimate = estimate_modes(lay, records, n_modes=6, **options)
     _, positions, directions = files.layout_arrays(fitted_layout(lay, table))
@@ -318,12 +326,6 @@ def estimate_rigid_modes(
     return table7, estimate7
 
 
-_READ_DECAYS: contextvars.ContextVar[bool] = contextvars.ContextVar("read_decays", default=False)
-"""True while the modes are estimated for a refit that follows: the record files' first read keeps the
-refit's impacts and decays (:attr:`~rigidid.core.timedomain.estimate.ModalEstimate.decays`), so that the
-refit need not read them again (:func:`refine_records`)."""
-
-
 def _estimate_streamed(
     lay: LayoutFile,
     paths: Sequence[PathLike],
@@ -334,8 +336,10 @@ def _estimate_streamed(
     decimate: int | None,
     progress: ProgressCallback | None,
     cascade: bool = True,
+    keep_decays: bool = False,
 ) -> tuple[ModeTable, ModalEstimate]:
-    """:func:`estimate_modes` on record files read in blocks and decimated as they arrive.
+    """:func:`estimate_modes` on record files read in blocks and decimated as they arrive (with
+    `keep_decays`, the refit's impacts and decays kept on the way).
 
     The first record chooses the pre-decimation factor (:mod:`rigidid.io.records.streamed`)
     or takes the user's `decimate` whole; the others share it. The estimate reports
@@ -353,7 +357,7 @@ def _estimate_streamed(
     # factor; read_records_streamed reads again without it when all records' content asks another factor
     cascade = cascade and decimate is None
     streamed, content = read_records_streamed(paths, ids, decimate, f_limit, progress, cascade=cascade,
-                                              capture=_READ_DECAYS.get())  # fmt: skip
+                                              capture=keep_decays)  # fmt: skip
     factor = streamed[0].factor
     dts = [r.dt for r in streamed]
     cascaded = streamed[0].stages[1] > 1
@@ -381,7 +385,8 @@ def _estimate_streamed(
             raise
         # the smaller factors the estimation retries need the record before the second stage
         del streamed
-        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False)
+        return _estimate_streamed(lay, paths, method, n_modes, band, max_order, decimate, progress, cascade=False,
+                                  keep_decays=keep_decays)  # fmt: skip
     if factor > 1:
         impacts = tuple(
             Impact(r.offset + i.onset * factor, r.offset + i.peak * factor, r.offset + i.start * factor, i.hits)
@@ -1170,18 +1175,21 @@ def estimate_test_modes(
     paths: Sequence[PathLike] | None = None,
     rigid_six: bool = False,
     progress: ProgressCallback | None = None,
+    keep_decays: bool = False,
 ) -> tuple[ModeTable, ModalEstimate]:
     """Modes from a test's records, or from record files read in row blocks (`paths`).
 
     With `rigid_six` and six modes asked, seven are estimated when one of six looks elastic and the
-    rigid six are returned (:func:`estimate_rigid_modes`); otherwise :func:`estimate_modes`.
+    rigid six are returned (:func:`estimate_rigid_modes`); otherwise :func:`estimate_modes`. With
+    `keep_decays`, the files' one read also keeps what the refit needs (:func:`estimate_modes`).
     """
     from rigidid.core.timedomain import METHODS
 
     if modal.method is not None and modal.method not in METHODS:
         raise InputError(f"unknown method {modal.method!r}; choose {' or '.join(METHODS)}", source="modal_method")
     source: Sequence[PathLike] | Sequence[tuple[NDArray[np.float64], float]] = paths or data.records
-    options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order, "decimate": modal.decimate}
+    options = {"method": modal.method, "band": modal.band, "max_order": modal.max_order, "decimate": modal.decimate,
+               "keep_decays": keep_decays}  # fmt: skip
     if rigid_six and modal.n_modes == 6:
         return estimate_rigid_modes(data.layout, source, progress=progress, **options)  # type: ignore[arg-type]
     return estimate_modes(data.layout, source, n_modes=modal.n_modes, progress=progress, **options)  # type: ignore[arg-type]
@@ -1318,12 +1326,8 @@ def _identify_test(
     with named_source(src), noted(notes, ElasticModeWarning, ClippedChannelWarning):
         if records:
             rigid_six = identify_options.get("modes_used") is None
-            token = _READ_DECAYS.set(refine and method == "structured")
-            try:
-                modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six,
-                                                      progress=progress)  # fmt: skip
-            finally:
-                _READ_DECAYS.reset(token)
+            modes, estimate = estimate_test_modes(data, modal, paths=paths, rigid_six=rigid_six, progress=progress,
+                                                  keep_decays=refine and method == "structured")  # fmt: skip
     assert modes is not None
     summed = None
     if spectrum and paths:  # after the estimation, which checked the files
