@@ -658,7 +658,7 @@ def _refit_skewed(
     from rigidid.errors import ChainWarning, RefinementWarning
 
     ids, late = named
-    where = ", ".join(text for _, text in late) + " relative to " + (ids[0] if ids else "the first channel")
+    where = _skew_where(late, ids)
     first = refit_verdict(plain)[2]
     skewed = _run_fit(result, fit, True, f"the plain refit was rejected ({first}); with the channels' delays "
                       f"estimated (a skew on {where}), ")  # fmt: skip
@@ -703,6 +703,11 @@ def _late_channels(refinement: Any, ids: Sequence[str]) -> list[tuple[int, str]]
             if abs(zz) > _SKEW_Z]  # fmt: skip
 
 
+def _skew_where(late: list[tuple[int, str]], ids: Sequence[str]) -> str:
+    """The late channels' texts (:func:`_late_channels`) and the channel their delays are relative to."""
+    return ", ".join(text for _, text in late) + " relative to " + (ids[0] if ids else "the first channel")
+
+
 def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: list[tuple[int, str]]) -> None:
     """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score
     (the channels `late`, :func:`_late_channels`); a HumWarning naming the mains hum the refit modelled."""
@@ -733,9 +738,7 @@ def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: l
     if late:
         warnings.warn(
             "the refit's residual shows a delay (a phase growing with frequency) on channel(s) "
-            + ", ".join(text for _, text in late)
-            + " relative to "
-            + (ids[0] if ids else "the first channel")
+            + _skew_where(late, ids)
             + ": state the chain's delays in the layout's chain block or use --estimate-delays",
             ChainWarning,
             stacklevel=3,
