@@ -523,16 +523,6 @@ class StreamingDecimation:
         return Decimated(data, self.total, offset, stages, channel_energy(data), spectrum, captured)
 
 
-def chunk_maxima(mags: Array) -> Array:
-    """``max |x|`` per channel of every 128 rows of `mags` (shape (n, p)), shape (chunks, p)."""
-    n = mags.shape[0]
-    whole = n // _CHUNK * _CHUNK
-    parts = [mags[:whole].reshape(-1, _CHUNK, mags.shape[1]).max(axis=1)] if whole else []
-    if whole < n:
-        parts.append(mags[whole:].max(axis=0, keepdims=True))
-    return np.concatenate(parts) if parts else np.zeros((0, mags.shape[1]))
-
-
 def locate_impact(blocks: Blocks, channels: int, dt: float, lo: int, hi: int) -> Impact | None:
     """:func:`find_impact` on a raw record, from its rows ``lo:hi`` and every block's maxima; None if unsure.
 
@@ -574,21 +564,21 @@ class _WindowScan:
         """Take the next block; return the row it starts at."""
         row, stop, lo, hi = self.row, self.row + values.shape[0], self.lo, self.hi
         if row < lo:
-            self.before.append(_abs_chunk_maxima(values[: min(stop, lo) - row]))
+            self.before.append(chunk_maxima(values[: min(stop, lo) - row]))
             self.peaks = np.maximum(self.peaks, self.before[-1].max(axis=0, initial=0.0))
         if stop > lo and row < hi:
             self.held.append(np.array(values[max(0, lo - row) : min(stop, hi) - row], dtype=float))
             self.peaks = np.maximum(self.peaks, np.abs(self.held[-1]).max(axis=0, initial=0.0))
         if stop > hi:
-            self.after.append(_abs_chunk_maxima(values[max(0, hi - row) :]))
+            self.after.append(chunk_maxima(values[max(0, hi - row) :]))
             self.peaks = np.maximum(self.peaks, self.after[-1].max(axis=0, initial=0.0))
         self.row = stop
         return row
 
 
-def _abs_chunk_maxima(x: Array) -> Array:
-    """:func:`chunk_maxima` of ``|x|`` from each chunk's largest and smallest value (no ``|x|`` made: the
-    capture's pass over every row of the record, issue 23)."""
+def chunk_maxima(x: Array) -> Array:
+    """``max |x|`` per channel of every 128 rows of `x` (shape (n, p)), shape (chunks, p): from each chunk's
+    largest and smallest value, no ``|x|`` made (the capture's pass over every row of a record, issue 23)."""
     n, p = x.shape
     whole = n // _CHUNK * _CHUNK
     parts = []
