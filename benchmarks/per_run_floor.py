@@ -242,8 +242,13 @@ def qp_bound(r_map: np.ndarray, k_map: np.ndarray, bases: tuple[np.ndarray, np.n
         c = 1.25 * floor[:, 0 if i < 3 else 1] + 6 * se[0 if i < 3 else 1]
         x_free = -np.linalg.lstsq(sv, sf[:, i], rcond=None)[0]
         free[i] = fixed[i] + x_free @ seen
-        cons = [{"type": "ineq", "jac": lambda x: np.vstack([-sv, sv]),
-                 "fun": lambda x, c=c, i=i: np.concatenate([c - sf[:, i] - sv @ x, c + sf[:, i] + sv @ x])}]
+        cons = [
+            {
+                "type": "ineq",
+                "jac": lambda x: np.vstack([-sv, sv]),
+                "fun": lambda x, c=c, i=i: np.concatenate([c - sf[:, i] - sv @ x, c + sf[:, i] + sv @ x]),
+            }
+        ]
         res = minimize(lambda x, i=i: np.mean((sf[:, i] + sv @ x) ** 2), seen @ k_map[i],
                        jac=lambda x, i=i: 2 * sv.T @ (sf[:, i] + sv @ x) / len(sv), constraints=cons,
                        method="SLSQP", options={"maxiter": 500, "ftol": 1e-14})  # fmt: skip
@@ -323,7 +328,9 @@ def candidate_run(cell: str, seed: int) -> dict[str, np.ndarray]:
     return out
 
 
-def candidate_table(runs: int, r_map: np.ndarray, k_map: np.ndarray) -> None:
+def candidate_table(
+    runs: int, r_map: np.ndarray, k_map: np.ndarray, cells: tuple[str, ...] = ("clean", *CELLS)
+) -> None:
     """The candidate (LS shapes at the refit's poles, then the kernel) against the refit, run by run.
 
     Per cell, over `runs` draws: runs within the per-run target (the run's own floor and clean std), the
@@ -337,7 +344,7 @@ def candidate_table(runs: int, r_map: np.ndarray, k_map: np.ndarray) -> None:
     print(f"{'cell':<11} " + " ".join(f"{n + ' pass, RMS CG/J':>28}" for n in names))
     rng = np.random.default_rng(5)
     noise_err: dict[str, np.ndarray] = {}
-    for cell in ("clean", *CELLS):
+    for cell in cells:
         rows = [candidate_run(cell, seed) for seed in range(runs)]
         got = {n: np.array([r[n] for r in rows]) for n in (*names[:3], names[4], "floor", "std")}
         if cell == "clean":
@@ -403,10 +410,13 @@ def cell_table(r_map: np.ndarray, k_map: np.ndarray, std: np.ndarray, n: int, qp
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--draws", type=int, default=20000)
+    parser.add_argument("--draws", type=int, default=20000, help="Monte Carlo draws per cell (0: no table)")
     parser.add_argument("--qp-draws", type=int, default=1000)
     parser.add_argument("--cache", type=Path, help="npz of the maps: read if present, else written")
     parser.add_argument("--candidate", type=int, default=0, help="runs per cell of the LS-shapes candidate")
+    parser.add_argument("--candidate-cells", default="clean," + ",".join(CELLS))
+    parser.add_argument("--free-positions", action="store_true", help="'sensors estimated' frees the positions too "
+                        "(an experiment: refine's estimated kinds set to all six)")  # fmt: skip
     args = parser.parse_args()
     if args.cache is not None and args.cache.exists():
         saved = np.load(args.cache)
@@ -415,9 +425,14 @@ def main() -> None:
         r_map, k_map, std = linear_maps()
         if args.cache is not None:
             np.savez(args.cache, r_map=r_map, k_map=k_map, std=std)
-    cell_table(r_map, k_map, std, args.draws, args.qp_draws)
+    if args.draws:
+        cell_table(r_map, k_map, std, args.draws, args.qp_draws)
+    if args.free_positions:  # the experiment: gains, axes and positions estimated (refine keeps positions at prior)
+        import rigidid.core.timedomain.refine as refine
+
+        setattr(refine, "_ESTIMATED_KINDS", 6)  # noqa: B010
     if args.candidate:
-        candidate_table(args.candidate, r_map, k_map)
+        candidate_table(args.candidate, r_map, k_map, tuple(args.candidate_cells.split(",")))
 
 
 if __name__ == "__main__":
