@@ -282,10 +282,17 @@ def ls_shapes(records: list[np.ndarray], poles: np.ndarray, start: int, pre: int
     return shapes
 
 
+CLEAN_DEFAULT = False
+"""``--clean-default-tolerances``: the clean cell's 'sensors estimated' states rigidid's default tolerances (exact
+sensors, tolerances stated: what estimating them costs when there is nothing to correct)."""
+
+
 def stated_bounds(effects: set[str]) -> object:
     """The cell's stated tolerances (chain_matrix's bounds; zero for the sources not drawn)."""
-    from rigidid.core.sensor_budget import SensorBounds
+    from rigidid.core.sensor_budget import DEFAULT_BOUNDS, SensorBounds
 
+    if not effects and CLEAN_DEFAULT:
+        return DEFAULT_BOUNDS
     return SensorBounds(**cm.stated_tolerances(effects))
 
 
@@ -415,6 +422,8 @@ def main() -> None:
     parser.add_argument("--cache", type=Path, help="npz of the maps: read if present, else written")
     parser.add_argument("--candidate", type=int, default=0, help="runs per cell of the LS-shapes candidate")
     parser.add_argument("--candidate-cells", default="clean," + ",".join(CELLS))
+    parser.add_argument("--clean-default-tolerances", action="store_true", help="the clean cell's 'sensors "
+                        "estimated' states the default tolerances")  # fmt: skip
     parser.add_argument("--free-positions", action="store_true", help="'sensors estimated' frees the positions too "
                         "(an experiment: refine's estimated kinds set to all six)")  # fmt: skip
     args = parser.parse_args()
@@ -427,6 +436,8 @@ def main() -> None:
             np.savez(args.cache, r_map=r_map, k_map=k_map, std=std)
     if args.draws:
         cell_table(r_map, k_map, std, args.draws, args.qp_draws)
+    global CLEAN_DEFAULT
+    CLEAN_DEFAULT = args.clean_default_tolerances
     if args.free_positions:  # the experiment: gains, axes and positions estimated (refine keeps positions at prior)
         import rigidid.core.timedomain.refine as refine
 
