@@ -1,6 +1,6 @@
 """Accuracy read run by run in the sensor-error cells: what any estimator can reach (issue 23).
 
-Run from the worktree root (about 2 minutes for the maps, then seconds; ``--candidate`` adds ~3 s per run)::
+Run from the worktree root (a few minutes for the maps, then seconds; ``--candidate`` adds ~5 s per run)::
 
     PYTHONPATH=src OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/per_run_floor.py [--draws 20000]
         [--cache /tmp/per_run_maps.npz] [--candidate 20]
@@ -26,12 +26,28 @@ on the exact modes read through the same sensors) plus 6 of the clean case's sta
    w = 0: the kernel's own map, what a kernel fed with noise-free modal data would reach), the RMS of
    each class's largest error over the refit's, and the minimum-variance combination per figure
    (weights from the maps' joint covariance under the stated distribution).
-3. **The bound**: the smallest RMS error over *all* linear maps ``E`` (achievable or not, noise ignored)
-   that pass the per-run target on every one of ``--qp-draws`` draws: a quadratic programme per figure.
-   If it is above the refit's RMS, no estimator can pass every run without losing RMS accuracy.
-4. ``--candidate N``: the non-efficient candidate measured on N simulated runs per cell (1 % noise):
-   the mode shapes by linear least squares at the refit's poles (each channel's and impact's complex
-   residues given the poles, then per mode the rank-one fit across impacts), then the kernel.
+3. **The invisible errors and the bound**: the sensor errors no records can tell from a change of the body
+   (first order, from the modal model written afresh here: the change of the read shapes is a body's change
+   whose poles stay, plus a complex scale per mode). On them every consistent estimator's map is the same (the refit's
+   and the kernel's agree there: printed as a check); elsewhere an estimator that uses the redundancy can
+   take any value. Printed: the least RMS any consistent linear map reaches (noise-free), and the least RMS
+   of one passing the per-run target on every one of ``--qp-draws`` draws (a quadratic programme per figure),
+   with its pass rate on all draws. Near 0: the per-run target is reachable in principle, by estimating the
+   visible sensor errors; the price is noise, measured in 4.
+4. ``--candidate N``: estimators measured on N simulated runs per cell (1 % noise), run by run against the
+   run's own floor and the refit's noise std (``--candidate-cells``):
+
+   - ``refit``: ``refine_body`` started at the truth (no sensor parameters: the efficient map ``R``);
+   - ``candidate``: the mode shapes by linear least squares at the refit's poles (each channel's and
+     impact's complex residues given the poles, then per mode the rank-one fit across impacts, weighted by
+     the channels' pre-trigger noise), then the kernel (``oracle poles``: the same at the true poles);
+   - ``mix``: per figure, the minimum-variance combination of refit and candidate (weights from their joint
+     covariance: noise from the clean runs, sensors from ``R``, ``K`` over the cell's stated distribution);
+   - ``sensors estimated``: the refit with the sensors' gains and axes estimated jointly, the stated
+     tolerances as their prior (``refine_body(..., estimate_sensors=True)``, what ``--estimate-sensors``
+     does); ``--free-positions`` frees the positions too (an experiment: refine keeps them at their prior);
+     ``--clean-default-tolerances``: in the clean cell it states rigidid's default tolerances (exact sensors:
+     what estimating them costs when there is nothing to correct).
 """
 
 from __future__ import annotations
@@ -382,6 +398,10 @@ def candidate_table(
 
 def cell_table(r_map: np.ndarray, k_map: np.ndarray, std: np.ndarray, n: int, qp_draws: int) -> None:
     bases = invisible_basis()
+    agree = np.linalg.norm((r_map - k_map) @ bases[0].T) / np.linalg.norm(r_map @ bases[0].T)
+    print(f"invisible sensor errors: {bases[0].shape[0]} of {6 * N_SENSORS} dimensions; there |R - K| / |R| = "
+          f"{agree:.3f} (every consistent estimator agrees there), |R N| / |R| = "
+          f"{np.linalg.norm(r_map @ bases[0].T) / np.linalg.norm(r_map):.2f}")  # fmt: skip
     """Per cell: miss rates and RMS (over the refit's) of E_w, the min-variance mix and the QP bound."""
     se = np.array([std[:3].max(), std[3:].max()])
     ws = (1.0, 0.75, 0.5, 0.25, 0.1, 0.0)
