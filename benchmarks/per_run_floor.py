@@ -367,6 +367,8 @@ def candidate_table(
     print(f"{'cell':<11} " + " ".join(f"{n + ' pass, RMS CG/J':>28}" for n in names))
     rng = np.random.default_rng(5)
     noise_err: dict[str, np.ndarray] = {}
+    if cells[0] != "clean":
+        raise SystemExit("--candidate-cells: clean first (the mix's noise covariance comes from its runs)")
     for cell in cells:
         rows = [candidate_run(cell, seed) for seed in range(runs)]
         got = {n: np.array([r[n] for r in rows]) for n in (*names[:3], names[4], "floor", "std")}
