@@ -17,7 +17,7 @@ from rigidid.core.timedomain.preprocess import decimate, fir_taps
 from rigidid.core.timedomain.refine import _Data, _evaluate, _Frame, _outputs
 from rigidid.io.files import layout_arrays, load_body, load_layout
 
-from ..tolerances import COVERAGE_BAND, NOISE_CORRELATION_ABS, SANDWICH_VARIANCE_REL
+from ..tolerances import COVERAGE_BAND, DELAY_HELD_EXCESS, NOISE_CORRELATION_ABS, SANDWICH_VARIANCE_REL
 
 SAMPLE = Path(__file__).resolve().parents[2] / "samples" / "four-mounts"
 IMPACTS = [((0.3, 0.2, 0.15), (0.3, -0.5, -1.0)), ((-0.3, -0.1, 0.0), (1.0, 0.6, 0.2))]
@@ -188,3 +188,70 @@ def test_the_refinement_reports_the_calibrated_covariance(monkeypatch) -> None: 
     )
     textbook = refine_body(records, 1.0 / 128.0, pos, dirs, **options)  # type: ignore[arg-type]
     assert not np.allclose(ref.std["center_of_gravity"], textbook.std["center_of_gravity"], rtol=0.05)
+
+
+def test_intervals_with_delays_fitted_cover_the_linearised_errors(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # issue 23: with the channels' delays fitted, the body's reported std is the marginal of the joint covariance
+    # (body and delays): it matches the Monte Carlo spread of the linearised delay-fitted estimate, under noise
+    # whose level differs between impacts; the body's columns alone (the delays held) fall short of it
+    import rigidid.core.timedomain.intervals as intervals
+    import rigidid.core.timedomain.refine as refine
+
+    body = body_from_file(load_body(SAMPLE / "body.json"))
+    _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
+    rate, q, start, onset, draws = 128.0, 2, 53, 51, 1000
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=rate, duration=2.0, pretrigger=0.4)
+    level = [0.005 * f * np.sqrt(np.mean(r[60:] ** 2, axis=0)) for r, f in zip(clean, (1.0, 4.0), strict=True)]
+    rng = np.random.default_rng(4)
+    records = [r + lv * rng.standard_normal(r.shape) for r, lv in zip(clean, level, strict=True)]
+    seen: dict[str, object] = {}
+    original, gradient, evaluate = intervals.parameter_covariance, refine._output_gradient, refine._evaluate
+
+    def at_truth(*args, **kwargs):  # type: ignore[no-untyped-def]
+        seen["args"] = args
+        pc = original(*args, **kwargs)  # without the remaining step (the draw's own error at the truth)
+        return replace(pc, matrix=pc.matrix - np.outer(pc.step, pc.step))
+
+    def grad_spy(*args):  # type: ignore[no-untyped-def]
+        seen["grad"] = gradient(*args)
+        return seen["grad"]
+
+    def model_spy(*args, **kwargs):  # type: ignore[no-untyped-def]
+        out = evaluate(*args, **kwargs)
+        if args[5]:  # the model's Jacobian (the body's and the delays' columns)
+            seen["model"] = out[1]
+        return out
+
+    monkeypatch.setattr(intervals, "parameter_covariance", at_truth)
+    monkeypatch.setattr(refine, "_output_gradient", grad_spy)
+    monkeypatch.setattr(refine, "_evaluate", model_spy)
+    _, k, c = system_matrices(body)
+    ref = refine.refine_body(
+        records, 1.0 / rate, pos, dirs, starts=[start] * 2, onsets=[onset] * 2, decimation=q, max_evaluations=0,
+        center_of_gravity=body.center_of_gravity, inertia_per_mass=body.inertia_tensor / body.mass,
+        stiffness_per_mass=k / body.mass, damping_per_mass=c / body.mass, estimate_delays=True,
+    )  # fmt: skip
+    _, residual, lengths, p, factor, n_linear = seen["args"]  # type: ignore[misc]
+    jac = seen["model"]
+    grad = seen["grad"][np.r_[0, 1, 2, 3, 7, 11]]  # type: ignore[index]
+    assert jac.shape[1] == refine.N_PARAMETERS + p - 1  # type: ignore[attr-defined]
+    # Monte Carlo: the weighted noise at the fit's rate (from the decay's start, at the fit's decimation, 2 samples
+    # skipped with the delays fitted, over the pre-trigger's levels) and the linearised estimate's error
+    pre = [r[: onset - 2] for r in records]
+    m2 = [((x - x.mean(0)) ** 2).sum(0) for x in pre]
+    sigma = refine.pretrigger_sigma([x.shape[0] for x in pre], m2, 2, factor)[0]
+    noise = []
+    for lv, n in zip(level, lengths, strict=True):
+        raw = rng.standard_normal((clean[0].shape[0] - start, p * draws)) * np.repeat(lv, draws)
+        dec = decimate(raw, factor)[2 : 2 + n].reshape(n, p, draws) / sigma[None, :, None]
+        noise.append(dec.transpose(2, 0, 1).reshape(draws, -1))
+    err = np.hstack(noise) @ jac @ np.linalg.pinv(jac.T @ jac, rcond=1e-12) @ grad.T
+    std = np.concatenate([ref.std["center_of_gravity"], np.diag(ref.std["inertia_per_mass"])])
+    ratio = err.var(axis=0) / std**2  # observed 0.97-1.06 (1000 draws: sampling error about 4.5 % each)
+    np.testing.assert_allclose(ratio, 1.0, rtol=SANDWICH_VARIANCE_REL)
+    assert abs(float(np.mean(ratio)) - 1.0) < DELAY_HELD_EXCESS / 2  # observed 0.009
+    # the delays held (their columns left out): too narrow, 1.12 in variance on average
+    held = original(jac[:, : refine.N_PARAMETERS], residual, lengths, p, factor, n_linear)
+    g = grad[:, : refine.N_PARAMETERS]
+    std_held = np.sqrt(np.diag(g @ (held.matrix - np.outer(held.step, held.step)) @ g.T))
+    assert float(np.mean(err.var(axis=0) / std_held**2)) > 1.0 + DELAY_HELD_EXCESS

@@ -18,6 +18,19 @@ of error the bound ignores: the remaining Gauss-Newton step ``B^-1 J^T r``
 tells how far the estimate still is from the minimum; its outer product is
 added to the covariance (a mean-square-error matrix), so such a fit gets wider
 intervals instead of over-confident ones.
+
+Why the sandwich is the refit's covariance, not only a bound (issue 23): with the
+linear parameters projected out, the estimate's error is, to first order, one
+Gauss-Newton step from the truth, ``-(J^T J)^-1 J^T e`` (``J^T P_perp = J^T``:
+Kaufman's Jacobian is exact in the gradient), whose covariance is ``B^-1 J^T Sigma J
+B^-1`` exactly; ``Sigma`` is ``v_ic P`` per impact and channel when the noise is
+stationary within a decay and white before the decimation filter. Measured on the
+chain benchmark's test (``benchmarks/refit_noise_calibration.py``): the refit's
+error equals that step to 0.003-0.01 of its standard error (the estimate is linear
+in the noise at 1 %), ``v_ic`` is unbiased (0.95-1.05 of the true level per impact
+and channel), and over 394 noise draws the estimate's spread is 1.01-1.08 of the mean
+reported std per figure (sampling error 3.6 %). With the channels' delays fitted the
+delays' columns stay in ``J`` and the body's std is the joint covariance's marginal.
 """
 
 from __future__ import annotations
