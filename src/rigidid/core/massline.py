@@ -684,8 +684,9 @@ the choice of the upper residual, which it cannot make reliably there (:func:`_r
 SE off). The first-order fit is linear (its SE was the spread within 0.86-1.14 on six free-free bodies x 100
 draws), always fits the upper residual, and the terms it leaves out are the support terms times their own
 relative size: below the noise when the first-order ones are. Measured ``F``: free-free bodies (supports 0.1
-Hz under a 30-150 Hz band) mean 1.07, SD 0.23 (theory 0.24), largest 1.55 over 60 draws; mounted bodies from
-1.5x their highest support mode 2200-2600; the threshold for 36 coefficients is 2.18."""
+Hz under a 30-150 Hz band) mean 1.03, SD 0.26 (theory 0.24), largest 2.05 over 1000 draws (before the Hotelling
+factor of :func:`_supports_seen`: mean 1.11, and 2 draws above the threshold); mounted bodies from 1.5x their
+highest support mode about 2000; the threshold for 36 coefficients is 2.18."""
 
 
 def _supports_seen(design: Array, coef: Array, misfit: Array, n_terms: int) -> float | None:
