@@ -686,7 +686,7 @@ draws), always fits the upper residual, and the terms it leaves out are the supp
 relative size: below the noise when the first-order ones are. Measured ``F``: free-free bodies (supports 0.1
 Hz under a 30-150 Hz band) mean 1.03, SD 0.26 (theory 0.24), largest 2.05 over 1000 draws (before the Hotelling
 factor of :func:`_supports_seen`: mean 1.11, and 2 draws above the threshold); mounted bodies from 1.5x their
-highest support mode about 2000; the threshold for 36 coefficients is 2.18."""
+highest support mode 2000-2400; the threshold for 36 coefficients is 2.18."""
 
 
 def _supports_seen(design: Array, coef: Array, misfit: Array, n_terms: int) -> float | None:
