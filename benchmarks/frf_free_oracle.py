@@ -84,7 +84,7 @@ def one_draw(seed: int, fresh: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     true_se = np.sqrt(np.einsum("ik,kl,il->i", jac, cov, jac))
     g = np.random.default_rng(1_000_000 + seed)
     dy = np.einsum("l,ip,rpjl->rij", a, tp, g.standard_normal((fresh, *half_var.shape)) * np.sqrt(half_var)[None])
-    return error, se, true_se, (dy.reshape(fresh, -1) @ jac.T) / true_se, r.supports
+    return error, se, true_se, (dy.reshape(fresh, y0.size) @ jac.T) / true_se, r.supports
 
 
 def report(label: str, z: np.ndarray) -> None:
