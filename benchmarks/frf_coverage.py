@@ -1,7 +1,8 @@
 """Coverage of the mass-line route's 95 % intervals over many noise draws, three regimes (issue 21).
 
 Run: ``OPENBLAS_NUM_THREADS=1 PYTHONPATH=src .venv/bin/python benchmarks/frf_coverage.py
-[--draws 200] [--regimes near,mounted,free] [--routes massline,exact,first_order,auto,residues] [--save DIR]``
+[--draws 200] [--first-seed 0] [--regimes near,mounted,free] [--routes massline,exact,first_order,auto,residues]
+[--save DIR]``
 
 Routes (``--routes``, default ``massline``): ``massline`` is ``mass_line`` with its automatic mount
 model, ``exact`` the exact support fit forced (``supports="exact"``), ``first_order`` the first-order
@@ -147,6 +148,7 @@ def binomial(p: float, n: int) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--draws", type=int, default=200)
+    ap.add_argument("--first-seed", type=int, default=0, help="seeds first-seed .. first-seed + draws - 1")
     ap.add_argument("--regimes", default="near,mounted,free")
     ap.add_argument("--routes", default="massline")
     ap.add_argument("--save", default="", help="directory for each row's signed z per draw (ROUTE_REGIME.npy)")
@@ -157,16 +159,22 @@ def main() -> None:
     print("|---" * (len(names) + 7) + "|")
     for route in a.routes.split(","):
         for name in a.regimes.split(","):
-            table_row(route, name, a.draws, makers, names, a.save)
+            table_row(route, name, a.draws, makers, names, a.save, a.first_seed)
 
 
 def table_row(
-    route: str, name: str, draws: int, makers: dict[str, Any], names: tuple[str, ...], save: str = ""
+    route: str,
+    name: str,
+    draws: int,
+    makers: dict[str, Any],
+    names: tuple[str, ...],
+    save: str = "",
+    first_seed: int = 0,
 ) -> None:
     """One route on one regime over `draws` draws: coverage of each figure with its binomial interval."""
     t0 = time.perf_counter()
     zs, refused, seeds = [], 0, []
-    for seed in range(draws):
+    for seed in range(first_seed, first_seed + draws):
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

@@ -571,30 +571,64 @@ def _first_order_misfit(misfit: Array, n_params: int, q: int) -> tuple[float, st
     return units, f"rigid coordinate {names[i]}, reference {j + 1} ({per_col[i, j]:.3g} noise units)"
 
 
+NOISE_WINDOW = 0.0625
+"""Half-width, as a share of the band's lines, of the window over which :func:`_first_order_intervals`
+averages the misfit's outer products to estimate each line's noise covariance (an eighth of the band). Wider
+windows steady the standard errors further where the noise is even along the band, but at the band's ends the
+window is one-sided, and that is where the constant's weights sit: with the noise 25x higher at the band's low
+end than at its top, free-free coverage was 0.895 with 1/8, 0.911 with 1/16, 0.921 with 1/32 (0.910 with each
+row alone); with even noise 0.945, 0.943, 0.942 over 1000 draws (0.939 each row alone, 0.945 the true noise's)."""
+
+
 def _first_order_intervals(
     design: Array, misfit: Array, y0: Array, tf: Array, origin: Array, span: float
 ) -> BodyIntervals:
     """Linearised intervals of the first-order mass line: sandwich covariance of its constants ``y0``.
 
-    The constants are ``a^T Y`` (``a`` the design pseudo-inverse's first row), their covariance the sandwich
-    ``sum_l a_l^2 e_l e_l^T`` over the real data rows ``l`` (all ``6 q`` columns of a row together: they are
-    correlated through the sensors) with each misfit ``e_l`` divided by ``sqrt(1 - h_l)``, ``h_l`` the row's
-    leverage (HC2): a fitted row's misfit has variance ``(1 - h_l) s_l^2``, and the rows that weigh most in
-    ``a`` (the band's ends, where ``1 / w^2`` and ``w^4`` are largest) have the largest leverage, so the
-    average correction ``N / (N - k)`` used before left the standard errors about 2 % short (free-free,
-    benchmarks/frf_coverage.py).
+    The constants are ``a^T Y`` (``a`` the design pseudo-inverse's first row), so their covariance is
+    ``V = sum_l a_l^2 S_l`` over the data rows ``l``, ``S_l`` the noise covariance of row ``l``'s ``6 q``
+    columns (correlated through the sensors, so all of them together), estimated by :func:`_line_noise`.
+    A per-row sandwich (``S_l = e_l e_l^T`` alone) is unbiased but noisy: the weights ``a_l^2`` sit on
+    the band's ends (``1 / w^2`` and ``w^4`` largest there), about 45 rows of 121 carry them, so the
+    standard error varied by 11 % between draws and ``z`` followed a Student ``t`` of about 45 degrees of
+    freedom (95 % coverage 0.944 with ``1.96``; free-free draws of benchmarks/frf_coverage.py, issue 21).
+    A single ``S`` pooled over the band is steadier but wrong where the noise varies along it (noise
+    rising 25x over the band: coverage 0.971, RMS ``z`` 0.90). The delta method's linearisation holds: the
+    map from ``y0`` to mass, CG and inertia left a second-order part of 0.02-0.06 SE RMS (0.6 at most) over
+    200 draws, and with the true noise's covariance (benchmarks/frf_free_oracle.py) the SEs are the same.
     """
     a = np.linalg.pinv(design)[0]  # the constant of every column is a^T (its column of the target)
-    q_design = np.linalg.qr(design)[0]
-    leverage = np.minimum(np.sum(q_design**2, axis=1), 0.99)  # diagonal of the hat matrix, per data row
-    weighted = a[:, None] * misfit / np.sqrt(1.0 - leverage)[:, None]  # (2 f, 6 q)
-    cov = weighted.T @ weighted
+    cov = _line_noise(design, misfit, a)
     return body_intervals(
         lambda y: _body_from_inverse_mass(y, tf, origin, span),
         y0,
         cov,
-        "linearised: sandwich covariance of the mass line's constants from the fit's misfit",
+        "linearised: sandwich covariance of the mass line's constants, the noise averaged over neighbouring lines",
     )
+
+
+def _line_noise(design: Array, misfit: Array, a: Array) -> Array:
+    """``sum_l a_l^2 S_l`` (:func:`_first_order_intervals`) with each line's noise ``S_l`` averaged over its neighbours.
+
+    Each row's misfit is divided by ``sqrt(1 - h_l)``, ``h_l`` its leverage (HC2: a fitted row's misfit has
+    covariance ``(1 - h_l) S_l``), so that its outer product ``e_l e_l^T / (1 - h_l)`` is unbiased for ``S_l``.
+    ``S_l`` is then the mean of these over the lines within :data:`NOISE_WINDOW` of the band's lines of
+    line ``l``, real and imaginary parts together (FRF noise is circular: both parts carry half of the
+    complex covariance, the same matrix; the rows are stacked real parts of the lines, then imaginary).
+    Unbiased wherever the noise is constant over a window, and it varies smoothly along frequency (it
+    follows the force spectrum and the response); the estimate then rests on several times more rows than
+    a per-row sandwich. ``sum_l a_l^2 S_l = sum_k b_k e_k e_k^T`` with ``b_k`` the window sum of
+    ``a_l^2 / (2 n_l)`` (``n_l`` lines in line ``l``'s window), one pass.
+    """
+    n_f = design.shape[0] // 2
+    q_design = np.linalg.qr(design)[0]
+    leverage = np.minimum(np.sum(q_design**2, axis=1), 0.99)  # diagonal of the hat matrix, per data row
+    e = misfit / np.sqrt(1.0 - leverage)[:, None]
+    box = np.ones(2 * max(1, round(NOISE_WINDOW * n_f)) + 1)
+    count = np.convolve(np.ones(n_f), box, mode="same")  # lines in each line's window
+    share = np.convolve((a[:n_f] ** 2 + a[n_f:] ** 2) / (2.0 * count), box, mode="same")  # b_k per line
+    cov: Array = (e[:n_f] * share[:, None]).T @ e[:n_f] + (e[n_f:] * share[:, None]).T @ e[n_f:]
+    return cov
 
 
 def _support_model(supports: str, stiffness: bool) -> tuple[str, str]:
@@ -656,8 +690,9 @@ the choice of the upper residual, which it cannot make reliably there (:func:`_r
 SE off). The first-order fit is linear (its SE was the spread within 0.86-1.14 on six free-free bodies x 100
 draws), always fits the upper residual, and the terms it leaves out are the support terms times their own
 relative size: below the noise when the first-order ones are. Measured ``F``: free-free bodies (supports 0.1
-Hz under a 30-150 Hz band) mean 1.07, SD 0.23 (theory 0.24), largest 1.55 over 60 draws; mounted bodies from
-1.5x their highest support mode 2200-2600; the threshold for 36 coefficients is 2.18."""
+Hz under a 30-150 Hz band) mean 1.03, SD 0.26 (theory 0.24), largest 2.05 over 1000 draws (before the Hotelling
+factor of :func:`_supports_seen`: mean 1.11, and 2 draws above the threshold); mounted bodies from 1.5x their
+highest support mode 2000-2400; the threshold for 36 coefficients is 2.18."""
 
 
 def _supports_seen(design: Array, coef: Array, misfit: Array, n_terms: int) -> float | None:
@@ -666,12 +701,17 @@ def _supports_seen(design: Array, coef: Array, misfit: Array, n_terms: int) -> f
     The terms are rows ``1 .. n_terms`` of `coef` (``p = n_terms x 6 q`` coefficients ``b``, linear in the data
     through the rows ``A`` of the design's pseudo-inverse); their covariance is ``V = (A A^T) kron S``, ``S`` the
     covariance of the misfit's ``6 q`` columns over its ``N`` real rows (``N - k`` degrees of freedom; the
-    columns correlated through the sensors). ``F = b^T V^-1 b / p`` is about ``F(p, N - k)`` under pure
-    noise, mean 1 and standard deviation about ``sqrt(2 / p)``: the terms are not seen when ``F < 1 +``
-    :data:`SUPPORTS_SEEN` ``sqrt(2 / p)``. (The sandwich of the rows instead of ``S``, robust to a noise that
-    varies along the band, inflated ``F`` to 2-3.7 on free-free bodies: the stiffness term's weights sit on the
-    lowest lines, too few rows to estimate ``18 x 18`` covariances.) With fewer rows than twice ``p`` (femtools'
-    21 lines and 6 references) the exact fit is taken, as before. Returns ``F`` when not seen.
+    columns correlated through the sensors). Under pure noise ``b`` is independent of ``S`` (the misfit is
+    orthogonal to the fit), and ``S`` is a Wishart matrix of ``nu = N - k`` degrees of freedom in ``d = 6 q``
+    dimensions, ``E[S^-1] = nu / (nu - d - 1) Sigma^-1``: ``F = (nu - d - 1) / nu x b^T V^-1 b / p`` (a
+    Hotelling statistic) has mean 1 and standard deviation about ``sqrt(2 / p)``, and the terms are not seen
+    when ``F < 1 +`` :data:`SUPPORTS_SEEN` ``sqrt(2 / p)``. (Without the factor, about 0.92 for 121 lines and
+    3 references, the null mean was 1.11, and 2 of 1000 free-free draws of benchmarks/frf_coverage.py went
+    to the exact fit, whose standard errors were there 0.15-0.4 of the spread: issue 21.) The sandwich of the
+    rows instead of ``S``, robust to a noise that varies along the band, inflated ``F`` to 2-3.7 on free-free
+    bodies: the stiffness term's weights sit on the lowest lines, too few rows to estimate ``18 x 18``
+    covariances. With fewer rows than twice ``p`` (femtools' 21 lines and 6 references) the exact fit is
+    taken, as before. Returns ``F`` when not seen.
     """
     n_rows, k = design.shape
     cols = slice(1, 1 + n_terms)
@@ -680,9 +720,10 @@ def _supports_seen(design: Array, coef: Array, misfit: Array, n_terms: int) -> f
     if n_rows < 2 * p + k:
         return None
     a = np.linalg.pinv(design)[cols]  # (n_terms, N)
-    noise = misfit.T @ misfit / (n_rows - k)  # (6 q, 6 q): the columns' noise, correlated through the sensors
+    nu, d = n_rows - k, misfit.shape[1]
+    noise = misfit.T @ misfit / nu  # (6 q, 6 q): the columns' noise, correlated through the sensors
     v = np.kron(a @ a.T, noise)
-    f_stat = float(b @ np.linalg.lstsq(v, b, rcond=None)[0]) / p
+    f_stat = (nu - d - 1) / nu * float(b @ np.linalg.lstsq(v, b, rcond=None)[0]) / p
     return f_stat if f_stat < 1.0 + SUPPORTS_SEEN * np.sqrt(2.0 / p) else None
 
 
