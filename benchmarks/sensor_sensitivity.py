@@ -4,6 +4,7 @@ Run from the worktree root::
 
     PYTHONPATH=src OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/sensor_sensitivity.py [--draws 8]
         [--sources orient,transverse,position,sens] [--noise 1e-6] [--equal-noise] [--linear]
+        [--chain skew,ac,aa,hum] [--delays]
 
 The body, sensors and impacts of ``benchmarks/chain_matrix.py`` (its own scipy expm simulator), the
 records almost noise-free (``--noise``, relative to each channel's RMS; ``--equal-noise``: the same
@@ -19,6 +20,11 @@ normal axis, 3 % transverse in a uniform direction, 3 mm per axis). Per source, 
 - ``mean/kernel``: the RMS error of the two estimates' mean over the kernel's (below 1: their errors differ
   draw by draw, and a combination would gain);
 - ``--linear``: the refit's error with the errors scaled by 0.1, times 10, over the full one's (1: linear).
+
+``--chain``: chain_matrix's chain effects in the records too (``skew``: channel 5 one sample late; ``ac``:
+2 Hz AC coupling; ``aa``: the 8th-order anti-alias filter; ``hum``: 50 Hz), the refit modelling them:
+``ac`` and ``aa`` stated (``ChainModel``), the channels' delays fitted with ``skew`` or ``--delays``, the hum
+found. The refit's own budget is then its signatures through that model (``sensor_terms`` with the link).
 
 Per quantity class: CG (3 coordinates, % of the sensor span) and J/m's diagonal (%).
 """
@@ -89,6 +95,23 @@ def _std_vector(std: dict[str, np.ndarray]) -> np.ndarray:
     return np.concatenate([100 * std["center_of_gravity"] / span, 100 * np.diag(std["inertia_per_mass"]) / truth])
 
 
+CHAIN: set[str] = set()
+"""``--chain``: chain_matrix's chain effects simulated in the records and modelled by the refit."""
+DELAYS = False
+"""``--delays``: the channels' delays fitted (also whenever ``skew`` is in :data:`CHAIN`)."""
+
+
+def chain_model() -> object:
+    """The refit's stated chain for :data:`CHAIN` (None: nothing stated)."""
+    from rigidid.core.timedomain.chain import AntiAlias, ChainModel, ChannelChain
+
+    if not CHAIN & {"ac", "aa"}:
+        return None
+    aa = AntiAlias("butterworth", cm.AA_ORDER, cm.AA_CORNER) if "aa" in CHAIN else None
+    one = ChannelChain(highpass_hz=cm.HP_CORNER if "ac" in CHAIN else 0.0, antialias=aa)
+    return ChainModel(tuple(one for _ in range(cm.SENSORS.shape[0])))
+
+
 def refit(true: dict[str, np.ndarray], source: str, noise: float, equal: bool, seed: int) -> tuple[np.ndarray, ...]:
     """The refit's error and its own type-B std (as % vectors)."""
     from rigidid.core.timedomain.refine import refine_body
@@ -99,7 +122,8 @@ def refit(true: dict[str, np.ndarray], source: str, noise: float, equal: bool, s
     ref = refine_body(
         recs, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
         center_of_gravity=cm.CG, inertia_per_mass=cm.INERTIA / cm.MASS, stiffness_per_mass=cm.K6 / cm.MASS,
-        damping_per_mass=cm.C6 / cm.MASS, sensor_bounds=stated(source),
+        damping_per_mass=cm.C6 / cm.MASS, sensor_bounds=stated(source), chain=chain_model(),  # type: ignore[arg-type]
+        estimate_delays=DELAYS or "skew" in CHAIN,
     )  # fmt: skip
     assert ref.sensor_std is not None
     own = np.sqrt(sum(_std_vector(part) ** 2 for part in ref.sensor_std.values()))
@@ -110,7 +134,7 @@ def records(true: dict[str, np.ndarray], noise: float, equal: bool, rng: np.rand
     old = cm.NOISE
     cm.NOISE = 0.0
     try:
-        clean = cm.simulate(set(), rng, true)
+        clean = cm.simulate(set(CHAIN), rng, true)
     finally:
         cm.NOISE = old
     level = [np.sqrt(np.mean(r**2, axis=0)) for r in clean]
@@ -141,7 +165,12 @@ def main() -> None:
     parser.add_argument("--equal-noise", action="store_true")
     parser.add_argument("--linear", action="store_true")
     parser.add_argument("--runs", action="store_true", help="print each draw's largest errors")
+    parser.add_argument("--chain", default="", help="chain effects in the records, modelled: skew,ac,aa,hum")
+    parser.add_argument("--delays", action="store_true", help="fit the channels' delays")
     args = parser.parse_args()
+    global DELAYS
+    CHAIN.update(x for x in args.chain.split(",") if x)
+    DELAYS = args.delays
     print(f"{'source':<11} {'class':<3} {'refit':>7} {'refit/own':>9} {'kernel':>7} {'kernel/own':>10} "
           f"{'refit/kernel':>12} {'own/kernel std':>14} {'mean/kernel':>11}"
           + (f" {'linear':>7}" if args.linear else ""))  # fmt: skip

@@ -650,8 +650,8 @@ def _refit_skewed(
     test named the channels `named[1]` late (index, text); kept if its misfit test keeps it, else `result`
     with both refits' reasons.
 
-    Its sensor budget is the --estimate-delays path's (:func:`_accept_refinement`: the refit has no
-    signatures of its own with delays free, so the kernel's budget at the modes).
+    Its sensor budget is the refit's own, with the delays in its model (:func:`_accept_refinement`,
+    :func:`rigidid.core.timedomain.refine.sensor_terms`), as --estimate-delays reports it.
     """
     import warnings
 
@@ -818,9 +818,10 @@ def _accept_refinement(
     bounds = tolerances if tolerances is not None else sensor_bounds(None, result.units["length"])
     if refinement.sensor_correction is not None:
         implausible_sensors(refinement.sensor_correction, bounds, result.sensor_ids)
-    # the refit's own linearisation (sensor_terms): the refit weighs the channels by their noise, the kernel
-    # does not, so their errors are different combinations of the same sensor errors; the kernel's budget
-    # (what plan predicts) only when the refit has none (benchmarks/sensor_sensitivity.py).
+    # the refit's own linearisation (sensor_terms, its chain, delays and hum included): the refit weighs the
+    # channels by their noise, the kernel does not, so their errors are different combinations of the same
+    # sensor errors; the kernel's budget (what plan predicts) only when the refit has none
+    # (benchmarks/sensor_sensitivity.py; with fitted delays the kernel's was too wide: chain_matrix "all").
     sensor_std = refinement.sensor_std
     if sensor_std is None:
         sensor_std = _sensor_std(result, bounds)

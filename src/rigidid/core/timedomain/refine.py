@@ -318,9 +318,7 @@ class _Link:
         ``d(phi H)/dtheta = dphi H + phi H'(s) omega dlam``; a delay ``tau_c`` multiplies channel c by
         ``e^{-s tau_c}``, so ``d(phi_ck H_ck)/d(omega tau_c) = -lambda_k phi_ck H_ck`` (local units).
         """
-        extra = np.zeros(phi.shape[0])
-        extra[list(self.free)] = theta[N_PARAMETERS:] / self.omega
-        h, dh = self.chain.transfer(lam * self.omega, extra)
+        h, dh = self.transfer(theta, lam, phi.shape[0])
         out = phi * h
         if dphi.shape[0] == 0:
             return out, dlam, dphi
@@ -329,6 +327,15 @@ class _Link:
         for i, c in enumerate(self.free):
             dd[i, c] = -lam * out[c]
         return out, np.vstack([dlam, np.zeros((len(self.free), lam.size), complex)]), np.concatenate([d, dd])
+
+    def transfer(self, theta: Array, lam: CArray, p: int) -> tuple[CArray, CArray]:
+        """Each channel's chain ``H_c(s_k)`` (p, 6) with the fitted delays, and its derivative in ``s``."""
+        extra = np.zeros(p)
+        extra[list(self.free)] = theta[N_PARAMETERS:] / self.omega
+        h: CArray
+        dh: CArray
+        h, dh = self.chain.transfer(lam * self.omega, extra)
+        return h, dh
 
     def extra_columns(self) -> int:
         """Linear unknowns per impact the chain adds (the AC coupling's transients, per channel) and the hum."""
@@ -776,7 +783,7 @@ class SensorTerms:
 
 
 def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array, r: Array,
-                 scale: float) -> SensorTerms:  # fmt: skip
+                 scale: float, link: _Link | None = None) -> SensorTerms:  # fmt: skip
     """The sensor errors' signatures at `theta`, projected and reduced (:class:`SensorTerms`).
 
     The signature of an error of sensor ``i`` is the model's motion read by a virtual
@@ -784,12 +791,15 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     a normal (tilt), or the difference of two points a unit apart (the reading is linear
     in the position, eq. (3) of [1]); the per-impact modal amplitudes are the fit's.
     Position columns are per layout length (`scale`: the local frame's length unit).
+    With `link` (a modelled chain, fitted delays, hum) the virtual sensors read through
+    channel ``i``'s chain and fitted delay, and ``G~`` is projected off the chain's nuisance
+    columns too; `theta` and `jm` then hold the delays' parameters (``cross`` has a row each).
     """
     p = pos_l.shape[0]
     k = 6 * p
-    cross, gram, proj = np.zeros((N_PARAMETERS, k)), np.zeros((k, k)), np.zeros(k)
+    cross, gram, proj = np.zeros((theta.size, k)), np.zeros((k, k)), np.zeros(k)
     row = 0
-    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
         n = sig.shape[0]
         # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
         sig_c = sig.transpose(2, 0, 1)  # (c, n, kind): batched products per channel (BLAS, not einsum loops)
@@ -798,16 +808,19 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
         own = np.zeros((p, 6, p, 6))
         own[np.arange(p), :, np.arange(p), :] = block
         gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
-        jr = jm[row : row + n * p].reshape(n, p, N_PARAMETERS)
-        cross += np.matmul(jr.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(N_PARAMETERS, k)
+        jr = jm[row : row + n * p].reshape(n, p, theta.size)
+        cross += np.matmul(jr.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(theta.size, k)
         proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
         row += n * p
     return SensorTerms(cross, gram, proj)
 
 
-def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float,
-                       scale: float) -> Iterator[tuple[Array, Array, Array]]:  # fmt: skip
-    """Per impact: the column-normalised design ``S`` (n, p, m), ``(S^T S)^+``, the signatures (n, 6, p)."""
+def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, scale: float,
+                       link: _Link | None = None) -> Iterator[tuple[Array, Array, Array]]:  # fmt: skip
+    """Per impact: the column-normalised design ``S`` (n, p, m), ``(S^T S)^+``, the signatures (n, 6, p).
+
+    With `link`, every virtual sensor reads through its channel's chain ``H_c(s_k)`` (the fitted delay
+    included) and ``S`` holds the chain's nuisance columns (AC transients, hum), as :func:`_evaluate`'s."""
     from rigidid.core.sensor_budget import axis_normals
 
     p = pos_l.shape[0]
@@ -818,12 +831,15 @@ def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, ome
     lam, phi_v, *_ = _modes(theta, vpos, vdir, False)
     phi_v = phi_v.reshape(6, p, 6)
     phi_v[3:] = (phi_v[3:] - phi_v[0]) / scale
+    if link is not None:  # each channel's chain: linear, so the position's difference passes through it too
+        phi_v = phi_v * link.transfer(theta, lam, p)[0][None]
     phi = phi_v[0]
     w = 1.0 / data.sigma
     for y in data.decays:
         n = y.shape[0]
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        design, ex = _design(lam, phi * w[:, None], t, data.drift)
+        extra = None if link is None else link.nuisance(t)
+        design, ex = _design(lam, phi * w[:, None], t, data.drift, extra)
         norms = np.sqrt(np.einsum("ij,ij->j", design, design))
         norms = np.where(norms > 0.0, norms, 1.0)
         flat = design / norms
@@ -1200,19 +1216,19 @@ def refine_prepared(
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
     sensor_std, correction = None, None
-    if sensor_bounds is not None and link is None:  # the sensors' signatures are the plain model's
-        theta, std, misfit, sensor_std, correction = _with_sensors(
-            (theta, std, misfit), (data, pos_l, dirs, omega, frame), (jm, r, grad), sensor_bounds, estimate_sensors,
-            lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
-        )  # fmt: skip
-        if correction is not None:  # the body moved with the sensors' correction
-            g, j, k, c = frame.physical(theta)
-            lam, *_ = _modes(theta, pos_l, dirs, False)
-    elif estimate_sensors:
+    if estimate_sensors and link is not None:
         raise InputError(
             "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
             source="estimate_sensors",
         )
+    if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
+        theta, std, misfit, sensor_std, correction = _with_sensors(
+            (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad), sensor_bounds,
+            estimate_sensors, lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
+        )  # fmt: skip
+        if correction is not None:  # the body moved with the sensors' correction
+            g, j, k, c = frame.physical(theta)
+            lam, *_ = _modes(theta, pos_l, dirs, False)
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
     delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
     out = Refinement(
@@ -1373,14 +1389,14 @@ def _with_sensors(
     """The stated sensor tolerances in the refit: the misfit they leave expected by the acceptance test,
     their effect on the body (``sensor_std``) and, with `estimate`, the sensors' errors estimated.
 
-    `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame)``, `linear`
+    `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame, link)``, `linear`
     ``(jm, r, grad)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
     and moments. Returns theta, std, misfit, sensor_std and the correction (or None).
     """
     theta, std, misfit = fit
-    data, pos_l, dirs, omega, frame = model
+    data, pos_l, dirs, omega, frame, link = model
     jm, r, grad = linear
-    terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale)
+    terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale, link)
     q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
     correction = None
