@@ -1,7 +1,8 @@
 """Coverage of the mass-line route's 95 % intervals over many noise draws, three regimes (issue 21).
 
 Run: ``OPENBLAS_NUM_THREADS=1 PYTHONPATH=src .venv/bin/python benchmarks/frf_coverage.py
-[--draws 200] [--regimes near,mounted,free] [--routes massline,exact,first_order,auto,residues] [--save DIR]``
+[--draws 200] [--first-seed 0] [--regimes near,mounted,free] [--routes massline,exact,first_order,auto,residues]
+[--save DIR]``
 
 Routes (``--routes``, default ``massline``): ``massline`` is ``mass_line`` with its automatic mount
 model, ``exact`` the exact support fit forced (``supports="exact"``), ``first_order`` the first-order
@@ -28,7 +29,8 @@ asks 0.93-0.97 for each. Also the RMS of the mass's z (error over its own SE), t
 seven figures, and the draws with a figure beyond 4 of its own SE. Refusals are counted. Under each row:
 the mean and RMS of each figure's z (a bias shows in the mean, an interval too narrow in the RMS), and
 the coverage pooled over the seven figures with its Wilson interval over the draws. ``--save DIR`` writes
-each row's seeds and signed z (``DIR/ROUTE_REGIME.npy``, one row per answered draw).
+each row's seeds and signed z (``DIR/ROUTE_REGIME.npy``, one row per answered draw; ``_FIRST`` added when
+``--first-seed`` is not 0).
 """
 
 from __future__ import annotations
@@ -147,6 +149,7 @@ def binomial(p: float, n: int) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--draws", type=int, default=200)
+    ap.add_argument("--first-seed", type=int, default=0, help="seeds first..first+draws-1 (split a run over processes)")
     ap.add_argument("--regimes", default="near,mounted,free")
     ap.add_argument("--routes", default="massline")
     ap.add_argument("--save", default="", help="directory for each row's signed z per draw (ROUTE_REGIME.npy)")
@@ -157,16 +160,16 @@ def main() -> None:
     print("|---" * (len(names) + 7) + "|")
     for route in a.routes.split(","):
         for name in a.regimes.split(","):
-            table_row(route, name, a.draws, makers, names, a.save)
+            table_row(route, name, a.draws, makers, names, a.save, a.first_seed)
 
 
 def table_row(
-    route: str, name: str, draws: int, makers: dict[str, Any], names: tuple[str, ...], save: str = ""
+    route: str, name: str, draws: int, makers: dict[str, Any], names: tuple[str, ...], save: str = "", first: int = 0
 ) -> None:
     """One route on one regime over `draws` draws: coverage of each figure with its binomial interval."""
     t0 = time.perf_counter()
     zs, refused, seeds = [], 0, []
-    for seed in range(draws):
+    for seed in range(first, first + draws):
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -189,7 +192,8 @@ def table_row(
         seeds.append(seed)
     zz = np.array(zs, dtype=float).reshape(-1, len(names))
     if save:
-        np.save(Path(save) / f"{route}_{name}.npy", np.column_stack([seeds, zz]) if len(zs) else zz)
+        out = Path(save) / f"{route}_{name}{f'_{first}' if first else ''}.npy"
+        np.save(out, np.column_stack([seeds, zz]) if len(zs) else zz)
     za = np.abs(zz)
     cov = np.mean(za < Z95, axis=0) if len(zs) else np.full(len(names), np.nan)
     rms = float(np.sqrt(np.mean(za[:, 0] ** 2))) if len(zs) else np.nan
