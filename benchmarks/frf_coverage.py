@@ -29,7 +29,11 @@ asks 0.93-0.97 for each. Also the RMS of the mass's z (error over its own SE), t
 seven figures, and the draws with a figure beyond 4 of its own SE. Refusals are counted. Under each row:
 the mean and RMS of each figure's z (a bias shows in the mean, an interval too narrow in the RMS), and
 the coverage pooled over the seven figures with its Wilson interval over the draws. ``--save DIR`` writes
-each row's seeds and signed z (``DIR/ROUTE_REGIME.npy``, one row per answered draw).
+each row's seeds, signed z and whether a RigididWarning was issued (``DIR/ROUTE_REGIME.npy``, one row per
+answered draw; ``_FIRST`` added when ``--first-seed`` is not 0); ``--combine DIR`` reads them back (the runs
+split over processes) and prints, per regime, the seeds below 200 and all of them: each figure's coverage
+with its Wilson interval, mean and RMS z, the draws beyond 4 of their own SE, and of those the silently
+wrong (no warning).
 """
 
 from __future__ import annotations
@@ -50,7 +54,7 @@ from femtools_compare import femtools_case
 from frf_sim import add_elastic, make_rig
 from rigidid.core.frfmodes import fit_frf_modes
 from rigidid.core.massline import MassLine, mass_from_residues, mass_line
-from rigidid.errors import RigididError
+from rigidid.errors import RigididError, RigididWarning
 
 Z95 = 1.959963984540054
 
@@ -148,11 +152,15 @@ def binomial(p: float, n: int) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--draws", type=int, default=200)
-    ap.add_argument("--first-seed", type=int, default=0, help="seeds first-seed .. first-seed + draws - 1")
+    ap.add_argument("--first-seed", type=int, default=0, help="seeds first..first+draws-1 (split a run over processes)")
     ap.add_argument("--regimes", default="near,mounted,free")
     ap.add_argument("--routes", default="massline")
     ap.add_argument("--save", default="", help="directory for each row's signed z per draw (ROUTE_REGIME.npy)")
+    ap.add_argument("--combine", default="", help="summarise the saved rows of DIR (runs split by --first-seed)")
     a = ap.parse_args()
+    if a.combine:
+        combine(Path(a.combine))
+        return
     makers = {"near": near, "mounted": lambda s: simulated(s, False), "free": lambda s: simulated(s, True)}
     names = ("mass", "CG x", "CG y", "CG z", "Jxx", "Jyy", "Jzz")
     print("| route | regime | draws | refused | " + " | ".join(names) + " | RMS z (mass) | worst z | beyond 4 SE |")
@@ -163,21 +171,15 @@ def main() -> None:
 
 
 def table_row(
-    route: str,
-    name: str,
-    draws: int,
-    makers: dict[str, Any],
-    names: tuple[str, ...],
-    save: str = "",
-    first_seed: int = 0,
+    route: str, name: str, draws: int, makers: dict[str, Any], names: tuple[str, ...], save: str = "", first: int = 0
 ) -> None:
     """One route on one regime over `draws` draws: coverage of each figure with its binomial interval."""
     t0 = time.perf_counter()
-    zs, refused, seeds = [], 0, []
-    for seed in range(first_seed, first_seed + draws):
+    zs, refused, seeds, warned = [], 0, [], []
+    for seed in range(first, first + draws):
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
                 out = run(route, name, seed, makers)
         except (RigididError, np.linalg.LinAlgError):
             refused += 1
@@ -195,9 +197,11 @@ def table_row(
         z += list(np.diag(r.inertia_tensor - truth["inertia"]) / np.diag(iv.inertia_tensor.std))
         zs.append(z)
         seeds.append(seed)
+        warned.append(any(issubclass(w.category, RigididWarning) for w in caught))
     zz = np.array(zs, dtype=float).reshape(-1, len(names))
     if save:
-        np.save(Path(save) / f"{route}_{name}.npy", np.column_stack([seeds, zz]) if len(zs) else zz)
+        out = Path(save) / f"{route}_{name}{f'_{first}' if first else ''}.npy"
+        np.save(out, np.column_stack([seeds, zz, warned]) if len(zs) else zz)
     za = np.abs(zz)
     cov = np.mean(za < Z95, axis=0) if len(zs) else np.full(len(names), np.nan)
     rms = float(np.sqrt(np.mean(za[:, 0] ** 2))) if len(zs) else np.nan
@@ -218,6 +222,38 @@ def table_row(
             )
         )
         print(f"    {route} {name} pooled over the {len(names)} figures: {pooled(za)}", flush=True)
+
+
+def combine(directory: Path) -> None:
+    """The saved rows of `directory` (``ROUTE_REGIME[_FIRST].npy``) put together: per route and regime, the seeds
+    below 200 and all of them."""
+    names = ("mass", "CG x", "CG y", "CG z", "Jxx", "Jyy", "Jzz")
+    groups: dict[str, list[np.ndarray]] = {}
+    for path in sorted(directory.glob("*.npy")):
+        parts = path.stem.split("_")
+        key = "_".join(parts[:2] if parts[-1].isdigit() or len(parts) == 2 else parts)
+        groups.setdefault(key, []).append(np.load(path))
+    for key, arrays in groups.items():
+        rows = np.concatenate(arrays)
+        rows = rows[np.argsort(rows[:, 0])]
+        for label, sel in (("seeds 0-199", rows[:, 0] < 200), (f"all {len(rows)} draws", np.ones(len(rows), bool))):
+            z, warned = rows[sel, 1:8], rows[sel, 8].astype(bool)
+            za = np.abs(z)
+            n = len(z)
+            beyond = za.max(axis=1) > 4.0
+            print(f"{key}, {label} ({n} answered):")
+            for j, nm in enumerate(names):
+                m, r = float(z[:, j].mean()), float(np.sqrt(np.mean(z[:, j] ** 2)))
+                print(
+                    f"  {nm:5s} coverage {binomial(float(np.mean(za[:, j] < Z95)), n)}  mean z {m:+.3f}"
+                    f" (+-{z[:, j].std(ddof=1) / np.sqrt(n):.3f})  RMS z {r:.3f}"
+                    f"  beyond 4 SE {int(np.sum(za[:, j] > 4))}"
+                )
+            print(
+                f"  pooled: {pooled(za)}; draws beyond 4 SE: {int(beyond.sum())} (worst {float(za.max()):.2f}),"
+                f" silently wrong (no warning): {int(np.sum(beyond & ~warned))}; warned draws: {int(warned.sum())}",
+                flush=True,
+            )
 
 
 def pooled(za: np.ndarray) -> str:

@@ -271,3 +271,29 @@ def test_leverage_adjusted_sandwich_is_unbiased_where_few_clusters_carry_many_pa
         scores = np.einsum("cqnp,qnc->qnp", jac.reshape(12, q, n, k), adjusted).reshape(q * n, k)
         estimate += np.diag(bread @ (scores.T @ scores) @ bread) / 200
     assert 0.93 < np.mean(estimate / np.diag(bread)) < 1.07
+
+
+def test_weights_come_from_the_fitted_model_not_the_noisy_data():
+    """Every line twice, its accelerance scaled by 1.1 on one copy and 0.9 on the other (a zero-mean noise).
+
+    The model is the same on both copies, so it fits their mean, the true accelerance, when each copy weighs
+    the same: weights from the fitted model give the body (to the fit's stop). Weights ``1 / |data|`` lean to
+    the lowered copy: the accelerance fits ``(1 - a^2) / (1 + a^2)`` of its level, the mass ``2 a^2`` = 2 % high.
+    """
+    m = np.zeros((6, 6))  # 12 kg, CG (0.1, -0.05, 0.2) about the origin, inertia about the CG diag(0.4, 0.6, 0.7)
+    c = np.array([0.1, -0.05, 0.2])
+    cx = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
+    m[:3, :3], m[:3, 3:], m[3:, :3] = 12.0 * np.eye(3), -12.0 * cx, 12.0 * cx
+    m[3:, 3:] = np.diag([0.4, 0.6, 0.7]) - 12.0 * cx @ cx
+    root = np.random.default_rng(3).standard_normal((6, 6))
+    k = 12.0 * (2 * np.pi * 5.0) ** 2 * (root @ root.T / 6.0 + 0.2 * np.eye(6))  # supports about 5 Hz
+    damp = 0.02 / (2 * np.pi * 5.0) * k
+    pts = np.array([[0.5, 0.3, 0.4], [-0.5, 0.3, -0.2], [0.4, -0.3, -0.2]])
+    tft = np.hstack([np.eye(3), np.cross(pts, np.eye(3))]).T  # (6, 3): unit forces along x, y, z at three points
+    top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(m, k)).real))
+    w = np.repeat(np.linspace(1.6 * top, 5.0 * top, 20), 2)
+    x = np.stack([-(wk**2) * np.linalg.solve(k + 1j * wk * damp - wk**2 * m, tft) for wk in w], axis=2)
+    fit = rigid_frf_fit(w, x * (1.0 + 0.1 * (-1.0) ** np.arange(w.size)), tft)
+    # to the fit's stop (a hundredth of a standard error, 2.6e-4 here), not 2 %
+    assert abs(fit.parameters[0] / 12.0 - 1.0) < 1e-3
+    np.testing.assert_allclose(fit.parameters[4:7], np.diag(m)[3:], rtol=3e-3)
