@@ -55,6 +55,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -84,17 +85,23 @@ def _errors(j: int, h: float) -> dict[str, np.ndarray]:
     return err
 
 
-def refit_figures(true: dict[str, np.ndarray], noise: float, seed: int) -> tuple[np.ndarray, np.ndarray, object]:
-    """The refit's figures (% vector), its noise std (% vector) and the Refinement, started at the truth."""
+def refit_at_truth(records: object, **options: object) -> Any:
+    """The records refit of `records` (chain_matrix's test: three impacts, decimation 8), started at the truth;
+    `options` go to ``refine_body``."""
     from rigidid.core.timedomain.refine import refine_body
 
-    recs = ss.records(true, noise, False, np.random.default_rng(seed))
     onset = int(cm.PRE * cm.RATE)
-    ref = refine_body(
-        recs, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
+    return refine_body(
+        records, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
         center_of_gravity=cm.CG, inertia_per_mass=cm.INERTIA / cm.MASS, stiffness_per_mass=cm.K6 / cm.MASS,
-        damping_per_mass=cm.C6 / cm.MASS,
+        damping_per_mass=cm.C6 / cm.MASS, **options,
     )  # fmt: skip
+
+
+def refit_figures(true: dict[str, np.ndarray], noise: float, seed: int) -> tuple[np.ndarray, np.ndarray, object]:
+    """The refit's figures (% vector), its noise std (% vector) and the Refinement, started at the truth."""
+    recs = ss.records(true, noise, False, np.random.default_rng(seed))
+    ref = refit_at_truth(recs)
     return ss._vector(ref.center_of_gravity, ref.inertia_per_mass), ss._std_vector(ref.std), ref
 
 
@@ -326,14 +333,8 @@ def candidate_run(cell: str, seed: int) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(1000 * seed + cm.CELLS.index(cell))
     sensors = cm.sensor_errors(effects, rng)
     records = cm.simulate(effects, rng, sensors)
+    ref = refit_at_truth(records)
     onset = int(cm.PRE * cm.RATE)
-    from rigidid.core.timedomain.refine import refine_body
-
-    ref = refine_body(
-        records, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
-        center_of_gravity=cm.CG, inertia_per_mass=cm.INERTIA / cm.MASS, stiffness_per_mass=cm.K6 / cm.MASS,
-        damping_per_mass=cm.C6 / cm.MASS,
-    )  # fmt: skip
     freq, zeta, _ = cm.modes()
     true_poles = -zeta * 2 * np.pi * freq + 1j * 2 * np.pi * freq * np.sqrt(1 - zeta**2)
     out = {"refit": ss._vector(ref.center_of_gravity, ref.inertia_per_mass), "std": ss._std_vector(ref.std)}
@@ -341,11 +342,7 @@ def candidate_run(cell: str, seed: int) -> dict[str, np.ndarray]:
         shapes = ls_shapes(records, np.asarray(poles), onset + 16, onset)
         est = estimate(cm.SENSORS[None], cm.AXES[None], np.asarray(poles)[None], shapes[None])
         out[name] = ss._vector(est.center_of_gravity[0], est.inertia_per_mass[0])
-    sensed = refine_body(
-        records, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
-        center_of_gravity=cm.CG, inertia_per_mass=cm.INERTIA / cm.MASS, stiffness_per_mass=cm.K6 / cm.MASS,
-        damping_per_mass=cm.C6 / cm.MASS, sensor_bounds=stated_bounds(effects), estimate_sensors=True,
-    )  # fmt: skip
+    sensed = refit_at_truth(records, sensor_bounds=stated_bounds(effects), estimate_sensors=True)
     out["sensors estimated"] = ss._vector(sensed.center_of_gravity, sensed.inertia_per_mass)
     out["floor"] = kernel_figures({"reading": sensors["reading"], "position": sensors["position"]})
     return out
