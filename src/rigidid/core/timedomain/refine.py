@@ -1192,6 +1192,11 @@ def refine_prepared(
     p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
+    if estimate_sensors and link is not None:
+        raise InputError(
+            "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
+            source="estimate_sensors",
+        )
     if data.noise_from == "residual":
         r0 = _residual(theta0, data, pos_l, dirs, omega, link)
         per = r0.reshape(-1, pos.shape[0])
@@ -1216,11 +1221,6 @@ def refine_prepared(
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
     sensor_std, correction = None, None
-    if estimate_sensors and link is not None:
-        raise InputError(
-            "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
-            source="estimate_sensors",
-        )
     if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
         theta, std, misfit, sensor_std, correction = _with_sensors(
             (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad), sensor_bounds,
