@@ -631,9 +631,8 @@ def _line_noise(design: Array, misfit: Array, a: Array) -> Array:
     n_f = design.shape[0] // 2
     level = _line_level(design, misfit)
     e = misfit / (1.0 - _leverage(design))[:, None] / np.sqrt(level)[:, None]
-    box = np.ones(2 * max(1, round(NOISE_WINDOW * n_f)) + 1)
-    count = np.convolve(np.ones(n_f), box, mode="same")  # lines in each line's window
-    share = np.convolve((a[:n_f] ** 2 + a[n_f:] ** 2) * level[:n_f] / (2.0 * count), box, mode="same")  # b_k
+    count = _window_sum(np.ones(n_f), NOISE_WINDOW)  # lines in each line's window
+    share = _window_sum((a[:n_f] ** 2 + a[n_f:] ** 2) * level[:n_f] / (2.0 * count), NOISE_WINDOW)  # b_k
     cov: Array = (e[:n_f] * share[:, None]).T @ e[:n_f] + (e[n_f:] * share[:, None]).T @ e[n_f:]
     return cov
 
@@ -803,17 +802,19 @@ def _line_level(design: Array, misfit: Array) -> Array:
     pooled = e.T @ e / e.shape[0]
     r = np.sum(e * np.linalg.lstsq(pooled, e.T, rcond=None)[0].T, axis=1)
     g = np.log(np.maximum(r[:n_f] + r[n_f:], np.finfo(float).tiny))  # per line
-    box = np.ones(2 * max(1, round(LEVEL_WINDOW * n_f)) + 1)
     k = np.arange(n_f, dtype=float)
-
-    def win(v: Array) -> Array:
-        out: Array = np.convolve(v, box, mode="same")
-        return out
-
-    s0, sk, skk, sy, sky = win(np.ones(n_f)), win(k), win(k * k), win(g), win(k * g)
+    s0, sk, skk, sy, sky = (_window_sum(v, LEVEL_WINDOW) for v in (np.ones(n_f), k, k * k, g, k * g))
     s1, s2, sxy = sk - k * s0, skk - 2.0 * k * sk + k * k * s0, sky - k * sy  # sums of (j - l), (j - l)^2, ...
     level = np.exp((s2 * sy - s1 * sxy) / (s0 * s2 - s1 * s1))
     return np.concatenate([level, level])
+
+
+def _window_sum(values: Array, half_width: float) -> Array:
+    """Each line's sum of `values` over the lines within `half_width` (a share of the band's lines, at least
+    one line) on each side of it; one-sided at the band's ends."""
+    box = np.ones(2 * max(1, round(half_width * values.size)) + 1)
+    out: Array = np.convolve(values, box, mode="same")
+    return out
 
 
 def _leverage(design: Array) -> Array:

@@ -534,10 +534,9 @@ def _cost(problem: _Problem, pv: Array) -> float:
     return c if np.isfinite(c) else np.inf
 
 
-def _minimise(problem: _Problem, p0: Array, evaluations: int = 0) -> tuple[Array, float, bool]:
+def _minimise(problem: _Problem, p0: Array, evaluations: int = OUTPUT_ERROR_EVALUATIONS) -> tuple[Array, float, bool]:
     """The output-error cost minimised from `p0` (:func:`rigidid.core.optimize.levenberg_marquardt`, at most
-    `evaluations` of the cost, :data:`OUTPUT_ERROR_EVALUATIONS` by default): where, the cost there and whether
-    a convergence test fired."""
+    `evaluations` of the cost): where, the cost there and whether a convergence test fired."""
     from rigidid.core.optimize import levenberg_marquardt
 
     def normal(x: Array, index: Any) -> tuple[Array, Array, Array]:
@@ -547,7 +546,7 @@ def _minimise(problem: _Problem, p0: Array, evaluations: int = 0) -> tuple[Array
     with np.errstate(all="ignore"):
         best = levenberg_marquardt(
             normal, lambda x, index: np.array([_cost(problem, x[0])]), p0[None],
-            max_evaluations=evaluations or OUTPUT_ERROR_EVALUATIONS, residuals=problem.n_residuals,
+            max_evaluations=evaluations, residuals=problem.n_residuals,
             decrement=_DECREMENT,
         )  # fmt: skip
     c = float(best.cost[0])
