@@ -621,7 +621,8 @@ def sensor_plan_to_dict(plan: SensorPlan, *, ranking: int = 5) -> dict[str, Any]
 
 def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
     """JSON form of ``rigidid plan``: units, layout findings, prediction, the predicted budget per source
-    (``sensor_budget``, ``tolerances``) and suggestions (null when absent)."""
+    (``sensor_budget``, ``tolerances``) and suggestions (null when absent); with a records test planned, the
+    refit's predicted budget (``records_sensor_budget``) and the test (``records_test``)."""
     return {
         "rigidid_version": __version__,
         "units": {**plan.units, "time": "s"},
@@ -636,6 +637,12 @@ def plan_to_dict(plan: PlanResult) -> dict[str, Any]:
             for source, parts in plan.sensor_budget.items()
         },
         "tolerances": plan.tolerances,
+        **({} if plan.records_budget is None else {"records_sensor_budget": {
+            source: {"center_of_gravity": _vec(parts["center_of_gravity"]),
+                     "inertia_tensor": _rows(parts["inertia_tensor"]),
+                     "stiffness_diagonal": _vec(parts["stiffness_diagonal"])}
+            for source, parts in plan.records_budget.items()
+        }, "records_test": plan.records_test}),
         **({} if plan.mount_split is None else {"mount_split": {
             "unknowns": plan.mount_split[0], "rank": plan.mount_split[1],
             "unique": plan.mount_split[0] == plan.mount_split[1], "statement": plan.mount_split[2],

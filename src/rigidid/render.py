@@ -530,6 +530,8 @@ def plan_tables(plan: PlanResult) -> Group:
         parts.append(pred)
     if plan.sensor_budget is not None:
         parts.append(_budget_table(plan.sensor_budget, plan.tolerances or {}, length, mass))
+    if plan.records_budget is not None:
+        parts.append(_budget_table(plan.records_budget, plan.tolerances or {}, length, mass, plan.records_test))
     if plan.suggestions is not None:
         parts.append(_suggestions_table(plan.suggestions, length))
     if plan.references is not None:
@@ -537,17 +539,29 @@ def plan_tables(plan: PlanResult) -> Group:
     return Group(*parts)
 
 
-def _budget_table(budget: dict[str, dict[str, Any]], tolerances: dict[str, float], length: str, mass: str) -> Table:
-    """``plan`` with a body: the predicted standard deviation of each figure per source (noise, each tolerance)."""
+def _budget_table(
+    budget: dict[str, dict[str, Any]],
+    tolerances: dict[str, float],
+    length: str,
+    mass: str,
+    records: dict[str, Any] | None = None,
+) -> Table:
+    """``plan`` with a body: the predicted standard deviation of each figure per source (noise, each tolerance);
+    with `records` (the planned records test), the records route's: the refit's own."""
     from rich.table import Table
 
     stated = ", ".join(f"{k} {v:g}" for k, v in tolerances.items())
-    table = Table(
-        title="Predicted budget (standard deviation per source)",
-        caption=f"tolerances (bounds): {stated}; combined: all sources in quadrature",
-        title_justify="left",
-        caption_justify="left",
-    )
+    if records is None:
+        title = "Predicted budget (standard deviation per source)"
+        caption = f"tolerances (bounds): {stated}; combined: all sources in quadrature"
+    else:
+        title = "Predicted sensor budget, records route (identify --records: the refit's own)"
+        caption = (
+            f"{len(records['impacts'])} impacts, {records['sample_rate_hz']:g} Hz, {records['duration_s']:g} s "
+            f"(fitted at 1/{records['fit_decimation']}); tolerances (bounds): {stated}; "
+            "sensors: the four in quadrature"
+        )
+    table = Table(title=title, caption=caption, title_justify="left", caption_justify="left")
     table.add_column("quantity")
     for source in budget:
         table.add_column(source, justify="right")

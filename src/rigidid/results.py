@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -245,6 +245,12 @@ class PlanResult:
         ``"stiffness_diagonal"`` (6,), absolute units.
     tolerances : dict of str to float or None
         The bounds the budget used (the layout's ``tolerances``, defaults for the rest).
+    records_budget : dict of str to dict of str to ndarray, or None
+        With a records test planned: the sensor budget ``identify --records`` will report, the
+        refit's own (:func:`rigidid.api.planning.predicted_records_budget`), per source and
+        ``"sensors"`` (the four in quadrature), keys as `sensor_budget`'s.
+    records_test : dict or None
+        The records test it was predicted for (impacts, rate, duration, the refit's decimation).
     """
 
     units: dict[str, str]
@@ -256,6 +262,8 @@ class PlanResult:
     mount_prediction: MountModelPrediction | None = None
     sensor_budget: dict[str, dict[str, NDArray[np.float64]]] | None = None
     tolerances: dict[str, float] | None = None
+    records_budget: dict[str, dict[str, NDArray[np.float64]]] | None = None
+    records_test: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)

@@ -3,10 +3,10 @@ predict the precision and suggest sensors to add."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rigidid.api.load import body_from_file, check_uff_options, load_references_for, load_uff, same_units
 from rigidid.api.mounts import read_mount_spec
@@ -40,6 +40,10 @@ def plan(
     progress: ProgressCallback | None = None,
     references: ReferencesFile | PathLike | None = None,
     mounts: PathLike | MountsFile | None = None,
+    records: bool = False,
+    impacts: Sequence[tuple[Sequence[float], Sequence[float]]] | None = None,
+    sample_rate: float | None = None,
+    duration: float | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -81,6 +85,15 @@ def plan(
         predicted precision to first order, from one fit of the body's exact modes
         (:func:`rigidid.core.mounts.predict_mount_model_linearised`; ``draws`` 0)
         in :attr:`PlanResult.mount_prediction`.
+    records : bool
+        The test will be impact records (``identify --records``): with `body`, predict the
+        refit's own sensor budget for it (:func:`predicted_records_budget`), in
+        :attr:`PlanResult.records_budget`. Implied by `impacts`, `sample_rate` or `duration`.
+    impacts : sequence of (position, direction), optional
+        The planned impacts (layout length; force direction), as ``simulate_records``'s; default
+        :func:`rigidid.core.plan.default_impacts`.
+    sample_rate, duration : float, optional
+        Samples per second (default 512) and free decay per record (s, default 8) of the planned records.
 
     Returns
     -------
@@ -139,9 +152,19 @@ def plan(
         step("predicting the mount model", 1, 1)
     suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
     budget = None if prediction is None else predicted_budget(core_body, lay, positions, directions, prediction)
+    records_budget = None
+    if prediction is not None and (records or impacts is not None or sample_rate is not None or duration is not None):
+        step("predicting the records route's sensor budget", 0, 1)
+        records_budget = predicted_records_budget(
+            core_body, lay, positions, directions, impacts=impacts,
+            sample_rate=512.0 if sample_rate is None else sample_rate, duration=8.0 if duration is None else duration,
+        )  # fmt: skip
+        step("predicting the records route's sensor budget", 1, 1)
     return PlanResult(
         layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction,
         sensor_budget=None if budget is None else budget[0], tolerances=None if budget is None else budget[1],
+        records_budget=None if records_budget is None else records_budget[0],
+        records_test=None if records_budget is None else records_budget[1],
     )  # fmt: skip
 
 
@@ -205,6 +228,84 @@ def predicted_budget(
                        "stiffness_diagonal": mass * np.diag(parts["stiffness_per_mass"])}  # fmt: skip
     out["combined"] = {key: np.sqrt(sum(part[key] ** 2 for part in out.values())) for key in out["noise"]}
     return out, dict(vars(bounds))
+
+
+def predicted_records_budget(
+    body: Body,
+    layout: LayoutFile,
+    positions: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    *,
+    impacts: Sequence[tuple[Sequence[float], Sequence[float]]] | None = None,
+    sample_rate: float = 512.0,
+    duration: float = 8.0,
+) -> tuple[dict[str, dict[str, NDArray[np.float64]]], dict[str, Any]] | None:
+    """The sensor budget ``identify --records`` will report for a planned test: the refit's own.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate.
+    layout : LayoutFile
+        The planned sensors and their ``tolerances`` (:func:`rigidid.api.records.sensor_bounds`).
+    positions, directions : ndarray, shape (p, 3)
+        The sensors, layout order.
+    impacts : sequence of (position, direction), optional
+        The planned impacts (default :func:`rigidid.core.plan.default_impacts`).
+    sample_rate, duration : float
+        Samples per second (Hz) and free decay per record (s).
+
+    Returns
+    -------
+    (dict, dict) or None
+        Per source (:data:`rigidid.core.sensor_budget.SOURCES`, then ``sensors``, the four in
+        quadrature) the standard deviations ``center_of_gravity`` (3,), ``inertia_tensor`` (3, 3)
+        and ``stiffness_diagonal`` (6,), absolute units; and the test as planned (``impacts``,
+        ``sample_rate_hz``, ``duration_s``, the refit's ``fit_decimation`` and ``fit_rows`` per
+        impact, ``rows_used`` by the prediction). None when the refit cannot run on such a test.
+
+    Raises
+    ------
+    InputError
+        A bad test: a rate or duration not positive, records too large, a zero impact direction.
+
+    Notes
+    -----
+    :func:`rigidid.core.plan.predict_records_budget`: the refit's linearisation
+    (:func:`rigidid.core.timedomain.refine.sensor_terms`) on the planned records, at the body.
+    """
+    import numpy as np
+
+    from rigidid.api.records import sensor_bounds
+    from rigidid.core.plan import default_impacts, predict_records_budget
+    from rigidid.limits import check_number, check_record_size
+
+    for value, name in ((sample_rate, "sample_rate"), (duration, "duration")):
+        check_number(value, name, positive=True)
+    planned = default_impacts(positions) if impacts is None else [
+        (np.asarray(p, dtype=float).reshape(3), np.asarray(d, dtype=float).reshape(3)) for p, d in impacts
+    ]  # fmt: skip
+    if any(not np.any(d) for _, d in planned):
+        raise InputError("an impact direction is the zero vector", source="impacts")
+    check_record_size(sample_rate, duration, positions.shape[0], len(planned))
+    bounds = sensor_bounds(layout)
+    found = predict_records_budget(
+        body, positions, directions, bounds, planned, sample_rate=sample_rate, duration=duration
+    )
+    if found is None:
+        return None
+    mass = float(body.mass)
+    out = {source: {"center_of_gravity": np.asarray(parts["center_of_gravity"], dtype=float),
+                    "inertia_tensor": mass * parts["inertia_per_mass"],
+                    "stiffness_diagonal": mass * np.diag(parts["stiffness_per_mass"])}
+           for source, parts in found.std.items()}  # fmt: skip
+    out["sensors"] = {key: np.sqrt(sum(part[key] ** 2 for part in out.values())) for key in out["position"]}
+    test = {
+        "impacts": [{"position": p.tolist(), "direction": (d / np.linalg.norm(d)).tolist()} for p, d in planned],
+        "sample_rate_hz": float(sample_rate), "duration_s": float(duration), "fit_decimation": found.factor,
+        "fit_rows": found.rows, "rows_used": found.used,
+    }  # fmt: skip
+    return out, test
 
 
 def _plan_references(

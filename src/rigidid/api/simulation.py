@@ -123,25 +123,27 @@ def simulate_records(
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
     ids, positions, directions = files.layout_arrays(lay)
-    if impacts is None:
-        far = int(np.argmax(np.linalg.norm(positions - positions[0], axis=1)))
-        impacts = [(positions[0], (1.0, 1.0, 1.0)), (positions[far], (-1.0, 1.0, -1.0))]
-    for _, direction in impacts:
+    from rigidid.core.plan import default_impacts
+
+    planned = default_impacts(positions) if impacts is None else [
+        (np.asarray(p, dtype=float), np.asarray(d, dtype=float)) for p, d in impacts
+    ]  # fmt: skip
+    for _, direction in planned:
         if not np.any(np.asarray(direction, dtype=float)):
             raise InputError("an impact direction is the zero vector", source="impacts")
     if not (sample_rate > 0 and duration > 0 and pretrigger >= 0):
         raise InputError("sample rate and duration must be positive, pre-trigger zero or positive", source="records")
     from rigidid.limits import check_record_size
 
-    check_record_size(sample_rate, duration, len(ids), len(impacts))
+    check_record_size(sample_rate, duration, len(ids), len(planned))
     check_record_size(  # the decay fits: a pre-trigger that does not is to blame
-        sample_rate, duration + pretrigger, len(ids), len(impacts), name="pretrigger", advice="lower the pre-trigger"
+        sample_rate, duration + pretrigger, len(ids), len(planned), name="pretrigger", advice="lower the pre-trigger"
     )
     data = impulse_records(
         body_from_file(spec),
         positions,
         directions,
-        [(np.asarray(p, dtype=float), np.asarray(d, dtype=float)) for p, d in impacts],
+        [(np.asarray(p, dtype=float), np.asarray(d, dtype=float)) for p, d in planned],
         sample_rate=sample_rate,
         duration=duration,
         pretrigger=pretrigger,

@@ -21,11 +21,13 @@ from rigidid.cli.common import (
     write_json,
 )
 from rigidid.cli.options import (
+    RECORDS_PANEL,
     UNCERTAINTY_PANEL,
     AngleNoise,
     DampingNoise,
     FrequencyNoise,
     Geometry,
+    Impacts,
     JsonPath,
     PositionNoise,
     Seed,
@@ -36,6 +38,41 @@ from rigidid.errors import InputError, named_source
 
 if TYPE_CHECKING:
     from rigidid.results import PlanResult
+
+
+PlanMounts = Annotated[
+    Path | None,
+    typer.Option(
+        "--mounts", metavar="FILE", help="mounts.json: check that the mount layout determines every per-mount rate."
+    ),
+]
+PlanRecords = Annotated[
+    bool,
+    typer.Option(
+        "--records",
+        help="The test will be impact records: with --body, predict the sensor budget identify --records will "
+        "report (the refit's own) for the impacts, rate and duration given.",
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+PlannedRate = Annotated[
+    float | None,
+    typer.Option(
+        help="Samples per second of the planned records (implies --records) \\[default: 512].",
+        metavar="HZ",
+        rich_help_panel=RECORDS_PANEL,
+        show_default=False,
+    ),
+]
+PlannedDuration = Annotated[
+    float | None,
+    typer.Option(
+        help="Free decay per planned record, s (implies --records) \\[default: 8].",
+        metavar="S",
+        rich_help_panel=RECORDS_PANEL,
+        show_default=False,
+    ),
+]
 
 
 def plan(
@@ -80,26 +117,22 @@ def plan(
             show_default=False,
         ),
     ] = None,
-    mounts: Annotated[
-        Path | None,
-        typer.Option(
-            "--mounts", metavar="FILE", help="mounts.json: check that the mount layout determines every per-mount rate."
-        ),
-    ] = None,
+    mounts: PlanMounts = None,
+    records: PlanRecords = False,
+    impact: Impacts = None,
+    sample_rate: PlannedRate = None,
+    duration: PlannedDuration = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with reported():
         from rigidid import api
         from rigidid.io.atomic import OutputSet
         from rigidid.jsonout import plan_to_dict
-        from rigidid.limits import check_count
 
-        draws = old_name("plan", "--draws", "--uncertainty", draws_old, draws, 1000)
-        if draws < 2:
-            raise InputError(f"need at least 2 draws, got {draws}", source="--uncertainty")
+        draws = _checked_draws(draws_old, draws)
         check_options(add=add, seed=seed)
-        check_count(draws, "--uncertainty", low=2, high=1_000_000)
         check_outputs({"--json": json_path})
+        impacts = _planned_test(impact, sample_rate, duration)
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -110,7 +143,7 @@ def plan(
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
                 units=parse_units(units, layout), geometry=geometry, progress=progress, references=references,
-                mounts=mounts,
+                mounts=mounts, records=records, impacts=impacts, sample_rate=sample_rate, duration=duration,
             )  # fmt: skip
         with OutputSet():  # a verdict (exit 1) writes its report too: standard output first, then the file
             if json_path is not None:
@@ -122,6 +155,28 @@ def plan(
         if not result.report.ok or (result.references is not None and not result.references.ok):
             _verdict(result, layout, references)
             raise typer.Exit(EXIT_IDENTIFICATION)
+
+
+def _checked_draws(draws_old: int | None, draws: int) -> int:
+    """``--uncertainty`` (or its old name ``--draws``), at least 2."""
+    from rigidid.limits import check_count
+
+    draws = old_name("plan", "--draws", "--uncertainty", draws_old, draws, 1000)
+    if draws < 2:
+        raise InputError(f"need at least 2 draws, got {draws}", source="--uncertainty")
+    check_count(draws, "--uncertainty", low=2, high=1_000_000)
+    return draws
+
+
+def _planned_test(
+    impact: list[str] | None, sample_rate: float | None, duration: float | None
+) -> list[tuple[tuple[float, ...], tuple[float, ...]]] | None:
+    """The planned records test's options checked: the impacts parsed (None: the default ones)."""
+    from rigidid.limits import check_number
+
+    for value, flag in ((sample_rate, "--sample-rate"), (duration, "--duration")):
+        check_number(value, flag, positive=True)
+    return [parse_impact(text) for text in impact] if impact else None
 
 
 def _verdict(result: PlanResult, layout: Path, references: Path | None) -> None:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,20 +40,27 @@ from rigidid.core.simulate import Body, body_modes
 from rigidid.core.uncertainty import Uncertainty, propagate
 from rigidid.errors import IllConditionedWarning, InputError, Notice, emit
 
+if TYPE_CHECKING:
+    from rigidid.core.sensor_budget import SensorBounds
+
 __all__ = [
     "AXIS_COS",
     "INERTIAL_PARAMETERS",
+    "RECORDS_TIME_CONSTANTS",
     "RIGID_LOADS",
     "Finding",
     "LayoutReport",
     "PredictedFigures",
     "Prediction",
+    "RecordsBudget",
     "ReferenceReport",
     "SensorPlan",
     "SuggestedSensor",
     "candidate_grid",
     "check_layout",
     "check_references",
+    "default_impacts",
+    "predict_records_budget",
     "predict_uncertainty",
     "suggest_sensors",
 ]
@@ -221,6 +229,160 @@ def predict_uncertainty(
         failed=result.failed,
     )
     return Prediction(figures, result.inertia.std, result)
+
+
+# --------------------------------------------------------------------------- the records route's budget
+
+
+RECORDS_TIME_CONSTANTS = 8.0
+"""Decay time constants ``1 / (zeta omega)`` of the slowest-decaying mode kept by
+:func:`predict_records_budget`: the refit's sensor map from a longer record differs by less than
+0.1 % (``benchmarks/plan_budget.py``; its signatures and Jacobian hold the decay's energy,
+``exp(-16)`` of it lies beyond), and the map is computed on that much only."""
+
+RECORDS_NOISE_SEED = 20231
+"""Seed of the white noise the planned decays carry in :func:`predict_records_budget`."""
+
+
+def default_impacts(positions: ArrayLike) -> list[tuple[Array, Array]]:
+    """The two impacts a records test gets when none are given (``rigidid simulate``'s and ``plan``'s).
+
+    Parameters
+    ----------
+    positions : array_like, shape (p, 3)
+        The sensors (length).
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        At the first sensor along (1, 1, 1) and at the sensor farthest from it along (-1, 1, -1),
+        which excite all six modes in general.
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    far = int(np.argmax(np.linalg.norm(pos - pos[0], axis=1)))
+    return [(pos[0].copy(), np.array([1.0, 1.0, 1.0])), (pos[far].copy(), np.array([-1.0, 1.0, -1.0]))]
+
+
+@dataclass(frozen=True)
+class RecordsBudget:
+    """The sensor budget ``identify --records`` will report for a planned test (:func:`predict_records_budget`).
+
+    Attributes
+    ----------
+    std : dict of str to dict of str to ndarray
+        Per type-B source (:data:`rigidid.core.sensor_budget.SOURCES`), the refit's std of
+        ``center_of_gravity`` (3,), ``inertia_per_mass`` (3, 3), ``stiffness_per_mass`` and
+        ``damping_per_mass`` (6, 6), ``frequency_hz`` and ``damping_ratio`` (6,)
+        (:attr:`rigidid.core.timedomain.refine.Refinement.sensor_std`), per mass.
+    factor : int
+        The refit's decimation of the planned records (:func:`~rigidid.core.timedomain.refine.fit_factor`).
+    rows : int
+        Samples per impact (at the fit's rate) the refit would fit (:data:`~rigidid.core.timedomain.refine.MAX_ROWS`).
+    used : int
+        Samples per impact the prediction used (at most :data:`RECORDS_TIME_CONSTANTS` of the
+        slowest decay).
+    """
+
+    std: dict[str, dict[str, Array]]
+    factor: int
+    rows: int
+    used: int
+
+
+def predict_records_budget(
+    body: Body,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    bounds: SensorBounds,
+    impacts: list[tuple[Array, Array]] | None = None,
+    *,
+    sample_rate: float = 512.0,
+    duration: float = 8.0,
+    noise: float = 0.01,
+) -> RecordsBudget | None:
+    """The refit's sensor budget for a planned impact test, before the test.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate and its mounts.
+    positions, directions : array_like, shape (p, 3)
+        The planned sensors (length; axes).
+    bounds : SensorBounds
+        The stated tolerances (:class:`rigidid.core.sensor_budget.SensorBounds`, layout length).
+    impacts : list of (ndarray, ndarray), optional
+        Where each impact acts and along which direction; :func:`default_impacts` when None.
+    sample_rate : float
+        Samples per second of the records (Hz).
+    duration : float
+        Free decay per record (s).
+    noise : float
+        Noise of each channel relative to its RMS (``rigidid simulate``'s convention): the
+        channels' relative weights in the refit.
+
+    Returns
+    -------
+    RecordsBudget or None
+        None when the body's model has not six underdamped modes or the records are too short
+        for the refit.
+
+    Notes
+    -----
+    ``identify --records`` reports the output-error refit's own linearisation of each tolerance
+    (:func:`rigidid.core.timedomain.refine.sensor_terms`): a sensor error ``x`` moves the body by
+    one Gauss-Newton step ``(J^T J)^+ J^T G~ x`` of the refit's model, eq. (19) of [1], whose
+    Jacobian ``J`` and sensor signatures ``G~`` depend on the test (impacts, record length and
+    rate, the channels' noise levels). Here that same map is built at the body estimate: the
+    planned records (:func:`rigidid.core.timedomain.simulate.impulse_records`, white noise of
+    `noise` times each channel's RMS with a fixed seed, so that the refit's checks see noise)
+    decimated and cut as the refit would (:func:`~rigidid.core.timedomain.refine.fit_factor`,
+    :func:`~rigidid.core.timedomain.refine.cut_decays`, the modal estimate's factor for content
+    up to the top mode), each channel weighted by its noise level, and the refit evaluated at
+    the body (:func:`~rigidid.core.timedomain.refine.refine_prepared` with no iteration). Only
+    the first :data:`RECORDS_TIME_CONSTANTS` decay time constants are used. The prediction holds
+    for the body estimate: the reported budget is the refit's at the fitted body.
+    """
+    from rigidid.core.simulate import system_matrices
+    from rigidid.core.timedomain.estimate import decimation_factors
+    from rigidid.core.timedomain.preprocess import decimate, fir_taps
+    from rigidid.core.timedomain.refine import PreparedDecays, cut_decays, fit_factor, refine_prepared
+    from rigidid.core.timedomain.simulate import impulse_records
+
+    _check_body(body)
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    dirs = normalise_directions(directions)
+    poles = body_modes(body, pos, dirs).poles
+    if poles.size != 6:
+        return None
+    planned = impacts if impacts is not None else default_impacts(pos)
+    records = impulse_records(body, pos, dirs, planned, sample_rate=sample_rate, duration=duration)
+    dt, p = 1.0 / sample_rate, pos.shape[0]
+    rms = np.sqrt(np.mean([np.mean(r**2, axis=0) for r in records], axis=0))
+    rng = np.random.default_rng(RECORDS_NOISE_SEED)
+    records = [r + noise * rms * rng.standard_normal(r.shape) for r in records]
+    top = float(np.max(np.abs(poles))) / (2.0 * math.pi)
+    q = fit_factor([r.shape[0] for r in records], p, decimation_factors(records, dt, None, (0.0, top))[0])
+    try:
+        decays = cut_decays([decimate(r, q) if q > 1 else r for r in records], p)
+    except InputError:
+        return None
+    rows = decays[0].shape[0]
+    slowest = float(np.min(-poles.real))
+    used = rows if slowest <= 0.0 else min(rows, max(64, math.ceil(RECORDS_TIME_CONSTANTS / slowest / (q * dt))))
+    sigma = noise * rms * (math.sqrt(float(np.sum(fir_taps(q) ** 2))) if q > 1 else 1.0)
+    data = PreparedDecays([d[:used] for d in decays], np.where(sigma > 0.0, sigma, 1.0), q * dt, "pretrigger")
+    _, k, c = system_matrices(body)
+    try:
+        refit = refine_prepared(
+            data, dt, pos, dirs, center_of_gravity=body.center_of_gravity,
+            inertia_per_mass=body.inertia_tensor / body.mass, stiffness_per_mass=k / body.mass,
+            damping_per_mass=c / body.mass, max_evaluations=0, sensor_bounds=bounds,
+        )  # fmt: skip
+    except np.linalg.LinAlgError:
+        return None
+    if refit.sensor_std is None:
+        return None
+    return RecordsBudget(refit.sensor_std, q, rows, used)
 
 
 # --------------------------------------------------------------------------- sensor suggestions
