@@ -1,6 +1,7 @@
 """``rigidid plan``'s first-order shortcuts against the Monte Carlo they replace (issue 20).
 
     PYTHONPATH=src python benchmarks/plan_speed.py [--mount-draws 200] [--mount-seed 0] [--skip-mounts]
+        [--plan-time] [--only-plan-time]
 
 1. ``plan --add 2`` (:func:`rigidid.core.plan.suggest_sensors`, 300 draws, the default grid of
    81 candidates): per sample with a body estimate, the sensors chosen with the first-order
@@ -13,6 +14,10 @@
    Monte Carlo of noisy refits (:func:`rigidid.core.mounts.predict_mount_model`), each ratio with
    the Monte Carlo's own relative error ``1 / sqrt(2 (draws - 1))``, and the share of tests the
    F test flags.
+
+3. ``--plan-time``: ``rigidid plan LAYOUT --body BODY`` (the API, default 1000 draws) per sample with a
+   body estimate, CPU seconds without and with ``--records`` (the records route's sensor budget for the
+   default records test, 512 Hz, 8 s, two impacts: :func:`rigidid.core.plan.predict_records_budget`), best of 3.
 
 Measured (fe3e9eb + issue 20's change, 2 busy cores, ``--mount-draws 200``):
 
@@ -123,15 +128,40 @@ def mounts(draws: int, seed: int) -> None:
     print(f"flagged: first order {first.flagged:.3f}, Monte Carlo {mc.flagged:.3f}")
 
 
+def plan_time() -> None:
+    from rigidid import api
+
+    print("\nrigidid plan LAYOUT --body BODY (API, 1000 draws), CPU s, best of 3: without / with --records")
+    for case, body_file in CASES:
+        times = []
+        for records in (False, True):
+            best = np.inf
+            for _ in range(3):
+                start = time.process_time()
+                result = api.plan(SAMPLES / case / "layout.json", body=SAMPLES / case / body_file, records=records)
+                best = min(best, time.process_time() - start)
+            times.append(best)
+        test = result.records_test or {}
+        print(
+            f"  {case} {body_file}: {times[0]:.2f} / {times[1]:.2f} (+{times[1] - times[0]:.2f}; fitted at "
+            f"1/{test.get('fit_decimation')}, {test.get('rows_used')} of {test.get('fit_rows')} rows per impact)"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mount-draws", type=int, default=200)
     parser.add_argument("--mount-seed", type=int, default=0)
     parser.add_argument("--skip-mounts", action="store_true")
+    parser.add_argument("--plan-time", action="store_true", help="also time plan without and with --records")
+    parser.add_argument("--only-plan-time", action="store_true", help="only time plan without and with --records")
     args = parser.parse_args()
-    suggestions()
-    if not args.skip_mounts:
-        mounts(args.mount_draws, args.mount_seed)
+    if not args.only_plan_time:
+        suggestions()
+        if not args.skip_mounts:
+            mounts(args.mount_draws, args.mount_seed)
+    if args.plan_time or args.only_plan_time:
+        plan_time()
 
 
 if __name__ == "__main__":

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -50,6 +50,7 @@ __all__ = [
     "RIGID_LOADS",
     "Finding",
     "LayoutReport",
+    "PlannedDecays",
     "PredictedFigures",
     "Prediction",
     "RecordsBudget",
@@ -60,6 +61,7 @@ __all__ = [
     "check_layout",
     "check_references",
     "default_impacts",
+    "planned_decays",
     "predict_records_budget",
     "predict_uncertainty",
     "suggest_sensors",
@@ -264,6 +266,30 @@ def default_impacts(positions: ArrayLike) -> list[tuple[Array, Array]]:
 
 
 @dataclass(frozen=True)
+class PlannedDecays:
+    """The decays the refit would fit in a planned records test (:func:`planned_decays`).
+
+    Attributes
+    ----------
+    data : PreparedDecays
+        The decays at the fit's rate (the first :data:`RECORDS_TIME_CONSTANTS` decay time
+        constants) and each channel's noise level
+        (:class:`rigidid.core.timedomain.refine.PreparedDecays`).
+    dt : float
+        Sample interval of the planned records (s).
+    factor : int
+        The refit's decimation (:func:`~rigidid.core.timedomain.refine.fit_factor`).
+    rows : int
+        Samples per impact (at the fit's rate) the refit would fit (:data:`~rigidid.core.timedomain.refine.MAX_ROWS`).
+    """
+
+    data: Any
+    dt: float
+    factor: int
+    rows: int
+
+
+@dataclass(frozen=True)
 class RecordsBudget:
     """The sensor budget ``identify --records`` will report for a planned test (:func:`predict_records_budget`).
 
@@ -289,18 +315,17 @@ class RecordsBudget:
     used: int
 
 
-def predict_records_budget(
+def planned_decays(
     body: Body,
     positions: ArrayLike,
     directions: ArrayLike,
-    bounds: SensorBounds,
     impacts: list[tuple[Array, Array]] | None = None,
     *,
     sample_rate: float = 512.0,
     duration: float = 8.0,
     noise: float = 0.01,
-) -> RecordsBudget | None:
-    """The refit's sensor budget for a planned impact test, before the test.
+) -> PlannedDecays | None:
+    """The decays the refit would fit in a planned test, simulated from the body estimate.
 
     Parameters
     ----------
@@ -308,8 +333,6 @@ def predict_records_budget(
         The body estimate and its mounts.
     positions, directions : array_like, shape (p, 3)
         The planned sensors (length; axes).
-    bounds : SensorBounds
-        The stated tolerances (:class:`rigidid.core.sensor_budget.SensorBounds`, layout length).
     impacts : list of (ndarray, ndarray), optional
         Where each impact acts and along which direction; :func:`default_impacts` when None.
     sample_rate : float
@@ -322,30 +345,21 @@ def predict_records_budget(
 
     Returns
     -------
-    RecordsBudget or None
-        None when the body's model has not six underdamped modes or the records are too short
-        for the refit.
+    PlannedDecays or None
+        None when the body has not six modes or the records are too short for the refit.
 
     Notes
     -----
-    ``identify --records`` reports the output-error refit's own linearisation of each tolerance
-    (:func:`rigidid.core.timedomain.refine.sensor_terms`): a sensor error ``x`` moves the body by
-    one Gauss-Newton step ``(J^T J)^+ J^T G~ x`` of the refit's model, eq. (19) of [1], whose
-    Jacobian ``J`` and sensor signatures ``G~`` depend on the test (impacts, record length and
-    rate, the channels' noise levels). Here that same map is built at the body estimate: the
-    planned records (:func:`rigidid.core.timedomain.simulate.impulse_records`, white noise of
-    `noise` times each channel's RMS with a fixed seed, so that the refit's checks see noise)
-    decimated and cut as the refit would (:func:`~rigidid.core.timedomain.refine.fit_factor`,
-    :func:`~rigidid.core.timedomain.refine.cut_decays`, the modal estimate's factor for content
-    up to the top mode), each channel weighted by its noise level, and the refit evaluated at
-    the body (:func:`~rigidid.core.timedomain.refine.refine_prepared` with no iteration). Only
-    the first :data:`RECORDS_TIME_CONSTANTS` decay time constants are used. The prediction holds
-    for the body estimate: the reported budget is the refit's at the fitted body.
+    The records (:func:`rigidid.core.timedomain.simulate.impulse_records`) carry white noise of
+    `noise` times each channel's RMS (a fixed seed, :data:`RECORDS_NOISE_SEED`, so that the refit's
+    checks see noise); they are decimated and cut as the refit would
+    (:func:`~rigidid.core.timedomain.refine.fit_factor` up to the modal estimate's factor for
+    content up to the top mode, :func:`~rigidid.core.timedomain.refine.cut_decays`), then kept for
+    :data:`RECORDS_TIME_CONSTANTS` decay time constants of the slowest mode.
     """
-    from rigidid.core.simulate import system_matrices
     from rigidid.core.timedomain.estimate import decimation_factors
     from rigidid.core.timedomain.preprocess import decimate, fir_taps
-    from rigidid.core.timedomain.refine import PreparedDecays, cut_decays, fit_factor, refine_prepared
+    from rigidid.core.timedomain.refine import PreparedDecays, cut_decays, fit_factor
     from rigidid.core.timedomain.simulate import impulse_records
 
     _check_body(body)
@@ -371,10 +385,63 @@ def predict_records_budget(
     used = rows if slowest <= 0.0 else min(rows, max(64, math.ceil(RECORDS_TIME_CONSTANTS / slowest / (q * dt))))
     sigma = noise * rms * (math.sqrt(float(np.sum(fir_taps(q) ** 2))) if q > 1 else 1.0)
     data = PreparedDecays([d[:used] for d in decays], np.where(sigma > 0.0, sigma, 1.0), q * dt, "pretrigger")
+    return PlannedDecays(data, dt, q, rows)
+
+
+def predict_records_budget(
+    body: Body,
+    positions: ArrayLike,
+    directions: ArrayLike,
+    bounds: SensorBounds,
+    impacts: list[tuple[Array, Array]] | None = None,
+    *,
+    sample_rate: float = 512.0,
+    duration: float = 8.0,
+    noise: float = 0.01,
+) -> RecordsBudget | None:
+    """The refit's sensor budget for a planned impact test, before the test.
+
+    Parameters
+    ----------
+    body : Body
+        The body estimate and its mounts.
+    positions, directions : array_like, shape (p, 3)
+        The planned sensors (length; axes).
+    bounds : SensorBounds
+        The stated tolerances (:class:`rigidid.core.sensor_budget.SensorBounds`, layout length).
+    impacts, sample_rate, duration, noise
+        The planned test (:func:`planned_decays`).
+
+    Returns
+    -------
+    RecordsBudget or None
+        None when the body's model has not six underdamped modes or the records are too short
+        for the refit.
+
+    Notes
+    -----
+    ``identify --records`` reports the output-error refit's own linearisation of each tolerance
+    (:func:`rigidid.core.timedomain.refine.sensor_terms`): a sensor error ``x`` moves the body by
+    one Gauss-Newton step ``(J^T J)^+ J^T G~ x`` of the refit's model, eq. (19) of [1], whose
+    Jacobian ``J`` and sensor signatures ``G~`` depend on the test (impacts, record length and
+    rate, the channels' noise levels). Here that same map is built at the body estimate on the
+    planned decays (:func:`planned_decays`), the refit evaluated at the body
+    (:func:`~rigidid.core.timedomain.refine.refine_prepared` with no iteration). The prediction
+    holds for the body estimate: identify reports the map at the body it fits, which the sensors'
+    actual errors move (``benchmarks/plan_budget.py``).
+    """
+    from rigidid.core.simulate import system_matrices
+    from rigidid.core.timedomain.refine import refine_prepared
+
+    planned = planned_decays(
+        body, positions, directions, impacts, sample_rate=sample_rate, duration=duration, noise=noise
+    )
+    if planned is None:
+        return None
     _, k, c = system_matrices(body)
     try:
         refit = refine_prepared(
-            data, dt, pos, dirs, center_of_gravity=body.center_of_gravity,
+            planned.data, planned.dt, positions, directions, center_of_gravity=body.center_of_gravity,
             inertia_per_mass=body.inertia_tensor / body.mass, stiffness_per_mass=k / body.mass,
             damping_per_mass=c / body.mass, max_evaluations=0, sensor_bounds=bounds,
         )  # fmt: skip
@@ -382,7 +449,7 @@ def predict_records_budget(
         return None
     if refit.sensor_std is None:
         return None
-    return RecordsBudget(refit.sensor_std, q, rows, used)
+    return RecordsBudget(refit.sensor_std, planned.factor, planned.rows, planned.data.decays[0].shape[0])
 
 
 # --------------------------------------------------------------------------- sensor suggestions
