@@ -202,8 +202,8 @@ def predicted_budget(
     The type-B parts are :func:`rigidid.core.sensor_budget.sensor_budget` at the body's exact modes:
     the identification from the modes' propagation. ``identify --records`` reports the refit's own
     (:func:`rigidid.core.timedomain.refine.sensor_terms`), a different estimator's: on four-mounts
-    0.25-1.28 of this prediction (``tests/test_clipping.py``). The per-mass parts are scaled by
-    the body's mass.
+    0.25-1.28 of this prediction (``tests/test_clipping.py``); :func:`predicted_records_budget`
+    predicts that one. The per-mass parts are scaled by the body's mass.
     """
     import numpy as np
 
