@@ -106,8 +106,9 @@ def test_plan_prefers_a_good_layout_and_says_why(tmp_path: Path) -> None:
 
 def test_plan_with_body_predicts_and_suggests(tmp_path: Path) -> None:
     out = run(
-        "plan", ENGINE / "layout.json", "--body", ENGINE / "body.json", "--add", "1", "--draws", "100", "--json", "-"
-    )
+        "plan", ENGINE / "layout.json", "--body", ENGINE / "body.json", "--add", "1", "--draws", "100", "--json", "-",
+        "--records", "--sample-rate", "256", "--duration", "2",
+    )  # fmt: skip
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert len(data["prediction"]["center_of_gravity_std"]) == 3
@@ -121,6 +122,15 @@ def test_plan_with_body_predicts_and_suggests(tmp_path: Path) -> None:
         parts = [np.asarray(budget[s][key]) for s in budget if s != "combined"]
         np.testing.assert_allclose(budget["combined"][key], np.sqrt(sum(p**2 for p in parts)), rtol=1e-12)
     assert data["tolerances"]["orientation_deg"] > 0
+    # a records test planned: the refit's own budget per source, and the four sources in quadrature
+    records = data["records_sensor_budget"]
+    assert list(records) == ["sensitivity", "orientation", "transverse", "position", "sensors"]
+    for key in ("center_of_gravity", "inertia_tensor", "stiffness_diagonal"):
+        parts = [np.asarray(records[s][key]) for s in records if s != "sensors"]
+        np.testing.assert_allclose(records["sensors"][key], np.sqrt(sum(p**2 for p in parts)), rtol=1e-12)
+    test = data["records_test"]
+    assert (test["sample_rate_hz"], test["duration_s"], len(test["impacts"])) == (256.0, 2.0, 2)
+    assert 0 < test["rows_used"] <= test["fit_rows"] <= 512
 
 
 def test_report_is_one_offline_html_file(tmp_path: Path) -> None:

@@ -83,6 +83,19 @@ def test_uff_options_on_a_json_layout_are_refused(capsys: pytest.CaptureFixture[
     assert "UFF" in message
 
 
+@pytest.mark.parametrize(
+    ("args", "flag"),
+    [(("--body", "{body}", "--sample-rate", "0"), "--sample-rate"),
+     (("--body", "{body}", "--impact", "1,2:0,0,1"), "--impact"), (("--records",), "--records")],
+)  # fmt: skip
+def test_a_planned_records_test_is_checked(
+    capsys: pytest.CaptureFixture[str], args: tuple[str, ...], flag: str
+) -> None:
+    """``plan --records``: its test's options named when wrong, and refused without a body estimate to predict for."""
+    message = _error(capsys, "plan", CASE / "layout.json", *(a.format(body=CASE / "body.json") for a in args))
+    assert message.startswith(f"rigidid: error: {flag}: "), message
+
+
 def test_the_modes_file_is_not_json(tmp_path: Path) -> None:
     """The hint is only for tables: a broken layout JSON keeps its plain message."""
     from rigidid.errors import InputError

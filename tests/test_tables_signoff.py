@@ -50,12 +50,18 @@ def test_the_data_sheet_beside_the_identified_mount_rates(identified: str) -> No
 
 
 def test_plan_add_columns_have_units(tmp_path: Path) -> None:
-    args = ("plan", SAMPLE / "layout.json", "--body", SAMPLE / "cad-estimate.json", "--add", "1", "--uncertainty", "20")
+    args = ("plan", SAMPLE / "layout.json", "--body", SAMPLE / "cad-estimate.json", "--add", "1", "--uncertainty", "20",
+            "--duration", "2")  # fmt: skip
     out = run(*args, columns=160)
     assert out.returncode == 0, out.stderr
     header = next(line for line in out.stdout.splitlines() if "step" in line and "position" in line)
     for column in ("position (mm)", "direction (unit)", "CG std (mm)", "score (-)"):
         assert column in header
+    # --duration plans a records test: the refit's predicted budget, per source and the four in quadrature
+    lines = out.stdout.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("Predicted sensor budget, records route"))
+    assert all(name in lines[start + 2] for name in ("sensitivity", "orientation", "transverse", "position", "sensors"))
+    assert lines[start + 4].startswith("│ CG x (mm)") and "2 impacts, 512 Hz, 2 s" in out.stdout
 
 
 @pytest.mark.parametrize(

@@ -124,9 +124,12 @@ def plan(
         where, axes, mount_spec = read_mount_spec(mounts, layout_units)
         mount_groups = [m.group for m in mount_spec.mounts]
         split = split_uniqueness(where, axes, mount_groups)
+    planned = records or impacts is not None or sample_rate is not None or duration is not None
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
+        if planned:
+            raise InputError("predicting the records route's sensor budget needs a body estimate", source="records")
         return PlanResult(layout_units, report, references=_plan_references(references, lay, None), mount_split=split)
     spec = body if isinstance(body, BodyFile) else files.load_body(body)
     same_units(spec, lay, None if isinstance(body, BodyFile) else str(body))
@@ -153,7 +156,7 @@ def plan(
     suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
     budget = None if prediction is None else predicted_budget(core_body, lay, positions, directions, prediction)
     records_budget = None
-    if prediction is not None and (records or impacts is not None or sample_rate is not None or duration is not None):
+    if prediction is not None and planned:
         step("predicting the records route's sensor budget", 0, 1)
         records_budget = predicted_records_budget(
             core_body, lay, positions, directions, impacts=impacts,

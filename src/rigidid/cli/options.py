@@ -315,6 +315,8 @@ FLAGS = {
     "force": "--force",
     "estimate_sensors": "--estimate-sensors",
     "estimate_delays": "--estimate-delays",
+    "sample_rate": "--sample-rate",
+    "duration": "--duration",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 
