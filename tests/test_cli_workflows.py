@@ -124,12 +124,14 @@ def test_plan_with_body_predicts_and_suggests(tmp_path: Path) -> None:
     assert data["tolerances"]["orientation_deg"] > 0
     # a records test planned: the refit's own budget per source, and the four sources in quadrature
     records = data["records_sensor_budget"]
-    assert list(records) == ["sensitivity", "orientation", "transverse", "position", "sensors"]
+    sources = ["sensitivity", "orientation", "transverse", "position"]
+    assert list(records) == ["noise", *sources, "sensors", "combined"]
     for key in ("center_of_gravity", "inertia_tensor", "stiffness_diagonal"):
-        parts = [np.asarray(records[s][key]) for s in records if s != "sensors"]
-        np.testing.assert_allclose(records["sensors"][key], np.sqrt(sum(p**2 for p in parts)), rtol=1e-12)
+        sensors = np.sqrt(sum(np.asarray(records[s][key]) ** 2 for s in sources))
+        np.testing.assert_allclose(records["sensors"][key], sensors, rtol=1e-12)
+        np.testing.assert_allclose(records["combined"][key], np.hypot(records["noise"][key], sensors), rtol=1e-12)
     test = data["records_test"]
-    assert (test["sample_rate_hz"], test["duration_s"], len(test["impacts"])) == (256.0, 2.0, 2)
+    assert (test["sample_rate_hz"], test["duration_s"], test["noise"], len(test["impacts"])) == (256.0, 2.0, 0.01, 2)
     assert 0 < test["rows_used"] <= test["fit_rows"] <= 512
 
 

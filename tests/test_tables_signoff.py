@@ -60,7 +60,8 @@ def test_plan_add_columns_have_units(tmp_path: Path) -> None:
     # --duration plans a records test: the refit's predicted budget, per source and the four in quadrature
     lines = out.stdout.splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith("Predicted sensor budget, records route"))
-    assert all(name in lines[start + 2] for name in ("sensitivity", "orientation", "transverse", "position", "sensors"))
+    names = ("noise", "sensitivity", "orientation", "transverse", "position", "sensors", "combined")
+    assert all(name in lines[start + 2] for name in names)
     assert lines[start + 4].startswith("│ CG x (mm)") and "2 impacts, 512 Hz, 2 s" in out.stdout
 
 

@@ -558,8 +558,8 @@ def _budget_table(
         title = "Predicted sensor budget, records route (identify --records: the refit's own)"
         caption = (
             f"{len(records['impacts'])} impacts, {records['sample_rate_hz']:g} Hz, {records['duration_s']:g} s "
-            f"(fitted at 1/{records['fit_decimation']}); tolerances (bounds): {stated}; "
-            "sensors: the four in quadrature"
+            f"(fitted at 1/{records['fit_decimation']}), noise {records['noise']:g} of each channel's RMS; "
+            f"tolerances (bounds): {stated}; sensors: the four in quadrature; combined: with the noise"
         )
     table = Table(title=title, caption=caption, title_justify="left", caption_justify="left")
     table.add_column("quantity")

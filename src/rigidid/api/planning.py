@@ -44,6 +44,7 @@ def plan(
     impacts: Sequence[tuple[Sequence[float], Sequence[float]]] | None = None,
     sample_rate: float | None = None,
     duration: float | None = None,
+    record_noise: float | None = None,
 ) -> PlanResult:
     """Check a sensor layout before the test; predict and improve it with a body estimate.
 
@@ -94,6 +95,8 @@ def plan(
         :func:`rigidid.core.plan.default_impacts`.
     sample_rate, duration : float, optional
         Samples per second (default 512) and free decay per record (s, default 8) of the planned records.
+    record_noise : float, optional
+        Their noise, relative to each channel's RMS over each record's free decay (default 0.01).
 
     Returns
     -------
@@ -124,7 +127,7 @@ def plan(
         where, axes, mount_spec = read_mount_spec(mounts, layout_units)
         mount_groups = [m.group for m in mount_spec.mounts]
         split = split_uniqueness(where, axes, mount_groups)
-    planned = records or impacts is not None or sample_rate is not None or duration is not None
+    planned = records or any(x is not None for x in (impacts, sample_rate, duration, record_noise))
     if body is None:
         if add:
             raise InputError("suggesting sensors needs a body estimate", source="add")
@@ -155,14 +158,10 @@ def plan(
         step("predicting the mount model", 1, 1)
     suggestions = _suggest(core_body, lay, positions, directions, candidates, add, levels, draws, seed, step)
     budget = None if prediction is None else predicted_budget(core_body, lay, positions, directions, prediction)
-    records_budget = None
-    if prediction is not None and planned:
-        step("predicting the records route's sensor budget", 0, 1)
-        records_budget = predicted_records_budget(
-            core_body, lay, positions, directions, impacts=impacts,
-            sample_rate=512.0 if sample_rate is None else sample_rate, duration=8.0 if duration is None else duration,
-        )  # fmt: skip
-        step("predicting the records route's sensor budget", 1, 1)
+    records_budget = None if prediction is None or not planned else predicted_records_budget(
+        core_body, lay, positions, directions, impacts=impacts, sample_rate=sample_rate, duration=duration,
+        noise=record_noise, progress=step,
+    )  # fmt: skip
     return PlanResult(
         layout_units, report, prediction, suggestions, checked_refs, split, mount_prediction,
         sensor_budget=None if budget is None else budget[0], tolerances=None if budget is None else budget[1],
@@ -240,8 +239,10 @@ def predicted_records_budget(
     directions: NDArray[np.float64],
     *,
     impacts: Sequence[tuple[Sequence[float], Sequence[float]]] | None = None,
-    sample_rate: float = 512.0,
-    duration: float = 8.0,
+    sample_rate: float | None = None,
+    duration: float | None = None,
+    noise: float | None = None,
+    progress: ProgressCallback | None = None,
 ) -> tuple[dict[str, dict[str, NDArray[np.float64]]], dict[str, Any]] | None:
     """The sensor budget ``identify --records`` will report for a planned test: the refit's own.
 
@@ -255,17 +256,22 @@ def predicted_records_budget(
         The sensors, layout order.
     impacts : sequence of (position, direction), optional
         The planned impacts (default :func:`rigidid.core.plan.default_impacts`).
-    sample_rate, duration : float
-        Samples per second (Hz) and free decay per record (s).
+    sample_rate, duration : float, optional
+        Samples per second (Hz, default 512) and free decay per record (s, default 8).
+    noise : float, optional
+        The records' noise relative to each channel's RMS over each record's free decay (default 0.01).
+    progress : callable, optional
+        ``progress(task, done, total)`` around the prediction.
 
     Returns
     -------
     (dict, dict) or None
-        Per source (:data:`rigidid.core.sensor_budget.SOURCES`, then ``sensors``, the four in
-        quadrature) the standard deviations ``center_of_gravity`` (3,), ``inertia_tensor`` (3, 3)
-        and ``stiffness_diagonal`` (6,), absolute units; and the test as planned (``impacts``,
-        ``sample_rate_hz``, ``duration_s``, the refit's ``fit_decimation`` and ``fit_rows`` per
-        impact, ``rows_used`` by the prediction). None when the refit cannot run on such a test.
+        Per source (``noise`` when the refit converged, :data:`rigidid.core.sensor_budget.SOURCES`,
+        ``sensors``: the four in quadrature, ``combined``: all in quadrature, with the noise) the standard
+        deviations ``center_of_gravity`` (3,), ``inertia_tensor`` (3, 3) and ``stiffness_diagonal`` (6,),
+        absolute units; and the test as planned (``impacts``, ``sample_rate_hz``, ``duration_s``,
+        ``noise``, the refit's ``fit_decimation`` and ``fit_rows`` per impact, ``rows_used`` by the
+        prediction). None when the refit cannot run on such a test.
 
     Raises
     ------
@@ -283,7 +289,10 @@ def predicted_records_budget(
     from rigidid.core.plan import default_impacts, predict_records_budget
     from rigidid.limits import check_number, check_record_size
 
-    for value, name in ((sample_rate, "sample_rate"), (duration, "duration")):
+    sample_rate = 512.0 if sample_rate is None else sample_rate
+    duration = 8.0 if duration is None else duration
+    noise = 0.01 if noise is None else noise
+    for value, name in ((sample_rate, "sample_rate"), (duration, "duration"), (noise, "record_noise")):
         check_number(value, name, positive=True)
     planned = default_impacts(positions) if impacts is None else [
         (np.asarray(p, dtype=float).reshape(3), np.asarray(d, dtype=float).reshape(3)) for p, d in impacts
@@ -291,21 +300,29 @@ def predicted_records_budget(
     if any(not np.any(d) for _, d in planned):
         raise InputError("an impact direction is the zero vector", source="impacts")
     check_record_size(sample_rate, duration, positions.shape[0], len(planned))
-    bounds = sensor_bounds(layout)
+    step = progress or no_progress
+    step("predicting the records route's sensor budget", 0, 1)
     found = predict_records_budget(
-        body, positions, directions, bounds, planned, sample_rate=sample_rate, duration=duration
-    )
+        body, positions, directions, sensor_bounds(layout), planned, sample_rate=sample_rate, duration=duration,
+        noise=noise,
+    )  # fmt: skip
+    step("predicting the records route's sensor budget", 1, 1)
     if found is None:
         return None
     mass = float(body.mass)
+    parts_of = ({} if found.noise_std is None else {"noise": found.noise_std}) | found.std
     out = {source: {"center_of_gravity": np.asarray(parts["center_of_gravity"], dtype=float),
                     "inertia_tensor": mass * parts["inertia_per_mass"],
                     "stiffness_diagonal": mass * np.diag(parts["stiffness_per_mass"])}
-           for source, parts in found.std.items()}  # fmt: skip
-    out["sensors"] = {key: np.sqrt(sum(part[key] ** 2 for part in out.values())) for key in out["position"]}
+           for source, parts in parts_of.items()}  # fmt: skip
+    keys = out["position"]
+    out["sensors"] = {key: np.sqrt(sum(out[s][key] ** 2 for s in found.std)) for key in keys}
+    if "noise" in out:
+        out["combined"] = {key: np.hypot(out["noise"][key], out["sensors"][key]) for key in keys}
     test = {
         "impacts": [{"position": p.tolist(), "direction": (d / np.linalg.norm(d)).tolist()} for p, d in planned],
-        "sample_rate_hz": float(sample_rate), "duration_s": float(duration), "fit_decimation": found.factor,
+        "sample_rate_hz": float(sample_rate), "duration_s": float(duration), "noise": float(noise),
+        "fit_decimation": found.factor,
         "fit_rows": found.rows, "rows_used": found.used,
     }  # fmt: skip
     return out, test

@@ -317,6 +317,7 @@ FLAGS = {
     "estimate_delays": "--estimate-delays",
     "sample_rate": "--sample-rate",
     "duration": "--duration",
+    "record_noise": "--record-noise",
 }
 """API parameter names, as the API's errors name them, and the options that set them."""
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -60,6 +60,16 @@ PlannedRate = Annotated[
     typer.Option(
         help="Samples per second of the planned records (implies --records) \\[default: 512].",
         metavar="HZ",
+        rich_help_panel=RECORDS_PANEL,
+        show_default=False,
+    ),
+]
+PlannedNoise = Annotated[
+    float | None,
+    typer.Option(
+        help="Noise of the planned records, relative to each channel's RMS over the free decay (implies --records) "
+        "\\[default: 0.01].",
+        metavar="X",
         rich_help_panel=RECORDS_PANEL,
         show_default=False,
     ),
@@ -122,6 +132,7 @@ def plan(
     impact: Impacts = None,
     sample_rate: PlannedRate = None,
     duration: PlannedDuration = None,
+    record_noise: PlannedNoise = None,
 ) -> None:
     """Check a sensor layout before the test; with a body estimate, predict and improve it."""
     with reported():
@@ -132,7 +143,7 @@ def plan(
         draws = _checked_draws(draws_old, draws)
         check_options(add=add, seed=seed)
         check_outputs({"--json": json_path})
-        impacts = _planned_test(impact, sample_rate, duration)
+        test = _planned_test(records, impact, sample_rate, duration, record_noise)
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -143,7 +154,7 @@ def plan(
             result = api.plan(
                 layout, body=body, candidates=candidates, add=add, noise=noise, draws=draws, seed=seed,
                 units=parse_units(units, layout), geometry=geometry, progress=progress, references=references,
-                mounts=mounts, records=records, impacts=impacts, sample_rate=sample_rate, duration=duration,
+                mounts=mounts, **test,
             )  # fmt: skip
         with OutputSet():  # a verdict (exit 1) writes its report too: standard output first, then the file
             if json_path is not None:
@@ -169,14 +180,16 @@ def _checked_draws(draws_old: int | None, draws: int) -> int:
 
 
 def _planned_test(
-    impact: list[str] | None, sample_rate: float | None, duration: float | None
-) -> list[tuple[tuple[float, ...], tuple[float, ...]]] | None:
-    """The planned records test's options checked: the impacts parsed (None: the default ones)."""
+    records: bool, impact: list[str] | None, sample_rate: float | None, duration: float | None, noise: float | None
+) -> dict[str, Any]:
+    """The planned records test's options checked, as :func:`rigidid.api.plan`'s arguments (impacts parsed)."""
     from rigidid.limits import check_number
 
-    for value, flag in ((sample_rate, "--sample-rate"), (duration, "--duration")):
+    for value, flag in ((sample_rate, "--sample-rate"), (duration, "--duration"), (noise, "--record-noise")):
         check_number(value, flag, positive=True)
-    return [parse_impact(text) for text in impact] if impact else None
+    impacts = [parse_impact(text) for text in impact] if impact else None
+    return {"records": records, "impacts": impacts, "sample_rate": sample_rate, "duration": duration,
+            "record_noise": noise}  # fmt: skip
 
 
 def _verdict(result: PlanResult, layout: Path, references: Path | None) -> None:
