@@ -19,7 +19,11 @@ stiffness and damping matrices). Printed per cell and source: the ratio of the b
 reports (``uncertainty_records_crb.sensor_budget``) to plan's records prediction
 (``records_sensor_budget``), min-max over the seeds and the six figures (CG x, y, z and the inertia
 diagonal); then per figure over every cell and seed; the same ratio against plan's modal-kernel
-prediction (``sensor_budget``, what ``plan`` predicted before) for comparison. Target 0.8-1.25.
+prediction (``sensor_budget``, what ``plan`` predicted before) for comparison. Target 0.8-1.25. And the
+noise's part: plan is given chain_matrix's noise relative to the free decays' RMS (its 1 % is of the whole
+record's RMS, which the hammer pulse inflates: :func:`matched_noise`), one level for every channel where the
+benchmark's differs per channel, so the noise's ratio is approximate (the records' own noise level is the user's
+to state).
 
 ``--length``: the prediction from the first :data:`rigidid.core.plan.RECORDS_TIME_CONSTANTS` decay time
 constants against the whole decays the refit would fit, and the CPU time of each.
@@ -85,16 +89,33 @@ def body_json() -> dict[str, object]:
     }
 
 
+def matched_noise() -> float:
+    """The benchmark's noise relative to the free decays' RMS (plan's convention), pooled over channels and impacts.
+
+    chain_matrix's noise is 1 % of each channel's RMS over the whole record, which the hammer's pulse (the force's
+    direct part of the acceleration, large for 3 ms) inflates: relative to the decays it is more than 1 %.
+    """
+    saved = cm.NOISE
+    cm.NOISE = 0.0
+    records = cm.simulate(set(), np.random.default_rng(0), cm.sensor_errors(set(), np.random.default_rng(0)))
+    cm.NOISE = saved
+    start = round(cm.PRE * cm.RATE) + 8  # after the 3 ms pulse
+    sigma2 = [(saved**2) * np.mean(r**2, axis=0) for r in records]
+    decay2 = [np.mean(r[start:] ** 2, axis=0) for r in records]
+    return float(np.sqrt(np.mean(sigma2) / np.mean(decay2)))
+
+
 def planned(folder: Path) -> tuple[dict[str, Any], float]:
     """``plan --records`` for the benchmark's test (API), and its CPU seconds."""
     from rigidid import api
 
     (folder / "body.json").write_text(json.dumps(body_json()))
     cm.write_case(folder, [np.zeros((2, cm.SENSORS.shape[0]))], False, TOLERANCES)
+    noise = matched_noise()
     start = time.process_time()
     result = api.plan(
         folder / "layout.json", body=folder / "body.json", draws=20, impacts=cm.IMPACTS, sample_rate=cm.RATE,
-        duration=cm.DURATION - cm.PRE,
+        duration=cm.DURATION - cm.PRE, record_noise=noise,
     )  # fmt: skip
     assert result.records_budget is not None and result.sensor_budget is not None
     return {"records": result.records_budget, "kernel": result.sensor_budget, "test": result.records_test}, (
@@ -160,7 +181,8 @@ def length_check() -> None:
     body = body_from_file(BodyFile.model_validate(body_json()))
     impacts = [(np.asarray(p, float), np.asarray(d, float)) for p, d in cm.IMPACTS]
     runs = {}
-    for label, constants in (("cut", core_plan.RECORDS_TIME_CONSTANTS), ("whole", 1e9), ("3 tau", 3.0)):
+    saved = core_plan.RECORDS_TIME_CONSTANTS
+    for label, constants in (("cut", saved), ("whole", 1e9), ("3 tau", 3.0)):
         core_plan.RECORDS_TIME_CONSTANTS = constants
         start = time.process_time()
         found = core_plan.predict_records_budget(
@@ -169,7 +191,7 @@ def length_check() -> None:
         )  # fmt: skip
         assert found is not None
         runs[label] = (found, time.process_time() - start)
-    core_plan.RECORDS_TIME_CONSTANTS = 8.0
+    core_plan.RECORDS_TIME_CONSTANTS = saved
     whole = runs["whole"][0]
     print(f"\nrecord length: the prediction's map from fewer rows against the whole decays ({whole.rows} rows per "
           f"impact at 1/{whole.factor}), CPU s whole {runs['whole'][1]:.2f}")  # fmt: skip
@@ -196,12 +218,14 @@ def main() -> None:
     print(
         f"plan --records ({cpu:.2f} CPU s): {len(test['impacts'])} impacts, {test['sample_rate_hz']:g} Hz, "
         f"{test['duration_s']:g} s, fitted at 1/{test['fit_decimation']}, {test['fit_rows']} rows per impact, "
-        f"{test['rows_used']} used"
+        f"{test['rows_used']} used, noise {test['noise']:.4f} of the decays' RMS (chain_matrix's 1 %, matched)"
     )
     print("ratio identify's reported budget / plan's prediction, min-max over seeds and CG x, y, z, Ixx, Iyy, Izz;")
     print("geo: its geometric mean over seeds (the worst figure); fitted: min-max of identify's / plan's map at")
     print("the body identify fitted (what moves the budget run to run); kernel: identify's / plan's modal kernel's")
-    print(f"{'cell':<11} {'runs':>4}  " + "  ".join(f"{s:>24}" for s in SOURCES) + "  geo min-max  fitted  kernel")
+    print("noise: identify's noise part / plan's, min-max over seeds and figures")
+    print(f"{'cell':<11} {'runs':>4}  " + "  ".join(f"{s:>24}" for s in SOURCES)
+          + "  geo min-max  fitted     kernel     noise")  # fmt: skip
     per_figure: list[np.ndarray] = []
     kernel_all: list[np.ndarray] = []
     for cell in args.cells.split(","):
@@ -211,11 +235,12 @@ def main() -> None:
         fitted = np.array([[figures(r["budget"][s]) / figures(at_fitted_body(r["body"])[s]) for s in SOURCES]
                            for r in rows])  # fmt: skip
         geo = np.exp(np.mean(np.log(ratios), axis=0))  # (sources, figures)
+        noise = np.array([figures(r["budget"]["noise"]) / figures(plan["records"]["noise"]) for r in rows])
         per_figure.append(ratios.reshape(-1, 6))
         kernel_all.append(kernel.reshape(-1, 6))
         cols = "  ".join(f"{np.min(ratios[:, k]):>11.3f}-{np.max(ratios[:, k]):<12.3f}" for k in range(len(SOURCES)))
-        spans = [f"{np.min(x):.2f}-{np.max(x):.2f}" for x in (geo, fitted, kernel)]
-        print(f"{cell:<11} {len(rows):>4}  {cols}  {spans[0]}  {spans[1]}  {spans[2]}", flush=True)
+        spans = [f"{np.min(x):.2f}-{np.max(x):.2f}" for x in (geo, fitted, kernel, noise)]
+        print(f"{cell:<11} {len(rows):>4}  {cols}  {spans[0]}  {spans[1]}  {spans[2]}  {spans[3]}", flush=True)
     every, kern = np.concatenate(per_figure), np.concatenate(kernel_all)
     print("\nper figure over every cell, seed and source: records prediction / kernel's (plan before)")
     for k, name in enumerate(FIGURES):
