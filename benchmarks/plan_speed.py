@@ -18,6 +18,8 @@
 3. ``--plan-time``: ``rigidid plan LAYOUT --body BODY`` (the API, default 1000 draws) per sample with a
    body estimate, CPU seconds without and with ``--records`` (the records route's sensor budget for the
    default records test, 512 Hz, 8 s, two impacts: :func:`rigidid.core.plan.predict_records_budget`), best of 3.
+   Measured (s31-plan23, 2 busy cores): without 0.24-0.39 CPU s, with ``--records`` +0.05-0.11 on the engine
+   samples (1,105-1,154 of 4,096 rows per impact used) and +0.54 on four-mounts (its slow decays: all 4,096 rows).
 
 Measured (fe3e9eb + issue 20's change, 2 busy cores, ``--mount-draws 200``):
 
