@@ -346,8 +346,10 @@ def mass_line(
         residual = fit.residual
         supports_kc = _supports_at_cg(fit, cg - origin, span)
     else:
+        x_w, coef_w, e_w = _level_weighted(design, target, fitted - target)
+        y0 = coef_w[0].reshape(6, q)
         m, cg, inertia = _body_from_inverse_mass(y0, tf, origin, span)
-        intervals = _first_order_intervals(design, fitted - target, y0, tf, origin, span)
+        intervals = _first_order_intervals(x_w, e_w, y0, tf, origin, span)
     return MassLine(
         mass=m, center_of_gravity=cg, inertia_tensor=inertia, band=(lo, hi), band_source=band_source,
         frequencies_used=n_f, residual=residual, corrections=extra, supports=support_model, supports_reason=why,
@@ -771,17 +773,51 @@ def _supports_f(design: Array, coef: Array, misfit: Array, n_terms: int) -> floa
     p = n_terms * d
     if n_rows < 2 * p + k:
         return None
-    target, level, e_w = design @ coef - misfit, np.ones(n_rows), misfit  # misfit: fitted minus data
-    for _ in range(LEVEL_PASSES):
-        level = level * _line_level(design / np.sqrt(level)[:, None], e_w)
-        x_w, y_w = design / np.sqrt(level)[:, None], target / np.sqrt(level)[:, None]
-        coef_w = np.linalg.lstsq(x_w, y_w, rcond=None)[0]
-        e_w = y_w - x_w @ coef_w
+    x_w, coef_w, e_w = _level_weighted(design, design @ coef - misfit, misfit)  # misfit: fitted minus data
     b = coef_w[cols].reshape(-1)
     a = np.linalg.pinv(x_w)[cols]  # (n_terms, N)
     noise = e_w.T @ e_w / nu  # (6 q, 6 q): Sigma, the columns correlated through the sensors
     v = np.kron(a @ a.T, noise)
     return float((nu - d - 1) / nu * float(b @ np.linalg.lstsq(v, b, rcond=None)[0]) / p)
+
+
+def _level_weighted(design: Array, target: Array, misfit: Array) -> tuple[Array, Array, Array]:
+    """The fit weighted by each line's noise level (feasible generalised least squares), the level from the misfit.
+
+    Parameters
+    ----------
+    design : ndarray, shape (N, k)
+        The mass line's design (real rows, then imaginary: :func:`_correction_design`).
+    target : ndarray, shape (N, 6 q)
+        Its data (rigid coordinates per unit force, real parts then imaginary).
+    misfit : ndarray, shape (N, 6 q)
+        The unweighted fit's misfit (either sign).
+
+    Returns
+    -------
+    x_w : ndarray, shape (N, k)
+        The design with each row divided by ``s_l``, the level's square root (:func:`_line_level`).
+    coef_w : ndarray, shape (k, 6 q)
+        The weighted fit's coefficients: ``min sum_l |y_l - x_l c|^2 / s_l^2``.
+    e_w : ndarray, shape (N, 6 q)
+        Its whitened misfit, data minus fit: about ``Sigma`` on every row when the level model holds.
+
+    Notes
+    -----
+    The level is estimated :data:`LEVEL_PASSES` times, each from the misfit of the fit weighted by the last
+    (see :func:`_supports_f`, which tests the support terms of this fit). The level rests on several hundred
+    squared whitened values per line (a window of lines x ``6 q`` columns), so its error is a few % and the
+    weights' cost in efficiency is of second order in it.
+    """
+    level, e_w = np.ones(design.shape[0]), misfit
+    x_w: Array = design
+    coef_w: Array = np.zeros((design.shape[1], target.shape[1]))
+    for _ in range(LEVEL_PASSES):
+        level = level * _line_level(x_w, e_w)
+        x_w, y_w = design / np.sqrt(level)[:, None], target / np.sqrt(level)[:, None]
+        coef_w = np.asarray(np.linalg.lstsq(x_w, y_w, rcond=None)[0], dtype=float)
+        e_w = y_w - x_w @ coef_w
+    return x_w, coef_w, e_w
 
 
 def _line_level(design: Array, misfit: Array) -> Array:
