@@ -153,7 +153,7 @@ def main() -> None:
     ap.add_argument("--second-order", type=int, default=0, help="noise draws per body for the second-order bias")
     a = ap.parse_args()
     seeds = range(a.first_seed, a.first_seed + a.draws)
-    for regime in a.regimes.split(","):
+    for regime in filter(None, a.regimes.split(",")):
         out = [one(s, regime) for s in seeds]
         eu, ew, eo, zu, zw = (np.array([o[k] for o in out]) for k in range(5))
         rms = [np.sqrt(np.mean(e**2, axis=0)) for e in (eu, ew, eo)]
