@@ -611,7 +611,8 @@ def _first_order_intervals(
         lambda y: _body_from_inverse_mass(y, tf, origin, span),
         y0,
         cov,
-        "linearised: sandwich covariance of the mass line's constants, the noise averaged over neighbouring lines",
+        "linearised: the mass line weighted by each line's noise level, sandwich covariance of its constants, the "
+        "noise averaged over neighbouring lines",
     )
 
 
