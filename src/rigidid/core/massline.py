@@ -821,7 +821,10 @@ def _level_weighted(design: Array, target: Array, misfit: Array) -> tuple[Array,
     0.47 times the unweighted fit's RMS error in mass, CG and inertia, within 2 % of the fit weighted by the true
     level; with even noise 0.99-1.01 times. The unweighted fit's intervals had also been 8 % narrow there
     (coverage 0.92): its end lines, where the constant's weights sit, are the noisy ones, and their noise was
-    read from one-sided windows; weighted, the whitened noise is even and those windows read it right.
+    read from one-sided windows; weighted, the whitened noise is even and those windows read it right. Coverage
+    of the 95 % intervals pooled over mass, CG and inertia diagonal on draws not looked at while building this
+    (benchmarks/frf_coverage.py, seeds 2000 up): 0.951 (400 draws, RMS ``z`` 0.985) with the noise 25x higher
+    at the low end, 0.956 (0.963) at the top, 0.950 (0.996, 1000 draws) with even noise; each figure 0.927-0.965.
 
     The level is estimated :data:`LEVEL_PASSES` times, each from the misfit of the fit weighted by the last
     (see :func:`_supports_f`, which tests the support terms of this fit). The level rests on several hundred
