@@ -264,7 +264,7 @@ def combine(directory: Path) -> None:
     groups: dict[str, list[np.ndarray]] = {}
     for path in sorted(directory.glob("*.npy")):
         parts = path.stem.split("_")
-        key = "_".join(parts[:2] if parts[-1].isdigit() or len(parts) == 2 else parts)
+        key = "_".join(parts[:-1] if parts[-1].isdigit() else parts)  # ROUTE_REGIME (the regime may hold "_")
         groups.setdefault(key, []).append(np.load(path))
     for key, arrays in groups.items():
         rows = np.concatenate(arrays)
@@ -273,6 +273,8 @@ def combine(directory: Path) -> None:
             z, warned = rows[sel, 1:8], rows[sel, 8].astype(bool)
             za = np.abs(z)
             n = len(z)
+            if n < 2:
+                continue
             beyond = za.max(axis=1) > 4.0
             print(f"{key}, {label} ({n} answered):")
             for j, nm in enumerate(names):
