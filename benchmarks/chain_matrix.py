@@ -2,8 +2,8 @@
 
 Run from the worktree root (a few minutes; each cell runs ``rigidid identify --records`` with defaults)::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--cells clean,clip80,...] [--runs]
-        [--floor-draws 200] [--estimate-sensors] [--stated]
+    PYTHONPATH=src nice -n 10 python benchmarks/chain_matrix.py [--seeds 3] [--first-seed 0] [--cells clean,...]
+        [--runs] [--floor-draws 200] [--estimate-sensors] [--stated]
 
 The test, simulated here with a forward model that shares no code with rigidid (6-DOF body on
 mounts written afresh, zero-order-hold state transition from scipy.linalg.expm, half-sine hammer):
@@ -458,6 +458,7 @@ def run_cell(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--first-seed", type=int, default=0, help="the first seed (seeds FIRST .. FIRST + SEEDS - 1)")
     parser.add_argument("--cells", default=",".join(CELLS))
     parser.add_argument("--floor-draws", type=int, default=200, help="draws of the type-B coverage table (0: none)")
     parser.add_argument("--metadata", action="store_true", help="state the chain in the layout's chain block")
@@ -484,7 +485,8 @@ def main() -> None:
     for cell in args.cells.split(","):
         sensors_option = ("--estimate-sensors",) if args.estimate_sensors else ()
         rows = [
-            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option) for s in range(args.seeds)
+            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option)
+            for s in range(args.first_seed, args.first_seed + args.seeds)
         ]
         for r in rows if args.runs else []:
             print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
@@ -500,7 +502,7 @@ def main() -> None:
                      if r.get("error") or r["warnings"]), "")  # fmt: skip
         note = note.replace("rigidid: ", "")[:110]
         if args.paired:
-            twins = [run_cell(cell, s, twin=True) for s in range(args.seeds)]
+            twins = [run_cell(cell, s, twin=True) for s in range(args.first_seed, args.first_seed + args.seeds)]
             ratio = [np.array(r["errors"]) / np.array(t["errors"]) for r, t in zip(rows, twins, strict=True)
                      if r["exit"] == 0 and t["exit"] == 0]  # fmt: skip
             twin_errs = np.array([t["errors"] for t in twins if t["exit"] == 0])

@@ -34,7 +34,7 @@ def test_a_residual_a_quarter_above_the_noise_is_rejected() -> None:
     assert np.mean(p < FALSE_ALARM) > 0.9
 
 
-def test_the_verdict_keeps_an_accepted_refit_widens_a_mild_misfit_and_falls_back_beyond() -> None:
+def test_the_verdict_keeps_an_accepted_refit_names_a_mild_misfit_and_falls_back_beyond() -> None:
     from types import SimpleNamespace
 
     from rigidid.api.records import refit_verdict
@@ -43,12 +43,12 @@ def test_the_verdict_keeps_an_accepted_refit_widens_a_mild_misfit_and_falls_back
     def fit(ratio: float, p: float, cost: float) -> SimpleNamespace:
         return SimpleNamespace(misfit=MisfitTest(ratio, 0.0, p, FALSE_ALARM), normalised_cost=cost)
 
-    assert refit_verdict(fit(1.01, 0.3, 1.01)) == (True, 1.0, "")
-    keep, widen, reason = refit_verdict(fit(1.44, 1e-9, 1.44))
-    assert keep and abs(widen - 1.2) < 1e-12 and "p = 1e-09" in reason and "widened 1.2 times" in reason
-    keep, widen, reason = refit_verdict(fit(3.8, 0.0, 3.9))
-    assert not keep and widen == 1.0 and "kept the answer from the modes" in reason
-    assert refit_verdict(SimpleNamespace(misfit=None, normalised_cost=1.5)) == (True, 1.0, "")
+    assert refit_verdict(fit(1.01, 0.3, 1.01)) == (True, "")
+    keep, reason = refit_verdict(fit(1.44, 1e-9, 1.44))
+    assert keep and "p = 1e-09" in reason and "from its residual's level" in reason
+    keep, reason = refit_verdict(fit(3.8, 0.0, 3.9))
+    assert not keep and "kept the answer from the modes" in reason
+    assert refit_verdict(SimpleNamespace(misfit=None, normalised_cost=1.5)) == (True, "")
     assert not refit_verdict(SimpleNamespace(misfit=None, normalised_cost=2.5))[0]
 
 

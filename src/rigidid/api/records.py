@@ -659,13 +659,13 @@ def _refit_skewed(
 
     ids, late = named
     where = _skew_where(late, ids)
-    first = refit_verdict(plain)[2]
+    first = refit_verdict(plain)[1]
     skewed = _run_fit(result, fit, True, f"the plain refit was rejected ({first}); with the channels' delays "
                       f"estimated (a skew on {where}), ")  # fmt: skip
     if skewed is None:
         _warn_delays(plain, ids, plain.frequency_hz, late)
         return result
-    keep, _, reason = refit_verdict(skewed)
+    keep, reason = refit_verdict(skewed)
     if not keep:
         _warn_delays(plain, ids, plain.frequency_hz, late)
         warnings.warn(
@@ -801,13 +801,11 @@ def _accept_refinement(
     from rigidid.errors import RefinementWarning
 
     ident = result.identification
-    keep, widen, reason = refit_verdict(refinement)
+    keep, reason = refit_verdict(refinement)
     if reason:
         warnings.warn(reason + ("" if keep else suspect_mode(ident)), RefinementWarning, stacklevel=2)
     if not keep:
         return result
-    if widen > 1.0:
-        refinement = replace(refinement, std={key: widen * value for key, value in refinement.std.items()})
     refined = replace(
         ident,
         center_of_gravity=refinement.center_of_gravity,
@@ -881,8 +879,8 @@ def implausible_sensors(correction: Any, bounds: SensorBounds, ids: Sequence[str
     return named
 
 
-def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
-    """Whether to keep a refit, by how much to widen its noise intervals, and why (empty: accepted as it is).
+def refit_verdict(refinement: Any) -> tuple[bool, str]:
+    """Whether to keep a refit, and why (empty: accepted as it is).
 
     Parameters
     ----------
@@ -893,8 +891,6 @@ def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
     -------
     keep : bool
         Use the refit's answer (False: the answer from the modes).
-    widen : float
-        Factor on the refit's noise standard errors (1: none).
     reason : str
         The warning to give; empty when the refit is accepted.
 
@@ -905,27 +901,31 @@ def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
     :data:`~rigidid.core.timedomain.acceptance.FALSE_ALARM`). Accepted: kept as it is.
     Not accepted but within twice the noise's variance (normalised cost below 2): the
     model misses something systematic (the chain, the sensors), yet the refit still uses
-    the whole records; its answer is kept with its noise standard errors scaled by the
-    square root of the misfit ratio (the Birge ratio, as the Particle Data Group scales
-    inconsistent data), named. Beyond: the answer from the modes, with the reason. Without
-    a pre-trigger (no test possible) the normalised cost must be below 2.
+    the whole records; its answer is kept, named, with its standard errors as they are.
+    They already hold the misfit: the sandwich
+    (:func:`rigidid.core.timedomain.intervals.parameter_covariance`) takes each impact's
+    and channel's level ``v_ic`` from the fit's own residual, which is ``R_ic`` times the
+    pre-trigger's when the residual exceeds the noise ``R_ic`` times. That is the Birge
+    ratio's scaling, per impact and channel; scaling the standard errors again by the
+    square root of the pooled ratio counted it twice (the intervals' variance ``R^2``
+    times the noise's: on the chain matrix's ``aa`` cell, whose filtered noise is 1.25 times
+    denser in the fit's band than the pre-trigger's level taken as white, the true spread was
+    0.84 of the reported std, 1.03 without the second scaling; ``benchmarks/refit_width.py``).
+    Beyond: the answer from the modes, with the reason. Without a pre-trigger (no test
+    possible) the normalised cost must be below 2.
     """
     from rigidid.core.timedomain.refine import good_fit
 
     test = refinement.misfit
     cost = refinement.normalised_cost
     if test is not None and test.accepted:
-        return True, 1.0, ""
+        return True, ""
     if test is None:
         if good_fit(refinement):
-            return True, 1.0, ""
-        return (
-            False,
-            1.0,
-            (
-                f"refinement on the records ended at a normalised cost of {cost:.3g} (about 1 at a good fit): "
-                "a local minimum or a model that does not fit the records; kept the answer from the modes"
-            ),
+            return True, ""
+        return False, (
+            f"refinement on the records ended at a normalised cost of {cost:.3g} (about 1 at a good fit): "
+            "a local minimum or a model that does not fit the records; kept the answer from the modes"
         )
     why = (
         f"the refit's residual is {test.ratio:.3g} times the pre-trigger's noise variance (misfit test p = "
@@ -933,9 +933,8 @@ def refit_verdict(refinement: Any) -> tuple[bool, float, str]:
         "records (the acquisition chain, sensor errors, an unmodelled mode, or a local minimum)"
     )
     if good_fit(refinement):
-        widen = math.sqrt(max(test.ratio, cost, 1.0))
-        return True, widen, f"{why}; kept the refit, its noise standard errors widened {widen:.3g} times"
-    return False, 1.0, f"{why}; normalised cost {cost:.3g}: kept the answer from the modes"
+        return True, f"{why}; kept the refit, its noise standard errors from its residual's level"
+    return False, f"{why}; normalised cost {cost:.3g}: kept the answer from the modes"
 
 
 STREAM_REFIT_VALUES = 16 * 150_000

@@ -31,6 +31,16 @@ in the noise at 1 %), ``v_ic`` is unbiased (0.95-1.05 of the true level per impa
 and channel), and over 394 noise draws the estimate's spread is 1.01-1.08 of the mean
 reported std per figure (sampling error 3.6 %). With the channels' delays fitted the
 delays' columns stay in ``J`` and the body's std is the joint covariance's marginal.
+
+A residual above the pre-trigger's noise (a misfit, or noise coloured in the fit's band)
+needs no further widening: ``v_ic`` is the residual's own level, ``R_ic`` times the
+pre-trigger's, so the sandwich already is the Birge-scaled covariance, per impact and
+channel (:func:`rigidid.api.records.refit_verdict`). On the chain benchmark's ``aa`` cell
+(an unstated 8th-order anti-alias filter at 0.4 fs: its noise 1.25 times denser in the fit's
+band than the white level the pre-trigger states, residual over pre-trigger 1.25-1.29 on every
+impact and channel) the sandwich alone matches the Monte Carlo spread; scaled again by the
+square root of the misfit ratio, the intervals were 1.13 times too wide
+(``benchmarks/refit_width.py``).
 """
 
 from __future__ import annotations
