@@ -33,6 +33,9 @@ twin with defaults and judges the target against its noise std (the clean case's
 against the run's own ``sensor_budget.noise`` (which, with ``--estimate-sensors``, holds the noise that the
 sensors' correction adds): printed as ``target(clean) N``.
 
+``--state-all-tolerances`` states the ``all`` cell's tolerances (3 %, 3 degrees, 3 %, 3 mm) in every cell's
+layout, whatever its sensors' true errors (e.g. exact sensors in ``clean``: what ``--estimate-sensors`` costs there).
+
 ``--stated`` draws the orientation and transverse errors from the stated distribution (uniform within the
 tolerance: +-3 degrees per normal axis, transverse magnitude up to 3 % in a uniform direction) instead of at
 the bound (tilts of 2-3 degrees, transverse exactly 3 %); sensitivity and position draws are the stated
@@ -95,6 +98,8 @@ AA_ORDER, AA_CORNER = 8, 0.4 * RATE
 HP_CORNER = 2.0
 SKEWED = 4  # the channel one sample late
 SENSOR_EFFECTS = {"sens", "orient", "transverse", "position"}
+ALL_TOLERANCES = False
+"""``--state-all-tolerances``: every layout states the ``all`` cell's tolerances."""
 STATED_DRAWS = False
 """``--stated``: orientation and transverse errors drawn from the stated distribution (uniform within the
 tolerance) rather than at its bound (tilts of 2-3 degrees, transverse sensitivity exactly 3 %)."""
@@ -414,7 +419,8 @@ def run_cell(
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         chain = stated_chain(effects) if metadata else None
-        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects), chain)
+        told = stated_tolerances(SENSOR_EFFECTS if ALL_TOLERANCES and not twin else effects)
+        paths = write_case(folder, records, "stamps" in effects, told, chain)
         env = dict(os.environ)
         extra = ["--estimate-delays"] if estimate_delays else []
         extra += list(options)
@@ -478,14 +484,16 @@ def main() -> None:
     parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
     parser.add_argument("--runs", action="store_true", help="print each run's errors, floor and noise std")
     parser.add_argument("--estimate-sensors", action="store_true", help="run identify with --estimate-sensors")
+    parser.add_argument("--state-all-tolerances", action="store_true", help="state the all cell's tolerances in "
+                        "every cell")  # fmt: skip
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (seeds not developed on)")
     parser.add_argument("--clean-bound", action="store_true", help="also judge the target on the clean twin's "
                         "noise std")  # fmt: skip
     parser.add_argument("--stated", action="store_true", help="draw orientation and transverse errors from the "
                         "stated distribution (uniform within the tolerance), not at its bound")  # fmt: skip
     args = parser.parse_args()
-    global STATED_DRAWS
-    STATED_DRAWS = args.stated
+    global STATED_DRAWS, ALL_TOLERANCES
+    STATED_DRAWS, ALL_TOLERANCES = args.stated, args.state_all_tolerances
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
         print(f"{'effect':<11} {'coverage':>8} {'median |err|/std':>16} {'median J err %':>14}")
