@@ -608,8 +608,9 @@ def _refit(
     delay step beyond :data:`_SKEW_Z` standard errors) is fitted again with the delays estimated
     (``--estimate-delays``, eq. (19) with a delay per channel); that refit is kept when its own misfit test
     keeps it (:func:`refit_verdict`), the skew's fitted delays named in a ChainWarning. With the sensors'
-    errors estimated and no misfit test possible (hum modelled, no pre-trigger), a skew the score test names
-    is refitted whatever the verdict: the correction would otherwise take the skew for sensor errors.
+    errors estimated, the score (with the sensors freed too) is always given, and a skew it names is refitted
+    whatever the verdict: the correction would otherwise take the skew for sensor errors, and the misfit test
+    budgeted for the tolerances (or none, with hum) may accept that.
     """
     refinement = _run_fit(result, fit, delays)
     if progress is not None:
@@ -617,8 +618,8 @@ def _refit(
     if refinement is None:
         return result
     late = _late_channels(refinement, ids)
-    untested = refinement.sensor_correction is not None and refinement.misfit is None  # the score without a test
-    if late and not delays and (untested or not refit_verdict(refinement)[0]):
+    corrected = refinement.sensor_correction is not None  # a skew taken for sensor errors: refitted whatever the test
+    if late and not delays and (corrected or not refit_verdict(refinement)[0]):
         return _refit_skewed(result, fit, refinement, tolerances, (ids, late))
     _warn_delays(refinement, ids, refinement.frequency_hz, late)
     return _accept_refinement(result, refinement, tolerances, ids)

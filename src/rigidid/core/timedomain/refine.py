@@ -1255,13 +1255,15 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
     g, j, k, c = frame.physical(theta)  # with the sensors' correction, the body moved with it
     lam, *_ = _modes(theta, pos_l, dirs, False)
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
-    # the sensors' correction would take an unmodelled skew for sensor errors: where no misfit test can reject
-    # the fit (hum, no pre-trigger), the last pass gives the delays' score test too, at the fit's own minimum
-    untested = correction is not None and misfit is None and sensor_passes <= 1
-    at = fitted if untested and (link is None or not link.free) else theta
-    delays, delays_std, score = _delay_results(
-        at, std, link, rejected or untested, (data, pos_l, dirs, omega, start.chain, s2)
-    )  # fmt: skip
+    if correction is not None and (link is None or not link.free):  # the skew's score with the sensors free
+        delays, delays_std = None, None
+        first = getattr(sensor_bounds, "earlier", None) is None
+        at = (data, pos_l, dirs, omega, frame.scale)
+        score = _joint_delay_score(fitted, at, link, sensor_bounds, s2) if first else None
+    else:
+        delays, delays_std, score = _delay_results(
+            theta, std, link, rejected, (data, pos_l, dirs, omega, start.chain, s2)
+        )  # fmt: skip
     out = Refinement(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
         std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
@@ -1303,6 +1305,39 @@ def _delay_results(
     wide = _link(chain, omega, p, True, () if link is None else link.hum)
     r_d, j_d = _evaluate(np.concatenate([theta, np.zeros(p - 1)]), data, pos_l, dirs, omega, True, wide)
     return None, None, delay_step(r_d, j_d, p - 1, s2) / np.array([[omega], [1.0]])
+
+
+def _joint_delay_score(
+    theta: Array, model: tuple[Any, ...], link: _Link | None, bounds: Any, s2: float
+) -> Array | None:
+    """:func:`delay_step` with the sensors' errors freed too (their stated variances ``V`` as a prior), at the fit.
+
+    With the sensors' errors estimated, an unmodelled skew would be taken for them (a tilt or gain of the late
+    channel and the body moved), and the misfit test that the tolerances budget may accept the fit: the delays'
+    score is then the Gauss-Newton step of ``min |r + J d - G~ x|^2 + x^T V^-1 x`` with every channel's delay
+    among ``d`` (beyond the first's) and the estimated errors (gains, tilts) in ``x``, its covariance the inverse
+    of the joint normal matrix. `model` is ``(data, pos_l, dirs, omega, scale)``; None for one channel.
+    """
+    data, pos_l, dirs, omega, scale = model
+    p = pos_l.shape[0]
+    if p < 2:
+        return None
+    chain = link.chain if link is not None else None
+    wide = _link(chain, omega, p, True, () if link is None else link.hum)
+    th = np.concatenate([theta[:N_PARAMETERS], np.zeros(p - 1)])
+    r, jm = _evaluate(th, data, pos_l, dirs, omega, True, wide)
+    terms = sensor_terms(th, data, pos_l, dirs, omega, jm, r, scale, wide)
+    v = _sensor_moments(bounds, p)[0]
+    free = (np.repeat(np.arange(6), p) < _ESTIMATED_KINDS) & (v > 0.0)
+    cross, n_t = terms.cross[:, free], th.size
+    normal = np.block([[jm.T @ jm, -cross], [-cross.T, terms.gram[np.ix_(free, free)] + np.diag(1.0 / v[free])]])
+    cov = pseudo_inverse(normal, symmetric=True)[0]
+    step = cov @ np.concatenate([-(jm.T @ r), terms.data[free]])
+    sd = np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:n_t] * max(s2, 1.0), 1e-300))
+    out = np.zeros((2, p))
+    out[0, 1:], out[1, 1:] = step[N_PARAMETERS:n_t], step[N_PARAMETERS:n_t] / sd
+    scored: Array = out / np.array([[omega], [1.0]])
+    return scored
 
 
 def _link(
@@ -1507,7 +1542,8 @@ def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array
     value = x.value + y.value
     value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
     total = SensorCorrection(value, y.std, y.determined, y.rank)
-    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
+    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations,
+                   delay_score=first.delay_score if second.delay_score is None else second.delay_score)  # fmt: skip
 
 
 _COARSE_ROWS = 24_000
