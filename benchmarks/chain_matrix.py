@@ -507,16 +507,17 @@ def main() -> None:
           f"{'refit':>5} {'cover':>6} {'silent':>6} {'target':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
         sensors_option = ("--estimate-sensors",) if args.estimate_sensors else ()
-        rows = [
-            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option)
-            for s in range(args.first_seed, args.first_seed + args.seeds)
-        ]
-        clean = ([clean_target(r, run_cell(cell, int(r["seed"]), twin=True)) for r in rows]  # type: ignore[call-overload]
-                 if args.clean_bound else [])  # fmt: skip
-        for r in rows if args.runs else []:
-            print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
-                  f"covered {r.get('covered')}/6 target {r.get('target')} noise se {r.get('noise_se')}"
-                  + (f" target(clean) {clean[rows.index(r)]}" if clean else ""), flush=True)  # fmt: skip
+        rows, clean = [], []
+        for s in range(args.first_seed, args.first_seed + args.seeds):  # each run printed as it ends
+            r = run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option)
+            rows.append(r)
+            if args.clean_bound:
+                clean.append(clean_target(r, run_cell(cell, s, twin=True)))
+            if args.runs:
+                print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
+                      f"covered {r.get('covered')}/6 target {r.get('target')} noise se {r.get('noise_se')} "
+                      f"z {np.round(r['z'], 2).tolist() if 'z' in r else None}"
+                      + (f" target(clean) {clean[-1]}" if clean else ""), flush=True)  # fmt: skip
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])
