@@ -4,7 +4,7 @@ Run from the worktree root::
 
     PYTHONPATH=src OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/sensor_sensitivity.py [--draws 8]
         [--sources orient,transverse,position,sens] [--noise 1e-6] [--equal-noise] [--linear]
-        [--chain skew,ac,aa,hum] [--delays]
+        [--chain skew,ac,aa,hum] [--delays] [--estimate-sensors]
 
 The body, sensors and impacts of ``benchmarks/chain_matrix.py`` (its own scipy expm simulator), the
 records almost noise-free (``--noise``, relative to each channel's RMS; ``--equal-noise``: the same
@@ -25,6 +25,10 @@ normal axis, 3 % transverse in a uniform direction, 3 mm per axis). Per source, 
 2 Hz AC coupling; ``aa``: the 8th-order anti-alias filter; ``hum``: 50 Hz), the refit modelling them:
 ``ac`` and ``aa`` stated (``ChainModel``), the channels' delays fitted with ``skew`` or ``--delays``, the hum
 found. The refit's own budget is then its signatures through that model (``sensor_terms`` with the link).
+
+``--estimate-sensors``: the refit estimates the sensors' gains and tilts with the body (positions at their
+prior), through the same chain model; ``refit`` is then the corrected body's error and ``own`` the type-B
+std the correction predicts it leaves (``Refinement.sensor_std`` after the correction).
 
 Per quantity class: CG (3 coordinates, % of the sensor span) and J/m's diagonal (%).
 """
@@ -99,6 +103,8 @@ CHAIN: set[str] = set()
 """``--chain``: chain_matrix's chain effects simulated in the records and modelled by the refit."""
 DELAYS = False
 """``--delays``: the channels' delays fitted (also whenever ``skew`` is in :data:`CHAIN`)."""
+ESTIMATE = False
+"""``--estimate-sensors``: the sensors' errors estimated with the body."""
 
 
 def chain_model() -> object:
@@ -123,7 +129,7 @@ def refit(true: dict[str, np.ndarray], source: str, noise: float, equal: bool, s
         recs, 1.0 / cm.RATE, cm.SENSORS, cm.AXES, starts=[onset + 16] * 3, onsets=[onset] * 3, decimation=8,
         center_of_gravity=cm.CG, inertia_per_mass=cm.INERTIA / cm.MASS, stiffness_per_mass=cm.K6 / cm.MASS,
         damping_per_mass=cm.C6 / cm.MASS, sensor_bounds=stated(source), chain=chain_model(),  # type: ignore[arg-type]
-        estimate_delays=DELAYS or "skew" in CHAIN,
+        estimate_delays=DELAYS or "skew" in CHAIN, estimate_sensors=ESTIMATE,
     )  # fmt: skip
     assert ref.sensor_std is not None
     own = np.sqrt(sum(_std_vector(part) ** 2 for part in ref.sensor_std.values()))
@@ -167,10 +173,11 @@ def main() -> None:
     parser.add_argument("--runs", action="store_true", help="print each draw's largest errors")
     parser.add_argument("--chain", default="", help="chain effects in the records, modelled: skew,ac,aa,hum")
     parser.add_argument("--delays", action="store_true", help="fit the channels' delays")
+    parser.add_argument("--estimate-sensors", action="store_true", help="estimate the sensors' errors with the body")
     args = parser.parse_args()
-    global DELAYS
+    global DELAYS, ESTIMATE
     CHAIN.update(x for x in args.chain.split(",") if x)
-    DELAYS = args.delays
+    DELAYS, ESTIMATE = args.delays, args.estimate_sensors
     print(f"{'source':<11} {'class':<3} {'refit':>7} {'refit/own':>9} {'kernel':>7} {'kernel/own':>10} "
           f"{'refit/kernel':>12} {'own/kernel std':>14} {'mean/kernel':>11}"
           + (f" {'linear':>7}" if args.linear else ""))  # fmt: skip

@@ -76,19 +76,6 @@ def test_bad_options(args: tuple[str, ...], message: str) -> None:
     assert "Traceback" not in out.stderr
 
 
-def test_sensors_are_not_estimated_with_fitted_delays(tmp_path: Path) -> None:
-    """Issue 23: --estimate-sensors with --estimate-delays is refused before any work, naming the option."""
-    case = SAMPLES / "engine-test"
-    out = run("identify", case / "layout.json", "--records", case / "hit1.csv", case / "hit2.csv",
-              "--estimate-sensors", "--estimate-delays", "--json", tmp_path / "r.json")  # fmt: skip
-    assert out.returncode == 2
-    assert out.stderr.strip().splitlines() == [
-        "rigidid: error: --estimate-sensors: the sensors' errors are not estimated with a modelled chain "
-        "or fitted delays"
-    ]
-    assert list(tmp_path.iterdir()) == []
-
-
 def test_missing_file_is_one_line() -> None:
     out = run("identify", "nowhere.json", PAPER / "modes.csv")
     assert out.returncode == 2

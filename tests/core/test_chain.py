@@ -256,3 +256,53 @@ def test_with_the_chain_and_delays_fitted_the_sensor_budget_is_the_refits_own_li
     assert np.max(np.abs(actual)) > 5e-4  # the errors move the CG by 0.8 mm (the chain's own error: 1e-5)
     # observed 0.007 of the largest (the signatures without the skewed channel's chain: 0.052)
     np.testing.assert_allclose(moved[:12], actual, rtol=0, atol=0.025 * np.max(np.abs(actual)))
+
+
+def test_the_sensors_are_estimated_through_a_stated_ac_coupling_with_the_delays_fitted(rig) -> None:  # type: ignore[no-untyped-def]
+    """Issue 23: ``estimate_sensors`` with a modelled chain and fitted delays (it was refused): records through a
+    stated 2 Hz AC coupling, one channel a sample late, one sensor's gain 6 % high (the tolerance stated at 6 %);
+    the correction reads the virtual sensors through the chain and the fitted delays, moves the delays with the
+    body, keeps them on its second pass, recovers the gain and takes its error out of the body."""
+    from scipy.signal import bilinear, lfilter
+
+    from rigidid.core.sensor_budget import SensorBounds
+
+    body, pos, dirs = rig
+    p = pos.shape[0]
+    gain = np.ones(p)
+    gain[5] = 1.06
+    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=1.2, pretrigger=0.3, noise=0.002,
+                            seed=5)  # fmt: skip
+    b, a = bilinear([1.0, 0.0], [1.0, 2 * np.pi * 2.0], RATE)
+    records = [lfilter(b, a, r * gain, axis=0) for r in clean]
+    for r in records:
+        r[1:, SKEWED] = r[:-1, SKEWED].copy()  # one sample late
+    hp = ChainModel(tuple(ChannelChain(highpass_hz=2.0) for _ in range(p)))
+    bounds = SensorBounds(sensitivity=0.06, orientation_deg=0.0, transverse=0.0, position=0.0)
+    _, k, c = system_matrices(body)
+    m, j = body.mass, body.inertia_tensor / body.mass
+
+    fixed = refine_body(
+        records, 1.0 / RATE, pos, dirs, starts=[39] * 2, onsets=[38] * 2, decimation=1,
+        center_of_gravity=body.center_of_gravity + 1e-4, inertia_per_mass=j * 1.0005,
+        stiffness_per_mass=k / m * 1.0005, damping_per_mass=c / m * 1.002, max_evaluations=40, chain=hp,
+        sensor_bounds=bounds, estimate_sensors=True, estimate_delays=True,
+    )  # fmt: skip
+    error = np.concatenate([fixed.center_of_gravity - body.center_of_gravity, np.diag(fixed.inertia_per_mass - j)])
+    x = fixed.sensor_correction
+    assert x is not None and x.determined[0].all()
+    assert fixed.delays is not None and fixed.delays_std is not None  # the second pass fitted them too
+    late = np.where(np.arange(p) == SKEWED, 1 / RATE, 0.0)
+    assert np.max(np.abs(fixed.delays - late)[1:] / fixed.delays_std[1:]) < 4.0
+    # a common gain is undetermined (no force): the gains relative to their mean; observed 4e-4 of 6 %
+    rel = (x.value[0] - x.value[0].mean()) - (gain - gain.mean())
+    assert np.max(np.abs(rel)) < 1.5e-3 and np.max(np.abs(rel)) < np.min(x.std[0])
+    assert fixed.sensor_std is not None
+    noise = np.concatenate([fixed.std["center_of_gravity"], np.diag(fixed.std["inertia_per_mass"])])
+    typeb = [np.concatenate([x["center_of_gravity"], np.diag(x["inertia_per_mass"])])
+             for x in fixed.sensor_std.values()]  # fmt: skip
+    z = error / np.sqrt(noise**2 + sum(t**2 for t in typeb))
+    assert np.max(np.abs(z)) < 3.0  # observed 0.96: the corrected body within its intervals
+    # observed 1.1e-4 (without the correction 1.5e-3; with it, but the step the fit left at its end
+    # taken for sensor errors, the gains 17 % off and the body 8e-3)
+    assert np.max(np.abs(error)) < 4e-4

@@ -607,7 +607,10 @@ def _refit(
     A plain refit (`delays` False) that is not kept and whose residual's score test names a skew (a channel's
     delay step beyond :data:`_SKEW_Z` standard errors) is fitted again with the delays estimated
     (``--estimate-delays``, eq. (19) with a delay per channel); that refit is kept when its own misfit test
-    keeps it (:func:`refit_verdict`), the skew's fitted delays named in a ChainWarning.
+    keeps it (:func:`refit_verdict`), the skew's fitted delays named in a ChainWarning. With the sensors'
+    errors estimated, the score (with the sensors freed too) is always given, and a skew it names is refitted
+    whatever the verdict: the correction would otherwise take the skew for sensor errors, and the misfit test
+    budgeted for the tolerances (or none, with hum) may accept that.
     """
     refinement = _run_fit(result, fit, delays)
     if progress is not None:
@@ -615,7 +618,8 @@ def _refit(
     if refinement is None:
         return result
     late = _late_channels(refinement, ids)
-    if late and not delays and not refit_verdict(refinement)[0]:
+    corrected = refinement.sensor_correction is not None  # a skew taken for sensor errors: refitted whatever the test
+    if late and not delays and (corrected or not refit_verdict(refinement)[0]):
         return _refit_skewed(result, fit, refinement, tolerances, (ids, late))
     _warn_delays(refinement, ids, refinement.frequency_hz, late)
     return _accept_refinement(result, refinement, tolerances, ids)
@@ -1320,7 +1324,6 @@ def _identify_test(
         else load_test(layout, inputs or [], records=records, units=units, geometry=geometry)
     )
     _check_segments(data, resample)  # before any estimation: blame the option, not the records
-    _refuse_sensors_with_chain(data.layout, estimate_sensors, estimate_delays)
     force, data, mass_given = _force_setup(force, data, records, streamed, identify_options, inputs or [])
     paths = list(inputs or []) if streamed else None
     notes: list[str] = []  # the record route's warnings, kept in the result's diagnostics too
@@ -1363,18 +1366,6 @@ def _identify_test(
     if resample:
         result = _resampled(result, data, records, modal, resample, len(modes.labels))
     return TestRun(result, estimate, None if streamed else data.records, summed)
-
-
-def _refuse_sensors_with_chain(layout: LayoutFile, estimate_sensors: bool, estimate_delays: bool) -> None:
-    """``--estimate-sensors`` with a stated chain or ``--estimate-delays``: refused before any estimation (the
-    sensors' signatures are the plain model's, :func:`rigidid.core.timedomain.refine.refine_prepared`)."""
-    if not estimate_sensors:
-        return
-    chain = chain_model(layout)
-    if estimate_delays or (chain is not None and not chain.identity):
-        raise InputError(
-            "the sensors' errors are not estimated with a modelled chain or fitted delays", source="estimate_sensors"
-        )
 
 
 def _refit_test(

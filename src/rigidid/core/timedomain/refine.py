@@ -120,7 +120,8 @@ class Refinement:
         With ``estimate_delays``: each channel's delay (s) beyond the stated chain's,
         relative to the reference channel (0 there), and its standard error.
     delay_score : ndarray, shape (2, p), or None
-        Without ``estimate_delays``, when the fit was not accepted: the one Gauss-Newton
+        Without ``estimate_delays``, when the fit was not accepted (with ``estimate_sensors``, also when no
+        misfit test could reject it: the hum modelled, no pre-trigger): the one Gauss-Newton
         step's delay of each channel (s) and its z score (delay over standard error), the
         test for an unmodelled skew (:func:`delay_step`).
     hum : tuple of (float, float, float)
@@ -913,19 +914,20 @@ class SensorCorrection:
 
 
 def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, jm: Array,
-                    scale: float) -> tuple[Array, int]:  # fmt: skip
+                    scale: float, link: _Link | None = None) -> tuple[Array, int]:  # fmt: skip
     """Which sensor errors the records determine: null vectors of ``[J, G~]`` (column-normalised), by rows.
 
     The R factor of the stacked impacts (each impact's block factored, then the stack): the
     signatures formed whole here (``n p`` by ``6 p`` per impact), so this runs only when the errors
-    are estimated.
+    are estimated. With `link`, the signatures through the chain and ``J``'s columns beyond the body's the
+    delays' (:func:`sensor_terms`); the null vectors' parts on the sensors' columns are what is returned.
     """
     from rigidid.core.linalg import rank_tolerance
 
     p = pos_l.shape[0]
     blocks = []
     row = 0
-    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale):
+    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
         n = sig.shape[0]
         g = (sig[:, None, :, :] * np.eye(p)[None, :, None, :]).reshape(n * p, 6 * p)
         flat = scaled.reshape(n * p, -1)
@@ -937,7 +939,7 @@ def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega:
     _, sv, vt = np.linalg.svd(r / np.where(norms > 0.0, norms, 1.0))
     keep = sv > rank_tolerance(sv[0], row)
     null = vt[~keep]
-    return np.linalg.norm(null[:, N_PARAMETERS:], axis=0), int(np.sum(keep))
+    return np.linalg.norm(null[:, theta.size :], axis=0), int(np.sum(keep))
 
 
 _ESTIMATED_KINDS = 3
@@ -991,16 +993,21 @@ def _sensor_correction(
 
 def _corrected(
     theta: Array, data: _Data, sensors: tuple[Array, Array], frame: _Frame, jm: Array, terms: SensorTerms,
-    bounds: Any, grad: Array, std: dict[str, Array],
+    bounds: Any, grad: Array, std: dict[str, Array], link: _Link | None = None,
 ) -> tuple[Array, dict[str, Array], dict[str, dict[str, Array]], SensorCorrection]:  # fmt: skip
-    """The parameters, noise std and type-B std after :func:`_sensor_correction`, and the correction."""
+    """The parameters, noise std and type-B std after :func:`_sensor_correction`, and the correction.
+
+    With the delays fitted (`link`), ``theta`` and `jm` hold their parameters beyond the body's: the
+    correction moves them with the body; their std (``"delay"``) stays the joint covariance's marginal.
+    """
     pos_l, dirs = sensors
     x, x_std, shift, sensor_std, noise_var = _sensor_correction(terms, jm, bounds, grad)
-    null, rank = _augmented_null(theta, data, pos_l, dirs, frame.omega, jm, frame.scale)
+    null, rank = _augmented_null(theta, data, pos_l, dirs, frame.omega, jm, frame.scale, link)
     p = pos_l.shape[0]
     correction = SensorCorrection(x.reshape(6, p), x_std.reshape(6, p), (null**2 < 0.5).reshape(6, p), rank)
-    flat = np.concatenate([std[key].ravel() for key in std])
-    return theta + shift, _physical_std(np.sqrt(flat**2 + noise_var)), sensor_std, correction
+    flat = np.concatenate([std[key].ravel() for key in std if key != "delay"])
+    kept = {"delay": std["delay"]} if "delay" in std else {}
+    return theta + shift, _physical_std(np.sqrt(flat**2 + noise_var)) | kept, sensor_std, correction
 
 
 def _physical_std(sd: Array) -> dict[str, Array]:
@@ -1189,14 +1196,35 @@ def refine_prepared(
     body = (center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass)
     pos_l, frame, theta0 = _started(pos, dirs, body)
     omega = frame.omega
-    p, link = pos.shape[0], _link(chain, omega, pos.shape[0], estimate_delays)
+    link = _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
-    if estimate_sensors and link is not None:
-        raise InputError(
-            "the sensors' errors are not estimated with a modelled chain, delays or mains hum",
-            source="estimate_sensors",
-        )
+    return _refined(
+        _Start(data, link, hum, chain), dt, (pos, dirs, pos_l, frame, theta0), max_evaluations,
+        (sensor_bounds, estimate_sensors, sensor_passes),
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Start:
+    """What a refit starts from once the chain is settled and the hum found: the decays (their noise levels
+    from the pre-trigger, or to be taken from the start's residual), the link (:class:`_Link`, None without
+    one), the hum found and the stated chain (its delay score for a rejected fit). A later pass of the
+    sensors' correction (:func:`_next_pass`) starts from the same, the gains taken out of the decays."""
+
+    data: PreparedDecays
+    link: _Link | None
+    hum: tuple[tuple[float, float, float], ...]
+    chain: ChainModel | None
+
+
+def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations: int,
+             sensing: tuple[Any, bool, int]) -> Refinement:  # fmt: skip
+    """:func:`refine_prepared` from its start: `sensors` is ``(pos, dirs, pos_l, frame, theta0)`` (`theta0` with
+    the delays' parameters when fitted), `sensing` ``(sensor_bounds, estimate_sensors, sensor_passes)``."""
+    pos, dirs, pos_l, frame, theta0 = sensors
+    sensor_bounds, estimate_sensors, sensor_passes = sensing
+    data, link, omega, p = start.data, start.link, frame.omega, pos.shape[0]
     if data.noise_from == "residual":
         r0 = _residual(theta0, data, pos_l, dirs, omega, link)
         per = r0.reshape(-1, pos.shape[0])
@@ -1213,32 +1241,37 @@ def refine_prepared(
     dof = max(n_res - theta.size - len(data.decays) * n_linear, 1)
     s2 = float(r @ r) / dof
     cost = s2 if data.noise_from == "pretrigger" else 1.0
-    g, j, k, c = frame.physical(theta)
-    lam, *_ = _modes(theta, pos_l, dirs, False)
     q_fit = max(1, round(data.dt / float(dt)))  # _prepare may decimate less than `decimation`
     grad = _output_gradient(theta, frame, pos_l, dirs)
     lengths = [d.shape[0] for d in data.decays]
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
-    sensor_std, correction = None, None
+    sensor_std, correction, fitted = None, None, theta
     if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
         theta, std, misfit, sensor_std, correction = _with_sensors(
             (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad), sensor_bounds,
             estimate_sensors, lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
         )  # fmt: skip
-        if correction is not None:  # the body moved with the sensors' correction
-            g, j, k, c = frame.physical(theta)
-            lam, *_ = _modes(theta, pos_l, dirs, False)
+    g, j, k, c = frame.physical(theta)  # with the sensors' correction, the body moved with it
+    lam, *_ = _modes(theta, pos_l, dirs, False)
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
-    delays, delays_std, score = _delay_results(theta, std, link, rejected, (data, pos_l, dirs, omega, chain, s2))
+    if correction is not None and (link is None or not link.free):  # the skew's score with the sensors free
+        delays, delays_std = None, None
+        first = getattr(sensor_bounds, "earlier", None) is None
+        at = (data, pos_l, dirs, omega, frame.scale)
+        score = _joint_delay_score(fitted, at, link, sensor_bounds, s2) if first else None
+    else:
+        delays, delays_std, score = _delay_results(
+            theta, std, link, rejected, (data, pos_l, dirs, omega, start.chain, s2)
+        )  # fmt: skip
     out = Refinement(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
         std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
-        converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
+        converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=start.hum,
         sensor_std=sensor_std, sensor_correction=correction,
     )  # fmt: skip
     if correction is not None and sensor_passes > 1:
-        return _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+        return _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
     return out
 
 
@@ -1272,6 +1305,39 @@ def _delay_results(
     wide = _link(chain, omega, p, True, () if link is None else link.hum)
     r_d, j_d = _evaluate(np.concatenate([theta, np.zeros(p - 1)]), data, pos_l, dirs, omega, True, wide)
     return None, None, delay_step(r_d, j_d, p - 1, s2) / np.array([[omega], [1.0]])
+
+
+def _joint_delay_score(
+    theta: Array, model: tuple[Any, ...], link: _Link | None, bounds: Any, s2: float
+) -> Array | None:
+    """:func:`delay_step` with the sensors' errors freed too (their stated variances ``V`` as a prior), at the fit.
+
+    With the sensors' errors estimated, an unmodelled skew would be taken for them (a tilt or gain of the late
+    channel and the body moved), and the misfit test that the tolerances budget may accept the fit: the delays'
+    score is then the Gauss-Newton step of ``min |r + J d - G~ x|^2 + x^T V^-1 x`` with every channel's delay
+    among ``d`` (beyond the first's) and the estimated errors (gains, tilts) in ``x``, its covariance the inverse
+    of the joint normal matrix. `model` is ``(data, pos_l, dirs, omega, scale)``; None for one channel.
+    """
+    data, pos_l, dirs, omega, scale = model
+    p = pos_l.shape[0]
+    if p < 2:
+        return None
+    chain = link.chain if link is not None else None
+    wide = _link(chain, omega, p, True, () if link is None else link.hum)
+    th = np.concatenate([theta[:N_PARAMETERS], np.zeros(p - 1)])
+    r, jm = _evaluate(th, data, pos_l, dirs, omega, True, wide)
+    terms = sensor_terms(th, data, pos_l, dirs, omega, jm, r, scale, wide)
+    v = _sensor_moments(bounds, p)[0]
+    free = (np.repeat(np.arange(6), p) < _ESTIMATED_KINDS) & (v > 0.0)
+    cross, n_t = terms.cross[:, free], th.size
+    normal = np.block([[jm.T @ jm, -cross], [-cross.T, terms.gram[np.ix_(free, free)] + np.diag(1.0 / v[free])]])
+    cov = pseudo_inverse(normal, symmetric=True)[0]
+    step = cov @ np.concatenate([-(jm.T @ r), terms.data[free]])
+    sd = np.sqrt(np.maximum(np.diag(cov)[N_PARAMETERS:n_t] * max(s2, 1.0), 1e-300))
+    out = np.zeros((2, p))
+    out[0, 1:], out[1, 1:] = step[N_PARAMETERS:n_t], step[N_PARAMETERS:n_t] / sd
+    scored: Array = out / np.array([[omega], [1.0]])
+    return scored
 
 
 def _link(
@@ -1392,6 +1458,18 @@ def _with_sensors(
     `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame, link)``, `linear`
     ``(jm, r, grad)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
     and moments. Returns theta, std, misfit, sensor_std and the correction (or None).
+
+    Notes
+    -----
+    The correction is one Gauss-Newton step of ``min |r + J d - G~ x|^2 + x^T V^-1 x`` over the parameters
+    ``d`` and the sensors' errors ``x`` (:func:`_sensor_correction`). With a link (:class:`_Link`) ``d`` holds
+    the body's 51 parameters and the fitted delays' (``J``'s columns beyond the body's), ``G~`` the signatures
+    read through each channel's chain and fitted delay and projected off the chain's nuisance columns
+    (:func:`sensor_terms`); the elimination is the same: ``d = (J^T J)^+ J^T (G~ x - r)``, so the correction
+    moves the delays with the body, and their std stays the joint covariance's marginal. ``J^T r`` is zero only
+    at the fit's minimum: a fit stopped by its budget (a fit with delays, whose misfit holds the sensors'
+    errors, converges slowly) leaves the step ``-(J^T J)^+ J^T r``, which the correction takes with it
+    (``x``'s right-hand side ``V G~^T (r - J (J^T J)^+ J^T r)``): otherwise ``x`` absorbs what the fit left.
     """
     theta, std, misfit = fit
     data, pos_l, dirs, omega, frame, link = model
@@ -1401,7 +1479,12 @@ def _with_sensors(
     misfit = budgeted((q, v, sv)) or misfit
     correction = None
     if estimate:
-        theta, std, sensor_std, correction = _corrected(theta, data, (pos_l, dirs), frame, jm, terms, bounds, grad, std)
+        left = pseudo_inverse(jm.T @ jm, symmetric=True)[0] @ (jm.T @ r)  # the Gauss-Newton step left: -left
+        theta, std, sensor_std, correction = _corrected(
+            theta, data, (pos_l, dirs), frame, jm, replace(terms, data=terms.data - terms.cross.T @ left), bounds,
+            grad, std, link,
+        )  # fmt: skip
+        theta = theta - left
     return theta, std, misfit, sensor_std, correction
 
 
@@ -1419,10 +1502,15 @@ class _Centred:
         return out
 
 
-def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, Array], bounds: Any,
+def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array, Array], bounds: Any,
                max_evaluations: int, passes: int) -> Refinement:  # fmt: skip
     """The refit again with the sensors as `first` corrected them (gains out of the records, axes and
-    positions moved), from its body; its correction added to `first`'s (Gauss-Newton on the sensors)."""
+    positions moved), from its body; its correction added to `first`'s (Gauss-Newton on the sensors).
+
+    The later pass keeps `first`'s link (:class:`_Start`: the chain, the channels whose delays are fitted,
+    the hum found, in the new frame's time unit) and starts from `first`'s delays; its decays are `first`'s,
+    settled once. Noise levels from the residual are taken again from the new start's residual (unit
+    weights first: the levels `first` took would weight that residual twice)."""
     from rigidid.core.sensor_budget import axis_normals
 
     pos, dirs = sensors
@@ -1431,22 +1519,31 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     e1, e2 = axis_normals(dirs)
     dirs2 = normalise_directions(dirs + x.value[1][:, None] * e1 + x.value[2][:, None] * e2)
     unit = 1.0 / (1.0 + x.value[0])
+    data = start.data
     m2 = None if data.pre_m2 is None else data.pre_m2 * unit**2
-    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=data.sigma * unit, pre_m2=m2)
-    second = refine_prepared(
-        data2, dt, pos + x.value[3:].T, dirs2, center_of_gravity=first.center_of_gravity,
-        inertia_per_mass=first.inertia_per_mass, stiffness_per_mass=first.stiffness_per_mass,
-        damping_per_mass=first.damping_per_mass, max_evaluations=max_evaluations,
-        sensor_bounds=_Centred(getattr(bounds, "bounds", bounds), getattr(bounds, "earlier", 0.0) + x.value.ravel()),
-        estimate_sensors=True,
-        sensor_passes=passes,
+    sigma = data.sigma * unit if data.noise_from == "pretrigger" else np.ones_like(data.sigma)
+    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=sigma, pre_m2=m2)
+    body = (first.center_of_gravity, first.inertia_per_mass, first.stiffness_per_mass, first.damping_per_mass)
+    pos2 = pos + x.value[3:].T
+    pos_l, frame, theta0 = _started(pos2, dirs2, body)
+    link = start.link
+    if link is not None:  # the same chain and hum; the delays from `first`'s, in the new frame's time unit
+        link = replace(link, omega=frame.omega)
+        if link.free:
+            assert first.delays is not None
+            theta0 = np.concatenate([theta0, first.delays[list(link.free)] * frame.omega])
+    centred = _Centred(getattr(bounds, "bounds", bounds), getattr(bounds, "earlier", 0.0) + x.value.ravel())
+    second = _refined(
+        replace(start, data=data2, link=link), dt, (pos2, dirs2, pos_l, frame, theta0), max_evaluations,
+        (centred, True, passes),
     )  # fmt: skip
     y = second.sensor_correction
     assert y is not None
     value = x.value + y.value
     value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
     total = SensorCorrection(value, y.std, y.determined, y.rank)
-    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
+    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations,
+                   delay_score=first.delay_score if second.delay_score is None else second.delay_score)  # fmt: skip
 
 
 _COARSE_ROWS = 24_000
