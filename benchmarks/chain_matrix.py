@@ -397,10 +397,12 @@ def run_cell(
     estimate_delays: bool = False,
     twin: bool = False,
     options: tuple[str, ...] = (),
+    default_tolerances: bool = False,
 ) -> dict[str, object]:
     """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin.
 
-    `options`: more options of ``rigidid identify`` (e.g. ``--estimate-sensors``)."""
+    `options`: more options of ``rigidid identify`` (e.g. ``--estimate-sensors``); `default_tolerances`: the
+    layout states no tolerances (rigidid's defaults then hold) rather than the cell's."""
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
     effects = set() if twin else effects
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
@@ -409,7 +411,8 @@ def run_cell(
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         chain = stated_chain(effects) if metadata else None
-        paths = write_case(folder, records, "stamps" in effects, stated_tolerances(effects), chain)
+        tolerances = None if default_tolerances else stated_tolerances(effects)
+        paths = write_case(folder, records, "stamps" in effects, tolerances, chain)
         env = dict(os.environ)
         extra = ["--estimate-delays"] if estimate_delays else []
         extra += list(options)
@@ -445,6 +448,7 @@ def run_cell(
             row["covered_kernel"] = int(np.sum(np.abs(z_k) <= 1.959964))
             row["z_kernel"] = z_k
         row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
+        row["sensor_test"] = crb.get("sensor_test")
         noise = (crb.get("sensor_budget") or {}).get("noise")
         if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
             span = float(np.max(np.ptp(SENSORS, axis=0)))
@@ -453,6 +457,18 @@ def run_cell(
             fl = row["floor"]
             row["target"] = all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], fl, se, strict=True))  # type: ignore[arg-type]
     return row
+
+
+def _print_sensor_tests(rows: list[dict[str, object]]) -> None:
+    """The sensor test over the cell's runs: how many estimated the sensors, and the p-values' spread."""
+    tests = [r["sensor_test"] for r in rows if r.get("sensor_test")]
+    if not tests:
+        return
+    p = np.array([t["p_value"] for t in tests])  # type: ignore[index]
+    est = sum(bool(t["sensors_estimated"]) for t in tests)  # type: ignore[index]
+    print(f"    sensor test: {len(tests)} runs, estimated {est}, p < 0.01: {np.sum(p < 0.01)}, p < 0.05: "
+          f"{np.sum(p < 0.05)}, p < 0.5: {np.sum(p < 0.5)}, mean T/dof "
+          f"{np.mean([t['statistic'] / max(t['dof'], 1) for t in tests]):.2f}", flush=True)  # type: ignore[index]  # fmt: skip
 
 
 def main() -> None:
@@ -465,6 +481,10 @@ def main() -> None:
     parser.add_argument("--paired", action="store_true", help="also run each draw's clean twin (same noise)")
     parser.add_argument("--runs", action="store_true", help="print each run's errors, floor and noise std")
     parser.add_argument("--estimate-sensors", action="store_true", help="run identify with --estimate-sensors")
+    parser.add_argument("--first-seed", type=int, default=0, help="the first seed (seeds first..first+N-1)")
+    parser.add_argument("--default-tolerances", action="store_true",
+                        help="the layout states no tolerances (rigidid's defaults)")  # fmt: skip
+    parser.add_argument("--option", action="append", default=[], help="an option for identify (repeatable)")
     parser.add_argument("--stated", action="store_true", help="draw orientation and transverse errors from the "
                         "stated distribution (uniform within the tolerance), not at its bound")  # fmt: skip
     args = parser.parse_args()
@@ -482,13 +502,20 @@ def main() -> None:
     print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
           f"{'refit':>5} {'cover':>6} {'silent':>6} {'target':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
-        sensors_option = ("--estimate-sensors",) if args.estimate_sensors else ()
+        sensors_option = (("--estimate-sensors",) if args.estimate_sensors else ()) + tuple(args.option)
         rows = [
-            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option) for s in range(args.seeds)
-        ]
+            run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option,
+                     default_tolerances=args.default_tolerances)
+            for s in range(args.first_seed, args.first_seed + args.seeds)
+        ]  # fmt: skip
         for r in rows if args.runs else []:
+            test = r.get("sensor_test") or {}
             print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
-                  f"covered {r.get('covered')}/6 target {r.get('target')}", flush=True)  # fmt: skip
+                  f"covered {r.get('covered')}/6 target {r.get('target')} max|z| "
+                  f"{np.max(np.abs(r['z'])) if 'z' in r else float('nan'):.2f} sensor test T {test.get('statistic')} "
+                  f"dof {test.get('dof')} p {test.get('p_value')} estimated {test.get('sensors_estimated')}",
+                  flush=True)  # fmt: skip
+        _print_sensor_tests(rows)
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])

@@ -31,6 +31,7 @@ from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
+from rigidid.core.timedomain.sensor_test import TESTED_OUTPUTS, SensorTest, body_change_test
 from rigidid.errors import InputError
 
 __all__ = [
@@ -134,6 +135,10 @@ class Refinement:
     sensor_correction : SensorCorrection or None
         With ``estimate_sensors``: the sensors' errors estimated with the body (which the
         body's values and ``sensor_std`` then account for).
+    sensor_test : SensorTest or None
+        With stated sensor tolerances: the score test of the sensors as stated at the plain
+        refit's minimum (:func:`rigidid.core.timedomain.sensor_test.body_change_test`), and whether
+        the sensors were then estimated.
     """
 
     center_of_gravity: Array
@@ -154,6 +159,7 @@ class Refinement:
     hum: tuple[tuple[float, float, float], ...] = ()
     sensor_std: dict[str, dict[str, Array]] | None = None
     sensor_correction: SensorCorrection | None = None
+    sensor_test: SensorTest | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -1033,7 +1039,7 @@ def refine_body(
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
     sensor_bounds: Any = None,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -1070,10 +1076,12 @@ def refine_body(
         length in the layout's unit): the acceptance test expects the misfit they leave
         (:func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`) and
         ``sensor_std`` holds their effect on the body (:func:`sensor_terms`).
-    estimate_sensors : bool
+    estimate_sensors : bool or None
         With `sensor_bounds`: estimate every sensor's gain and axis errors (positions at their prior) with the
         body (the redundancy of more than six channels), the tolerances as their prior; the
-        body corrected (``sensor_correction``).
+        body corrected (``sensor_correction``). None: only when the sensor test flags
+        (``sensor_test``, :mod:`rigidid.core.timedomain.sensor_test`) and no chain, delays or hum are modelled;
+        otherwise the answer is the plain refit's.
 
     Returns
     -------
@@ -1138,7 +1146,7 @@ def refine_prepared(
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
     sensor_bounds: Any = None,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = False,
     sensor_passes: int = 2,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
@@ -1220,10 +1228,10 @@ def refine_prepared(
     lengths = [d.shape[0] for d in data.decays]
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
-    sensor_std, correction = None, None
+    sensor_std, correction, test = None, None, None
     if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
-        theta, std, misfit, sensor_std, correction = _with_sensors(
-            (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad), sensor_bounds,
+        theta, std, misfit, sensor_std, correction, test = _with_sensors(
+            (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad, s2), sensor_bounds,
             estimate_sensors, lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
         )  # fmt: skip
         if correction is not None:  # the body moved with the sensors' correction
@@ -1235,7 +1243,7 @@ def refine_prepared(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
         std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
         converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=hum,
-        sensor_std=sensor_std, sensor_correction=correction,
+        sensor_std=sensor_std, sensor_correction=correction, sensor_test=test,
     )  # fmt: skip
     if correction is not None and sensor_passes > 1:
         return _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
@@ -1381,28 +1389,46 @@ def delay_step(r: Array, jm: Array, n_delays: int, s2: float) -> Array:
 def _with_sensors(
     fit: tuple[Array, dict[str, Array], MisfitTest | None],
     model: tuple[Any, ...],
-    linear: tuple[Array, Array, Array],
+    linear: tuple[Array, Array, Array, float],
     bounds: Any,
-    estimate: bool,
+    estimate: bool | None,
     budgeted: Callable[[tuple[Array, Array, Array]], MisfitTest | None],
-) -> tuple[Array, dict[str, Array], MisfitTest | None, dict[str, dict[str, Array]], SensorCorrection | None]:
+) -> tuple[Array, dict[str, Array], MisfitTest | None, dict[str, dict[str, Array]], SensorCorrection | None,
+           SensorTest]:  # fmt: skip
     """The stated sensor tolerances in the refit: the misfit they leave expected by the acceptance test,
-    their effect on the body (``sensor_std``) and, with `estimate`, the sensors' errors estimated.
+    their effect on the body (``sensor_std``), the sensor test and, when `estimate` (None: when the test
+    flags and no chain is modelled), the sensors' errors estimated.
 
     `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame, link)``, `linear`
-    ``(jm, r, grad)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
-    and moments. Returns theta, std, misfit, sensor_std and the correction (or None).
+    ``(jm, r, grad, s2)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
+    and moments. Returns theta, std, misfit, sensor_std, the correction (or None) and the test.
     """
     theta, std, misfit = fit
     data, pos_l, dirs, omega, frame, link = model
-    jm, r, grad = linear
+    jm, r, grad, s2 = linear
     terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale, link)
     q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
+    test = _sensor_gate(terms, jm, bounds, grad, s2)
+    if estimate is None:
+        estimate = test.flagged and link is None
     correction = None
     if estimate:
         theta, std, sensor_std, correction = _corrected(theta, data, (pos_l, dirs), frame, jm, terms, bounds, grad, std)
-    return theta, std, misfit, sensor_std, correction
+    return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate))
+
+
+def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, s2: float) -> SensorTest:
+    """:func:`rigidid.core.timedomain.sensor_test.body_change_test` of the sensors as stated: the score
+    ``G~^T r``, the CG's and J/m's first-order move under :func:`_sensor_correction` per unit score."""
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross
+    q = terms.gram - terms.cross.T @ move
+    q = 0.5 * (q + q.T)
+    v = _sensor_moments(bounds, terms.gram.shape[0] // 6)[0]
+    v = np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
+    effect = grad[TESTED_OUTPUTS] @ move @ np.linalg.solve(v[:, None] * q + np.eye(v.size), np.diag(v))
+    return body_change_test(effect, q, terms.data, s2)
 
 
 @dataclass(frozen=True)
@@ -1446,7 +1472,8 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     value = x.value + y.value
     value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
     total = SensorCorrection(value, y.std, y.determined, y.rank)
-    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations)
+    return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations,
+                   sensor_test=first.sensor_test)  # fmt: skip
 
 
 _COARSE_ROWS = 24_000
@@ -1741,6 +1768,8 @@ class RecordBound:
         With the sensors' errors estimated: the estimate (:attr:`Refinement.sensor_correction`).
     corrected_sensors : tuple of str
         The ids of `sensor_correction`'s columns.
+    sensor_test : SensorTest or None
+        The sensor test and whether the sensors were estimated (:attr:`Refinement.sensor_test`).
     """
 
     center_of_gravity: Any
@@ -1761,6 +1790,7 @@ class RecordBound:
     hum_hz: tuple[float, ...] = ()
     sensor_correction: SensorCorrection | None = None
     corrected_sensors: tuple[str, ...] = ()
+    sensor_test: SensorTest | None = None
 
 
 def record_bound(
@@ -1841,4 +1871,5 @@ def record_bound(
         sensor_budget=budget,
         tolerances=tolerances,
         misfit=refinement.misfit,
+        sensor_test=refinement.sensor_test,
     )

@@ -1,0 +1,111 @@
+"""Whether correcting the sensors would move the body by more than its noise: a score test (issue 23).
+
+The output-error refit (:mod:`rigidid.core.timedomain.refine`) reads the records through the
+sensors as stated. A sensor's gain or axis error adds a signature ``g`` to the weighted
+records (``G~`` the signatures less each impact's linear terms, :class:`SensorTerms`); at the
+plain refit's minimum the score of the sensors' errors is ``s = G~^T r`` (``r`` the residual),
+and with exact sensors ``s ~ N(0, s2 Q)``, ``Q = G~^T (I - P_J) G~`` (``P_J`` the projector on
+the fit's Jacobian, ``s2`` the residual's variance per residual: Rao's score, or Lagrange
+multiplier, test).
+
+The sensors' errors are never exactly zero; what matters is whether correcting them changes
+the body. The correction (the maximum a posteriori estimate with the stated tolerances as
+prior, :func:`rigidid.core.timedomain.refine.refine_prepared`) moves the body's figures by
+``b = L s`` to first order, ``L = D (J^T J)^+ J^T G~ (V Q + I)^-1 V`` (``D`` the figures'
+derivatives, ``V`` the errors' prior variances). With exact sensors ``b ~ N(0, s2 L Q L^T)``
+and the statistic ``T = b^T (s2 L Q L^T)^+ b`` is chi-square with ``rank(L Q L^T)`` degrees of
+freedom (at most the nine figures tested: CG and the six distinct entries of J/m). So the test
+spends its power only on the sensor errors that move the CG and the inertia, not on those the
+body does not feel (a common error of all sensors' gains, errors the fit absorbs into the
+modal amplitudes); it flags when the move is beyond what the noise explains at the stated
+false-alarm rate (:data:`SENSOR_FALSE_ALARM`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigidid.core.linalg import pseudo_inverse
+from rigidid.core.timedomain.acceptance import FALSE_ALARM
+
+__all__ = ["SENSOR_FALSE_ALARM", "TESTED_OUTPUTS", "SensorTest", "body_change_test"]
+
+Array = NDArray[np.float64]
+
+SENSOR_FALSE_ALARM = FALSE_ALARM
+"""The sensor test's false-alarm rate: on exact sensors, the fraction of refits whose sensors are
+estimated anyway (then the answer costs the correction's noise, which its intervals include);
+the acceptance test's (:data:`rigidid.core.timedomain.acceptance.FALSE_ALARM`)."""
+
+TESTED_OUTPUTS = np.array([0, 1, 2, 3, 4, 5, 7, 8, 11])
+"""Rows of the refit's physical outputs the test looks at: CG (3) and J/m's upper triangle (6)."""
+
+
+@dataclass(frozen=True)
+class SensorTest:
+    """The score test of the stated sensors against the records.
+
+    Attributes
+    ----------
+    statistic : float
+        ``T``, chi-square with `dof` degrees of freedom when the sensors are exact.
+    dof : int
+        Rank of the body move's noise covariance (0: the tolerances let nothing move).
+    p_value : float
+        ``P(chi2_dof >= T)`` (1 when `dof` is 0).
+    false_alarm : float
+        The rate the test was run at.
+    estimated : bool
+        Whether the sensors' errors were then estimated with the body (by the test, or forced).
+    """
+
+    statistic: float
+    dof: int
+    p_value: float
+    false_alarm: float
+    estimated: bool = False
+
+    @property
+    def flagged(self) -> bool:
+        """Whether the records show sensor errors that move the body (p-value below the false-alarm rate)."""
+        return bool(self.dof > 0 and self.p_value < self.false_alarm)
+
+
+def body_change_test(
+    effect: Array, gram: Array, score: Array, variance: float = 1.0, false_alarm: float = SENSOR_FALSE_ALARM
+) -> SensorTest:
+    """Test whether the body move ``effect @ score`` exceeds what noise explains.
+
+    Parameters
+    ----------
+    effect : ndarray, shape (m, k)
+        ``L``: the tested figures' move per unit score (see the module's notes).
+    gram : ndarray, shape (k, k)
+        ``Q``: the score's covariance per unit noise variance.
+    score : ndarray, shape (k,)
+        ``s = G~^T r``.
+    variance : float
+        The residual's variance per residual (``s2``, 1 in pre-trigger units at a good fit).
+    false_alarm : float
+        The stated false-alarm rate.
+
+    Returns
+    -------
+    SensorTest
+    """
+    from scipy.special import gammaincc
+
+    b = effect @ score
+    cov = variance * (effect @ gram @ effect.T)
+    d = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    keep = d > 1e-12 * max(float(np.max(d, initial=0.0)), 1e-300)
+    if not np.any(keep):
+        return SensorTest(0.0, 0, 1.0, false_alarm)
+    z = b[keep] / d[keep]
+    inv, rank = pseudo_inverse(cov[np.ix_(keep, keep)] / np.outer(d[keep], d[keep]), symmetric=True)
+    t = float(z @ inv @ z)
+    p = float(gammaincc(0.5 * rank, 0.5 * t)) if rank > 0 else 1.0
+    return SensorTest(t, int(rank), p, false_alarm)
