@@ -435,7 +435,8 @@ def run_cell(
             # the clean case's bound: the same records' plain refit (the sensors not estimated), its noise std
             again = subprocess.run([*command, "--no-estimate-sensors"], capture_output=True, text=True, env=env,
                                    check=False)  # fmt: skip
-            plain = (json.loads(again.stdout)["uncertainty_records_crb"].get("sensor_budget") or {}).get("noise")
+            crb_plain = json.loads(again.stdout).get("uncertainty_records_crb") if again.returncode == 0 else None
+            plain = ((crb_plain or {}).get("sensor_budget") or {}).get("noise")  # None: no plain refit kept
     row: dict[str, object] = {"cell": cell, "seed": seed, "exit": out.returncode, "floor": floor(sensors)}
     warned = [line for line in out.stderr.splitlines() if "warning" in line]
     row["warnings"] = warned
@@ -468,6 +469,7 @@ def run_cell(
         if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
             row["target"] = _within(row, noise)
             row["target_plain"] = row["target"] if plain is None else _within(row, plain)
+            row["plain_kept"] = plain is not None or not PLAIN_BOUND or '"sensors_estimated": true' not in out.stdout
     return row
 
 
@@ -532,7 +534,8 @@ def main() -> None:
         for r in rows if args.runs else []:
             test = r.get("sensor_test") or {}
             print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
-                  f"covered {r.get('covered')}/6 target {r.get('target')}/{r.get('target_plain')} max|z| "
+                  f"covered {r.get('covered')}/6 target {r.get('target')}/{r.get('target_plain')} "
+                  f"plain kept {r.get('plain_kept')} max|z| "
                   f"{np.max(np.abs(r['z'])) if 'z' in r else float('nan'):.2f} sensor test T {test.get('statistic')} "
                   f"dof {test.get('dof')} p {test.get('p_value')} estimated {test.get('sensors_estimated')}",
                   flush=True)  # fmt: skip
