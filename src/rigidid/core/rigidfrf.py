@@ -301,12 +301,12 @@ class _Problem:
         self.q_basis = [np.linalg.qr(basis * weights[:, j, None])[0] for j in range(q)] if basis.shape[1] else []
         self.n_params = 52 if damping else 31
         self.n_residuals = 2 * n * 6 * q
-        sym = [_sym(e) for e in np.eye(21)]
-        da: list[NDArray[Any]] = [-(u**2)[:, None, None] * mass_matrix_from_parameters(e)[None] for e in np.eye(10)]
-        da += [np.broadcast_to(sb, (n, 6, 6)) for sb in sym]
-        if damping:
-            da += [1j * u[:, None, None] * sb[None] for sb in sym]
-        self.da = da
+        # dA/dp = (its matrix) x (its factor per line): -u^2 M_e, K_e, i u C_e
+        self.mats = np.stack([mass_matrix_from_parameters(e) for e in np.eye(10)] + [_sym(e) for e in np.eye(21)])
+        self.which = np.r_[np.arange(31), np.arange(10, 31)] if damping else np.arange(31)
+        damped = [np.broadcast_to(1j * u, (21, n))] if damping else []
+        factors = [np.broadcast_to(-(u**2), (10, n)), np.ones((21, n)), *damped]
+        self.factors: CArray = np.vstack(factors).astype(complex)
 
     def pack(self, theta: Array, kv: Array, cv: Array) -> Array:
         return np.concatenate([theta, kv, cv] if self.damping else [theta, kv])
@@ -337,8 +337,10 @@ class _Problem:
         a = a + 1j * self.u[:, None, None] * _sym(cv)[None]
         xm = -(self.u**2)[:, None, None] * np.linalg.solve(a, np.broadcast_to(self.tft.astype(complex), (n, 6, q)))
         ainv = np.linalg.solve(a, np.broadcast_to(np.eye(6, dtype=complex), (n, 6, 6)))
-        cols: CArray = np.stack([ainv @ (d @ xm) for d in self.da], axis=3)  # (n, 6, q, P)
-        jm = self._weighted(cols).reshape(-1, len(self.da))
+        base = (self.mats.reshape(-1, 6) @ np.moveaxis(xm, 1, 0).reshape(6, -1)).reshape(-1, 6, n, q)
+        dx = np.moveaxis(base, (2, 1, 3, 0), (0, 1, 2, 3))[..., self.which] * self.factors.T[:, None, None, :]
+        cols: CArray = (ainv @ dx.reshape(n, 6, -1)).reshape(n, 6, q, -1)  # (n, 6, q, P)
+        jm = self._weighted(cols).reshape(-1, self.which.size)
         return self._weighted(self.xs - xm).reshape(-1), jm
 
     def fitted_norm(self, theta: Array, kv: Array, cv: Array) -> Array:
