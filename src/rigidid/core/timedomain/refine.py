@@ -31,7 +31,7 @@ from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
-from rigidid.core.timedomain.sensor_test import TESTED_OUTPUTS, SensorTest, body_change_test
+from rigidid.core.timedomain.sensor_test import TESTED_OUTPUTS, SensorTest, body_change_test, noise_inflation
 from rigidid.errors import InputError
 
 __all__ = [
@@ -1409,7 +1409,7 @@ def _with_sensors(
     terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale, link)
     q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
-    test = _sensor_gate(terms, jm, bounds, grad, s2)
+    test = _sensor_gate(terms, jm, bounds, grad, (s2, std))
     if estimate is None:
         estimate = test.flagged and link is None
     correction = None
@@ -1418,9 +1418,19 @@ def _with_sensors(
     return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate))
 
 
-def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, s2: float) -> SensorTest:
+def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, noise: tuple[float, dict[str, Array]]
+                 ) -> SensorTest:  # fmt: skip
     """:func:`rigidid.core.timedomain.sensor_test.body_change_test` of the sensors as stated: the score
-    ``G~^T r``, the CG's and J/m's first-order move under :func:`_sensor_correction` per unit score."""
+    ``G~^T r``, the CG's and J/m's first-order move under :func:`_sensor_correction` per unit score.
+
+    `noise` is ``(s2, std)``: the residual's variance and the body's noise std (the sandwich of
+    :func:`_bound`). The score's noise is taken as ``c s2 Q``, ``c`` the median over the tested figures of
+    the sandwich's variance over the white-noise bound's ``s2 D (J^T J)^+ D^T``: the decimation filter's
+    correlation (and unequal noise between impacts) widen the score as they widen the body's, the
+    signatures being modal responses like the Jacobian's columns
+    (:func:`rigidid.core.timedomain.sensor_test.noise_inflation`).
+    """
+    s2, std = noise
     hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
     move = hp @ terms.cross
     q = terms.gram - terms.cross.T @ move
@@ -1428,7 +1438,10 @@ def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, s2: fl
     v = _sensor_moments(bounds, terms.gram.shape[0] // 6)[0]
     v = np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
     effect = grad[TESTED_OUTPUTS] @ move @ np.linalg.solve(v[:, None] * q + np.eye(v.size), np.diag(v))
-    return body_change_test(effect, q, terms.data, s2)
+    tested = grad[TESTED_OUTPUTS]
+    white = s2 * np.einsum("ij,jk,ik->i", tested, hp, tested)
+    sandwich = np.concatenate([std["center_of_gravity"].ravel(), std["inertia_per_mass"].ravel()])[TESTED_OUTPUTS] ** 2
+    return body_change_test(effect, q, terms.data, s2 * noise_inflation(sandwich, white))
 
 
 @dataclass(frozen=True)

