@@ -1413,7 +1413,7 @@ def _with_sensors(
     terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale, link)
     q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
-    test = _sensor_gate(terms, jm, bounds, grad, (s2, std))
+    test = _sensor_gate(terms, (jm, r), bounds, grad, (s2, std))
     if estimate is None:
         estimate = test.flagged and link is None
     correction = None
@@ -1435,10 +1435,11 @@ def _unsettled(move: Array, std: dict[str, Array]) -> bool:
     return bool(np.any(np.abs(move[TESTED_OUTPUTS]) > _SETTLED * sd))
 
 
-def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, noise: tuple[float, dict[str, Array]]
-                 ) -> SensorTest:  # fmt: skip
+def _sensor_gate(terms: SensorTerms, linear: tuple[Array, Array], bounds: Any, grad: Array,
+                 noise: tuple[float, dict[str, Array]]) -> SensorTest:  # fmt: skip
     """:func:`rigidid.core.timedomain.sensor_test.body_change_test` of the sensors as stated: the score
-    ``G~^T r``, the CG's and J/m's first-order move under :func:`_sensor_correction` per unit score.
+    ``G~^T (I - P_J) r`` (`linear` is ``(jm, r)``), the CG's and J/m's first-order move under
+    :func:`_sensor_correction` per unit score.
 
     `noise` is ``(s2, std)``: the residual's variance and the body's noise std (the sandwich of
     :func:`_bound`). The score's noise is taken as ``c s2 Q``, ``c`` the median over the tested figures of
@@ -1448,6 +1449,7 @@ def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, noise:
     (:func:`rigidid.core.timedomain.sensor_test.noise_inflation`).
     """
     s2, std = noise
+    jm, r = linear
     hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
     move = hp @ terms.cross
     q = terms.gram - terms.cross.T @ move
@@ -1458,7 +1460,8 @@ def _sensor_gate(terms: SensorTerms, jm: Array, bounds: Any, grad: Array, noise:
     tested = grad[TESTED_OUTPUTS]
     white = s2 * np.einsum("ij,jk,ik->i", tested, hp, tested)
     sandwich = np.concatenate([std["center_of_gravity"].ravel(), std["inertia_per_mass"].ravel()])[TESTED_OUTPUTS] ** 2
-    return body_change_test(effect, q, terms.data, s2 * noise_inflation(sandwich, white))
+    score = terms.data - move.T @ (jm.T @ r)  # G~^T (I - P_J) r: the fit stopped short of its minimum moves none
+    return body_change_test(effect, q, score, s2 * noise_inflation(sandwich, white))
 
 
 @dataclass(frozen=True)
