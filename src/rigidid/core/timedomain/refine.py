@@ -1193,6 +1193,7 @@ def refine_prepared(
     -----
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
+    given = data
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
     data = _settled(data, chain, estimate_delays, float(dt))
@@ -1250,8 +1251,25 @@ def refine_prepared(
         sensor_std=sensor_std, sensor_correction=correction, sensor_test=test,
     )  # fmt: skip
     if correction is not None and sensor_passes > 1 and _unsettled(grad @ (theta - fitted), std):
-        return _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
-    return out
+        out = _next_pass(out, data, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+    options = {"max_evaluations": max_evaluations, "drift": drift, "chain": chain, "sensor_bounds": sensor_bounds}
+    return _plain_kept(out, estimate_sensors, (given, dt, positions, directions), body,
+                       options | {"estimate_delays": estimate_delays})  # fmt: skip
+
+
+def _plain_kept(corrected: Refinement, estimate: bool | None, inputs: tuple[Any, ...], body: tuple[ArrayLike, ...],
+                options: dict[str, Any]) -> Refinement:  # fmt: skip
+    """`corrected`, or by default (`estimate` None) when the sensors' correction left a residual the noise and
+    the positions' tolerances do not explain (:attr:`rigidid.core.timedomain.sensor_test.SensorTest.explains`),
+    the plain refit of `inputs` (data, dt, positions, directions) from `body`, its sensor test marked not
+    estimated."""
+    test = corrected.sensor_test
+    if estimate is not None or test is None or test.explains:
+        return corrected
+    g, j, k, c = body
+    plain = refine_prepared(*inputs, center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c,
+                            estimate_sensors=False, **options)  # fmt: skip
+    return replace(plain, sensor_test=replace(test, estimated=False))
 
 
 def _started(pos: Array, dirs: Array, body: tuple[ArrayLike, ...]) -> tuple[Array, _Frame, Array]:
@@ -1416,10 +1434,13 @@ def _with_sensors(
     test = _sensor_gate(terms, (jm, r), bounds, grad, (s2, std))
     if estimate is None:
         estimate = test.flagged and link is None
-    correction = None
+    correction, after = None, None
     if estimate:
         theta, std, sensor_std, correction = _corrected(theta, data, (pos_l, dirs), frame, jm, terms, bounds, grad, std)
-    return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate))
+        rest = np.repeat(np.arange(6), v.size // 6) >= _ESTIMATED_KINDS  # what the correction leaves: positions
+        explained = budgeted((q, np.where(rest, v, 0.0), np.where(rest, sv, 0.0)))
+        after = None if explained is None else explained.p_value
+    return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate), misfit_after=after)
 
 
 _SETTLED = 0.2
@@ -1505,8 +1526,11 @@ def _next_pass(first: Refinement, data: _Data, dt: float, sensors: tuple[Array, 
     value = x.value + y.value
     value[0] = (1.0 + x.value[0]) * (1.0 + y.value[0]) - 1.0  # gains compose
     total = SensorCorrection(value, y.std, y.determined, y.rank)
+    test = first.sensor_test
+    if test is not None and second.sensor_test is not None:
+        test = replace(test, misfit_after=second.sensor_test.misfit_after)  # the last pass's residual
     return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations,
-                   sensor_test=first.sensor_test)  # fmt: skip
+                   sensor_test=test)  # fmt: skip
 
 
 _COARSE_ROWS = 24_000

@@ -65,6 +65,11 @@ class SensorTest:
         The rate the test was run at.
     estimated : bool
         Whether the sensors' errors were then estimated with the body (by the test, or forced).
+    misfit_after : float or None
+        With the sensors estimated: the p-value of the misfit test of the last corrected refit's residual
+        against the noise plus what the correction leaves (the positions' tolerances). Below the
+        false-alarm rate the correction has not explained the records (an unmodelled skew, say, that the
+        gains and tilts partly absorb): by default the plain refit is then kept.
     """
 
     statistic: float
@@ -72,6 +77,12 @@ class SensorTest:
     p_value: float
     false_alarm: float
     estimated: bool = False
+    misfit_after: float | None = None
+
+    @property
+    def explains(self) -> bool:
+        """Whether the correction, when made, leaves a residual the noise and the positions' tolerances explain."""
+        return self.misfit_after is None or self.misfit_after >= self.false_alarm
 
     @property
     def flagged(self) -> bool:
