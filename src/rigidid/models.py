@@ -522,6 +522,12 @@ class SensorTestEntry(_Strict):
         "when the test flags and no chain is modelled; always with --estimate-sensors, never with "
         "--no-estimate-sensors"
     )
+    correction_misfit_p_value: float | None = Field(
+        default=None,
+        description="when the sensors were estimated (or tried by default): the misfit test's p-value of the last "
+        "corrected refit against the noise plus the positions' tolerances; below false_alarm_rate the default "
+        "keeps the plain refit (sensors_estimated false)",
+    )
 
 
 class RecordBoundResult(BaseModel):

@@ -141,6 +141,8 @@ def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_bod
 
     entry = SensorTestEntry(**record_bound_to_dict(record_bound(fit, None))["sensor_test"])
     assert entry.sensors_estimated and entry.p_value == test.p_value and entry.false_alarm_rate == 0.01
+    # the corrected refit's residual is noise (positions exact): the correction kept
+    assert entry.correction_misfit_p_value is not None and entry.correction_misfit_p_value >= 0.01
 
 
 def test_exact_sensors_within_the_default_tolerances_are_not_flagged_and_not_estimated() -> None:
