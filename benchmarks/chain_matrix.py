@@ -23,6 +23,13 @@ single-axis accelerometers, three impacts, 2048 Hz, 6 s, 0.25 s pre-trigger, whi
   through the filter's magnitude (a bilinear Butterworth, |H|^2 as the analog one's below 0.4 fs);
 - ``hum``: a 50 Hz sinusoid of 2 % of each channel's peak, random phase per channel.
 
+``--first-seed N`` starts the seeds at N; ``--default-tolerances`` writes no ``tolerances`` block (rigidid's
+defaults then hold: the realistic null of the sensor test on clean records); ``--option OPT`` passes OPT to
+``identify`` (e.g. ``--no-estimate-sensors``); ``--plain-bound`` judges the target of runs whose sensors were
+estimated against the same records' plain refit's noise std (the clean case's bound). Each run's ``sensor_test``
+(its statistic, dof, p-value, whether the sensors were estimated) is printed with ``--runs``, and per cell the
+count estimated and of p-values below 0.01, 0.05 and 0.5.
+
 ``--paired`` also runs each draw's clean twin (the same noise, no effect) and prints its errors and the
 largest ratio of the cell's errors to its twin's (1: the effect costs nothing). ``--metadata`` states the
 chain in the layout's ``chain`` block (AC corner, anti-alias filter, the skewed
@@ -100,6 +107,10 @@ SKEWED = 4  # the channel one sample late
 SENSOR_EFFECTS = {"sens", "orient", "transverse", "position"}
 ALL_TOLERANCES = False
 """``--state-all-tolerances``: every layout states the ``all`` cell's tolerances."""
+PLAIN_BOUND = False
+"""``--plain-bound``: where the sensors were estimated, the target's noise std is the same records' plain refit's
+(``--no-estimate-sensors``), the clean case's bound, rather than the corrected answer's own (which includes the
+correction's noise); ``target`` counts the runs within it."""
 STATED_DRAWS = False
 """``--stated``: orientation and transverse errors drawn from the stated distribution (uniform within the
 tolerance) rather than at its bound (tilts of 2-3 degrees, transverse sensitivity exactly 3 %)."""
@@ -407,10 +418,12 @@ def run_cell(
     estimate_delays: bool = False,
     twin: bool = False,
     options: tuple[str, ...] = (),
+    default_tolerances: bool = False,
 ) -> dict[str, object]:
     """One run of `cell`; `twin`: the same draw (the same noise) with no effect at all, the cell's clean twin.
 
-    `options`: more options of ``rigidid identify`` (e.g. ``--estimate-sensors``)."""
+    `options`: more options of ``rigidid identify`` (e.g. ``--estimate-sensors``); `default_tolerances`: the
+    layout states no tolerances (rigidid's defaults then hold) rather than the cell's."""
     effects = set(CELLS[1:-1]) - {"clip30"} if cell == "all" else {cell}
     effects = set() if twin else effects
     rng = np.random.default_rng(1000 * seed + CELLS.index(cell))
@@ -419,16 +432,23 @@ def run_cell(
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         chain = stated_chain(effects) if metadata else None
-        told = stated_tolerances(SENSOR_EFFECTS if ALL_TOLERANCES and not twin else effects)
+        told = None if default_tolerances else stated_tolerances(
+            SENSOR_EFFECTS if ALL_TOLERANCES and not twin else effects
+        )
         paths = write_case(folder, records, "stamps" in effects, told, chain)
         env = dict(os.environ)
         extra = ["--estimate-delays"] if estimate_delays else []
         extra += list(options)
-        out = subprocess.run(
-            [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records", *map(str, paths),
-             "--mass", str(MASS), "--json", "-", *extra],
-            capture_output=True, text=True, env=env, check=False,
-        )  # fmt: skip
+        command = [sys.executable, "-m", "rigidid", "identify", str(folder / "layout.json"), "--records",
+                   *map(str, paths), "--mass", str(MASS), "--json", "-"]  # fmt: skip
+        out = subprocess.run([*command, *extra], capture_output=True, text=True, env=env, check=False)
+        plain = None
+        if PLAIN_BOUND and out.returncode == 0 and '"sensors_estimated": true' in out.stdout:
+            # the clean case's bound: the same records' plain refit (the sensors not estimated), its noise std
+            again = subprocess.run([*command, "--no-estimate-sensors"], capture_output=True, text=True, env=env,
+                                   check=False)  # fmt: skip
+            crb_plain = json.loads(again.stdout).get("uncertainty_records_crb") if again.returncode == 0 else None
+            plain = ((crb_plain or {}).get("sensor_budget") or {}).get("noise")  # None: no plain refit kept
     row: dict[str, object] = {"cell": cell, "seed": seed, "exit": out.returncode, "floor": floor(sensors)}
     warned = [line for line in out.stderr.splitlines() if "warning" in line]
     row["warnings"] = warned
@@ -456,15 +476,27 @@ def run_cell(
             row["covered_kernel"] = int(np.sum(np.abs(z_k) <= 1.959964))
             row["z_kernel"] = z_k
         row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
+        row["sensor_test"] = crb.get("sensor_test")
         noise = (crb.get("sensor_budget") or {}).get("noise")
         if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
-            span = float(np.max(np.ptp(SENSORS, axis=0)))
-            se = (100 * float(np.max(noise["center_of_gravity"])) / span,
-                  100 * float(np.max(np.diag(np.array(noise["inertia_tensor"])) / np.diag(INERTIA))))  # fmt: skip
-            fl = row["floor"]
-            row["target"] = all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], fl, se, strict=True))  # type: ignore[arg-type]
-            row["noise_se"] = se
+            row["target"] = _within(row, noise)
+            row["noise_se"] = _noise_se(noise)
+            row["target_plain"] = row["target"] if plain is None else _within(row, plain)
+            row["plain_kept"] = plain is not None or not PLAIN_BOUND or '"sensors_estimated": true' not in out.stdout
     return row
+
+
+def _noise_se(noise: dict[str, list[float]]) -> tuple[float, float]:
+    """A sensor_budget entry's largest CG std (% of span) and inertia diagonal std (% of the truth's)."""
+    span = float(np.max(np.ptp(SENSORS, axis=0)))
+    return (100 * float(np.max(noise["center_of_gravity"])) / span,
+            100 * float(np.max(np.diag(np.array(noise["inertia_tensor"])) / np.diag(INERTIA))))  # fmt: skip
+
+
+def _within(row: dict[str, object], noise: dict[str, list[float]]) -> bool:
+    """Whether the run's errors are within 1.25 x the floor plus 6 of `noise`'s std (a sensor_budget entry)."""
+    se = _noise_se(noise)
+    return all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], row["floor"], se, strict=True))  # type: ignore[call-overload]
 
 
 def clean_target(row: dict[str, object], twin: dict[str, object]) -> bool:
@@ -472,6 +504,18 @@ def clean_target(row: dict[str, object], twin: dict[str, object]) -> bool:
     if row["exit"] != 0 or "noise_se" not in twin or "errors" not in row:
         return False
     return all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], row["floor"], twin["noise_se"], strict=True))  # type: ignore[call-overload]
+
+
+def _print_sensor_tests(rows: list[dict[str, object]]) -> None:
+    """The sensor test over the cell's runs: how many estimated the sensors, and the p-values' spread."""
+    tests = [r["sensor_test"] for r in rows if r.get("sensor_test")]
+    if not tests:
+        return
+    p = np.array([t["p_value"] for t in tests])  # type: ignore[index]
+    est = sum(bool(t["sensors_estimated"]) for t in tests)  # type: ignore[index]
+    print(f"    sensor test: {len(tests)} runs, estimated {est}, p < 0.01: {np.sum(p < 0.01)}, p < 0.05: "
+          f"{np.sum(p < 0.05)}, p < 0.5: {np.sum(p < 0.5)}, mean T/dof "
+          f"{np.mean([t['statistic'] / max(t['dof'], 1) for t in tests]):.2f}", flush=True)  # type: ignore[index]  # fmt: skip
 
 
 def main() -> None:
@@ -489,11 +533,15 @@ def main() -> None:
                         "every cell")  # fmt: skip
     parser.add_argument("--clean-bound", action="store_true", help="also judge the target on the clean twin's "
                         "noise std")  # fmt: skip
+    parser.add_argument("--default-tolerances", action="store_true",
+                        help="the layout states no tolerances (rigidid's defaults)")  # fmt: skip
+    parser.add_argument("--plain-bound", action="store_true", help="target against the plain refit's noise std")
+    parser.add_argument("--option", action="append", default=[], help="an option for identify (repeatable)")
     parser.add_argument("--stated", action="store_true", help="draw orientation and transverse errors from the "
                         "stated distribution (uniform within the tolerance), not at its bound")  # fmt: skip
     args = parser.parse_args()
-    global STATED_DRAWS, ALL_TOLERANCES
-    STATED_DRAWS, ALL_TOLERANCES = args.stated, args.state_all_tolerances
+    global STATED_DRAWS, ALL_TOLERANCES, PLAIN_BOUND
+    STATED_DRAWS, ALL_TOLERANCES, PLAIN_BOUND = args.stated, args.state_all_tolerances, args.plain_bound
     if args.floor_draws:
         print(f"type-B intervals on perfect modal data, stated bounds true ({args.floor_draws} draws):")
         print(f"{'effect':<11} {'coverage':>8} {'median |err|/std':>16} {'median J err %':>14}")
@@ -506,25 +554,30 @@ def main() -> None:
     print(f"{'cell':<11} {'finished':>8} {'CG % span med/max':>18} {'J % med/max':>13} {'floor CG/J':>12} "
           f"{'refit':>5} {'cover':>6} {'silent':>6} {'target':>6}  first warning or error")  # fmt: skip
     for cell in args.cells.split(","):
-        sensors_option = ("--estimate-sensors",) if args.estimate_sensors else ()
+        sensors_option = (("--estimate-sensors",) if args.estimate_sensors else ()) + tuple(args.option)
         rows, clean = [], []
         for s in range(args.first_seed, args.first_seed + args.seeds):  # each run printed as it ends
-            r = run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option)
+            r = run_cell(cell, s, args.metadata, args.estimate_delays, options=sensors_option,
+                         default_tolerances=args.default_tolerances)  # fmt: skip
             rows.append(r)
             if args.clean_bound:
                 clean.append(clean_target(r, run_cell(cell, s, twin=True)))
             if args.runs:
+                test = r.get("sensor_test") or {}
                 print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
-                      f"covered {r.get('covered')}/6 target {r.get('target')} noise se {r.get('noise_se')} "
-                      f"z {np.round(r['z'], 2).tolist() if 'z' in r else None}"
-                      + (f" target(clean) {clean[-1]}" if clean else ""), flush=True)  # fmt: skip
+                      f"covered {r.get('covered')}/6 target {r.get('target')}/{r.get('target_plain')} "
+                      f"plain kept {r.get('plain_kept')} noise se {r.get('noise_se')} "
+                      f"z {np.round(r['z'], 2).tolist() if 'z' in r else None} sensor test T {test.get('statistic')} "
+                      f"dof {test.get('dof')} p {test.get('p_value')} estimated {test.get('sensors_estimated')}"
+                      + (f" target(clean) {clean[-1]}" if clean else ""), flush=True)  # type: ignore[union-attr]  # fmt: skip
+        _print_sensor_tests(rows)
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])
         fitted = [r for r in done if r.get("refit")]
         cover = sum(int(r["covered"]) for r in fitted) / (6 * len(fitted)) if fitted else float("nan")  # type: ignore[call-overload]
         silent = sum(bool(r.get("silent")) for r in done)
-        met = sum(bool(r.get("target")) for r in done)
+        met = sum(bool(r.get("target_plain" if PLAIN_BOUND else "target")) for r in done)
         note = next((str(r.get("error") or (r["warnings"][0] if r["warnings"] else "")) for r in rows  # type: ignore[index]
                      if r.get("error") or r["warnings"]), "")  # fmt: skip
         note = note.replace("rigidid: ", "")[:110]

@@ -493,7 +493,9 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     ``converged``, per quantity ``{"estimate", "std", "ci95"}``, with a pre-trigger the
     acceptance test's ``misfit_ratio``, ``misfit_p_value``, ``false_alarm_rate`` and ``misfit_expected``, with the
     delays estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
-    ``mains_hum_hz``, with the sensors' errors estimated ``sensor_corrections``, and, when the sensors'
+    ``mains_hum_hz``, with the sensors' errors estimated ``sensor_corrections``, with stated tolerances the
+    sensor test's ``sensor_test`` (``statistic``, ``dof``, ``p_value``, ``false_alarm_rate``,
+    ``sensors_estimated``, ``correction_misfit_p_value``), and, when the sensors'
     tolerances were propagated, ``sensor_budget`` (per source,
     ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
@@ -517,6 +519,11 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         out["mains_hum_hz"] = list(bound.hum_hz)
     if bound.sensor_correction is not None:
         out["sensor_corrections"] = corrections_by_sensor(bound.sensor_correction, bound.corrected_sensors)
+    if bound.sensor_test is not None:
+        test = bound.sensor_test
+        out["sensor_test"] = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
+                              "false_alarm_rate": test.false_alarm, "sensors_estimated": test.estimated,
+                              "correction_misfit_p_value": test.misfit_after}  # fmt: skip
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

@@ -507,6 +507,29 @@ class SensorCorrectionEntry(_Strict):
     )
 
 
+class SensorTestEntry(_Strict):
+    """The score test of the sensors as stated at the plain refit's minimum (issue 23)."""
+
+    statistic: float = Field(
+        description="chi-square statistic of the CG's and inertia's move the sensors' correction would make, "
+        "over its noise covariance"
+    )
+    dof: int = Field(description="its degrees of freedom (0: the stated tolerances let nothing move)")
+    p_value: float = Field(description="probability of a statistic at least this large with exact sensors")
+    false_alarm_rate: float = Field(description="the rate the test was run at: below it, the test flags")
+    sensors_estimated: bool = Field(
+        description="whether the sensors' errors were estimated with the body (sensor_corrections): by default "
+        "when the test flags and no chain is modelled; always with --estimate-sensors, never with "
+        "--no-estimate-sensors"
+    )
+    correction_misfit_p_value: float | None = Field(
+        default=None,
+        description="when the sensors were estimated (or tried by default): the misfit test's p-value of the last "
+        "corrected refit against the noise plus the positions' tolerances; below false_alarm_rate the default "
+        "keeps the plain refit (sensors_estimated false)",
+    )
+
+
 class RecordBoundResult(BaseModel):
     """Cramér-Rao intervals of the output-error refinement on the records (``--refine``, the default)."""
 
@@ -566,6 +589,10 @@ class RecordBoundResult(BaseModel):
     sensor_corrections: dict[str, SensorCorrectionEntry] | None = Field(
         default=None,
         description="--estimate-sensors: per sensor id, its errors estimated with the body (positions are not)",
+    )
+    sensor_test: SensorTestEntry | None = Field(
+        default=None,
+        description="with sensor tolerances: the test of the sensors as stated, and whether they were estimated",
     )
 
 

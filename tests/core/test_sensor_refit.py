@@ -58,7 +58,7 @@ def _records(gain: np.ndarray, shift: np.ndarray, rng: np.random.Generator, axes
 
 
 def _fit(records: list[np.ndarray], start, bounds: SensorBounds | None, evaluations: int = 240,  # type: ignore[no-untyped-def]
-         estimate_sensors: bool = False):  # fmt: skip
+         estimate_sensors: bool | None = False):  # fmt: skip
     """The refit from `start` (g, J/m, K/m, C/m), with the stated tolerances `bounds`."""
     _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
     impacts = [find_impact(r, 1.0 / RATE) for r in records]
@@ -106,7 +106,10 @@ def test_stated_gain_tolerances_explain_the_misfit_and_widen_the_intervals_to_th
 def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_body(gain_errors) -> None:  # type: ignore[no-untyped-def]
     records, body = gain_errors
     bounds = SensorBounds(sensitivity=0.03, orientation_deg=0.0, transverse=0.0, position=0.0)
-    fit = _fit(records, _truth(body), bounds, estimate_sensors=True)
+    fit = _fit(records, _truth(body), bounds, estimate_sensors=None)  # the default: estimated when the test flags
+    test = fit.sensor_test
+    # 8 gains move the body along 7 directions (a common gain moves nothing): T 1129 on 7 dof
+    assert test is not None and test.flagged and test.estimated and test.dof == 7
     x = fit.sensor_correction
     assert x is not None and x.determined[0].all()
     true = np.random.default_rng(3).uniform(-0.03, 0.03, 8)
@@ -132,6 +135,26 @@ def test_the_redundancy_estimates_the_gains_and_takes_their_error_out_of_the_bod
     gains = np.array([SensorCorrectionEntry(**entries[i]).gain for i in ids])
     np.testing.assert_allclose(gains, x.value[0], rtol=0, atol=0)
     assert all(entries[i]["determined"][0] for i in ids) and len(entries["s0"]["tilt_rad"]) == 2
+    from rigidid.core.timedomain.refine import record_bound
+    from rigidid.jsonout import record_bound_to_dict
+    from rigidid.models import SensorTestEntry
+
+    entry = SensorTestEntry(**record_bound_to_dict(record_bound(fit, None))["sensor_test"])
+    assert entry.sensors_estimated and entry.p_value == test.p_value and entry.false_alarm_rate == 0.01
+    # the corrected refit's residual is noise (positions exact): the correction kept
+    assert entry.correction_misfit_p_value is not None and entry.correction_misfit_p_value >= 0.01
+
+
+def test_exact_sensors_within_the_default_tolerances_are_not_flagged_and_not_estimated() -> None:
+    """Issue 23: with the default tolerances stated and exact sensors, the sensor test does not flag (its
+    statistic is chi-square on 9 dof; here 10.7, p 0.30), so the answer is the plain refit's: no correction."""
+    from rigidid.core.sensor_budget import DEFAULT_BOUNDS
+
+    records, body = _records(np.ones(8), np.zeros((8, 3)), np.random.default_rng(11))
+    fit = _fit(records, _truth(body), DEFAULT_BOUNDS, estimate_sensors=None)
+    test = fit.sensor_test
+    assert test is not None and test.dof == 9 and not test.flagged and not test.estimated
+    assert fit.sensor_correction is None
 
 
 def test_a_determined_correction_beyond_three_tolerances_names_its_sensor() -> None:

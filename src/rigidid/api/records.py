@@ -459,7 +459,7 @@ def with_refinement(
     tolerances: SensorBounds | None = None,
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = None,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -481,11 +481,13 @@ def with_refinement(
         The channels' acquisition chain in layout order (:func:`chain_model`), modelled in the refit.
     estimate_delays : bool
         Fit each channel's delay relative to the first (``--estimate-delays``).
-    estimate_sensors : bool
+    estimate_sensors : bool or None
         Estimate each sensor's gain and axis errors with the body (positions stay at their prior), the
         tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
         a sensor whose estimate is beyond 3 times its tolerance is named
-        (:func:`implausible_sensors`).
+        (:func:`implausible_sensors`). None (the default): when the sensor test flags sensor errors that
+        move the body (:mod:`rigidid.core.timedomain.sensor_test`) and no chain, delays or hum are
+        modelled; False: never (the plain refit).
 
     Returns
     -------
@@ -953,7 +955,7 @@ def refine_records(
     progress: ProgressCallback | None = None,
     stream_above: int | None = None,
     estimate_delays: bool = False,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = None,
 ) -> IdentifyResult:
     """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
 
@@ -978,7 +980,7 @@ def refine_records(
         smaller ones are read whole.
     estimate_delays : bool
         Fit each channel's delay (:func:`with_refinement`); the layout's ``chain`` is modelled.
-    estimate_sensors : bool
+    estimate_sensors : bool or None
         As for :func:`with_refinement`.
 
     Returns
@@ -1216,7 +1218,7 @@ def identify_test(
     progress: ProgressCallback | None = None,
     force: ForceOptions | None = None,
     estimate_delays: bool = False,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = None,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -1247,8 +1249,9 @@ def identify_test(
     estimate_delays : bool
         The refit fits each channel's delay relative to the first (``--estimate-delays``); the layout's
         ``chain`` is modelled in any case.
-    estimate_sensors : bool
-        In the refit, estimate each sensor's errors with the body (:func:`with_refinement`).
+    estimate_sensors : bool or None
+        In the refit, estimate each sensor's errors with the body (:func:`with_refinement`; None: when
+        the sensor test flags them).
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -1304,7 +1307,7 @@ def _identify_test(
     progress: ProgressCallback | None,
     force: ForceOptions | None,
     estimate_delays: bool = False,
-    estimate_sensors: bool = False,
+    estimate_sensors: bool | None = None,
     **identify_options: Any,
 ) -> TestRun:
     """:func:`identify_test`'s work."""
@@ -1375,7 +1378,7 @@ def _refit_test(
     estimate: ModalEstimate,
     progress: ProgressCallback | None,
     estimate_delays: bool,
-    estimate_sensors: bool,
+    estimate_sensors: bool | None,
 ) -> IdentifyResult:
     """The refit on the test's records: read in row blocks from `paths`, else on the records held."""
     if paths is not None:

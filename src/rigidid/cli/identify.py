@@ -98,7 +98,7 @@ def identify(
     mounts: MountsPath = None,
     torque_axis: TorqueAxis = None,
     refine: Refine = True,
-    estimate_sensors: EstimateSensors = False,
+    estimate_sensors: EstimateSensors = None,
     force: ForceColumn = None,
     frf_out: FrfOut = None,
     estimate_delays: EstimateDelays = False,
