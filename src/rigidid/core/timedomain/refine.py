@@ -995,7 +995,9 @@ def _sensor_correction(
     x_var: Array = np.where(v > 0.0, np.diag(np.linalg.solve(system, np.diag(v))), v_all)
     left = grad @ move @ np.linalg.solve(system, np.eye(v.size))  # physical value per unit true error, remaining
     std = {source: _physical_std(np.sqrt((left**2) @ var)) for source, var in per_source.items()}
-    noise_var: Array = np.einsum("ij,jk,ik->i", left, (v[:, None] * q) * v[None, :], left)
+    # a variance (q is a Schur complement, positive semi-definite): below zero only by rounding, where the
+    # signatures are nearly the Jacobian's (as many sensors as the body's six motions)
+    noise_var: Array = np.maximum(np.einsum("ij,jk,ik->i", left, (v[:, None] * q) * v[None, :], left), 0.0)
     shift: Array = move @ x
     x_std: Array = np.sqrt(np.maximum(x_var, 0.0))
     return x, x_std, shift, std, noise_var
@@ -1487,7 +1489,7 @@ def _with_sensors(
            SensorTest]:  # fmt: skip
     """The stated sensor tolerances in the refit: the misfit they leave expected by the acceptance test,
     their effect on the body (``sensor_std``), the sensor test and, when `estimate` (None: when the test
-    flags and no chain is modelled), the sensors' errors estimated.
+    flags, no chain is modelled and the noise is the pre-trigger's), the sensors' errors estimated.
 
     `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame, link)``, `linear`
     ``(jm, r, grad, s2)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
@@ -1512,8 +1514,8 @@ def _with_sensors(
     q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
     test = _sensor_gate(terms, (jm, r), bounds, grad, (s2, std))
-    if estimate is None:
-        estimate = test.flagged and link is None
+    if estimate is None:  # by default: the noise measured apart from the residual the test reads
+        estimate = test.flagged and link is None and data.noise_from == "pretrigger"
     correction, after = None, None
     if estimate:
         left = pseudo_inverse(jm.T @ jm, symmetric=True)[0] @ (jm.T @ r)  # the Gauss-Newton step left: -left
