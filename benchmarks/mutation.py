@@ -10,7 +10,7 @@ any other pytest exit (collection error, no tests) stops the run.
 
 Usage, from the repository root::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 29
+    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 31
     PYTHONPATH=src python benchmarks/mutation.py --only mounts-norm-axis frf-residual-dof
     python benchmarks/mutation.py --list
 """
@@ -275,6 +275,22 @@ MUTANTS: tuple[Mutant, ...] = (
         "done = np.zeros(idx.size, dtype=bool)",
         "no zero-residual stop (the issue's fault: noise-free refits never say converged)",
         ("tests/core/test_optimize.py",),
+    ),
+    Mutant(
+        "sensor-gate-inverted",
+        "core/timedomain/refine.py",
+        'estimate = test.flagged and link is None and data.noise_from == "pretrigger"',
+        'estimate = test.flagged and link is not None and data.noise_from == "pretrigger"',
+        "the sensor test's default inverted: sensors estimated only with a chain (issue 23)",
+        ("tests/core/test_sensor_refit.py",),
+    ),
+    Mutant(
+        "massline-level-unwhitened-target",
+        "core/massline.py",
+        "x_w, y_w = design / np.sqrt(level)[:, None], target / np.sqrt(level)[:, None]",
+        "x_w, y_w = design / np.sqrt(level)[:, None], target / level[:, None]",
+        "the first-order mass line's data weighted by the level, its design by the level's root (issue 21)",
+        ("tests/core/test_massline.py::test_first_order_mass_line_weights_each_line_by_its_noise_level",),
     ),
 )
 

@@ -202,3 +202,18 @@ def test_the_refits_own_sensor_budget_bounds_the_error_one_tilted_sensor_causes(
     ratio = np.abs(err) / own
     assert np.max(ratio) < np.sqrt(3.0)  # the bound by linearity; observed 1.15 (CG x)
     assert np.max(ratio) > 0.5  # the tilt shows: one quantity near its bound
+
+
+def test_with_the_noise_taken_from_the_residual_the_sensors_are_not_estimated_by_default() -> None:
+    """Issue 23: on noise-free records the refit takes its noise from its own residual, which then holds
+    whatever the model misses, so the sensor test's false-alarm rate cannot be stated: by default the
+    sensors are not estimated, and the answer is the plain refit's, exact (the paper sample's records
+    flagged exact sensors, T 1.3e8 on 5 dof, and the correction moved every gain by about 2 %)."""
+    from rigidid.core.sensor_budget import DEFAULT_BOUNDS
+
+    records, body = _records(np.ones(8), np.zeros((8, 3)), np.random.default_rng(0), noise=0.0)
+    fit = _fit(records, _truth(body), DEFAULT_BOUNDS, estimate_sensors=None)
+    assert fit.noise_from == "residual"
+    assert fit.sensor_test is not None and fit.sensor_test.flagged and not fit.sensor_test.estimated
+    assert fit.sensor_correction is None
+    np.testing.assert_allclose(fit.center_of_gravity, body.center_of_gravity, atol=1e-9)
