@@ -432,8 +432,10 @@ def run_cell(
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         chain = stated_chain(effects) if metadata else None
-        told = None if default_tolerances else stated_tolerances(
-            SENSOR_EFFECTS if ALL_TOLERANCES and not twin else effects
+        told = (
+            None
+            if default_tolerances
+            else stated_tolerances(SENSOR_EFFECTS if ALL_TOLERANCES and not twin else effects)
         )
         paths = write_case(folder, records, "stamps" in effects, told, chain)
         env = dict(os.environ)
