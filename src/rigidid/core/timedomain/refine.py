@@ -870,22 +870,46 @@ def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]
     return v, sv, per_source
 
 
+@dataclass(frozen=True)
+class _Projection:
+    """The sensors' signatures against the fit's Jacobian, at its minimum (:func:`_projection`).
+
+    Attributes
+    ----------
+    hp : ndarray
+        ``(J^T J)^+``.
+    move : ndarray, shape (parameters, 6 p)
+        ``(J^T J)^+ J^T G~``: the parameters' move per unit sensor error (Gauss-Newton, first order).
+    q : ndarray, shape (6 p, 6 p)
+        ``Q = G~^T G~ - (J^T G~)^T (J^T J)^+ J^T G~``, symmetrised: what the fit cannot absorb.
+    """
+
+    hp: Array
+    move: Array
+    q: Array
+
+
+def _projection(terms: SensorTerms, jm: Array) -> _Projection:
+    """:class:`_Projection` of `terms` on the Jacobian `jm`: one pseudo-inverse for the budget, the sensor
+    test and the correction."""
+    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
+    move = hp @ terms.cross
+    q = terms.gram - terms.cross.T @ move
+    return _Projection(hp, move, 0.5 * (q + q.T))
+
+
 def _sensor_outcome(
-    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+    terms: SensorTerms, proj: _Projection, bounds: Any, grad: Array
 ) -> tuple[Array, Array, Array, dict[str, dict[str, Array]]]:
     """The misfit's quadratic form, the moments, and each source's std of the physical values.
 
-    ``Q = G~^T G~ - (J^T G~)^T (J^T J)^+ J^T G~`` (what the fit cannot absorb); a sensor
-    error ``x`` moves the parameters by ``(J^T J)^+ J^T G~ x`` (Gauss-Newton, first order),
-    the physical values by `grad` times that.
+    ``Q`` is `proj`'s (what the fit cannot absorb); a sensor error ``x`` moves the parameters by
+    ``(J^T J)^+ J^T G~ x`` (Gauss-Newton, first order), the physical values by `grad` times that.
     """
-    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
-    move = hp @ terms.cross  # (51, k)
-    q = terms.gram - terms.cross.T @ move
     v, sv, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
-    effect = grad @ move  # (outputs, k)
+    effect = grad @ proj.move  # (outputs, k)
     std = {source: _physical_std(np.sqrt((effect**2) @ var)) for source, var in per_source.items()}
-    return 0.5 * (q + q.T), v, sv, std
+    return proj.q, v, sv, std
 
 
 @dataclass(frozen=True)
@@ -960,7 +984,7 @@ while the position cell came within target in 10 of 10 (chain_matrix seeds 200-2
 
 
 def _sensor_correction(
-    terms: SensorTerms, jm: Array, bounds: Any, grad: Array
+    terms: SensorTerms, proj: _Projection, bounds: Any, grad: Array
 ) -> tuple[Array, Array, Array, dict[str, dict[str, Array]], Array]:
     """The sensor errors estimated with the body (maximum a posteriori, linearised at the refit's minimum).
 
@@ -982,10 +1006,7 @@ def _sensor_correction(
     noise_var : ndarray
         Variance added to each physical value by the noise in ``x``.
     """
-    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
-    move = hp @ terms.cross
-    q = terms.gram - terms.cross.T @ move
-    q = 0.5 * (q + q.T)
+    move, q = proj.move, proj.q
     v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
     v_all, v = v, np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)  # positions: prior only
     system = v[:, None] * q + np.eye(v.size)
@@ -1005,7 +1026,7 @@ def _sensor_correction(
 
 def _corrected(
     theta: Array, data: _Data, sensors: tuple[Array, Array], frame: _Frame, jm: Array, terms: SensorTerms,
-    bounds: Any, grad: Array, std: dict[str, Array], link: _Link | None = None,
+    bounds: Any, grad: Array, std: dict[str, Array], link: _Link | None, proj: _Projection,
 ) -> tuple[Array, dict[str, Array], dict[str, dict[str, Array]], SensorCorrection]:  # fmt: skip
     """The parameters, noise std and type-B std after :func:`_sensor_correction`, and the correction.
 
@@ -1013,7 +1034,7 @@ def _corrected(
     correction moves them with the body; their std (``"delay"``) stays the joint covariance's marginal.
     """
     pos_l, dirs = sensors
-    x, x_std, shift, sensor_std, noise_var = _sensor_correction(terms, jm, bounds, grad)
+    x, x_std, shift, sensor_std, noise_var = _sensor_correction(terms, proj, bounds, grad)
     null, rank = _augmented_null(theta, data, pos_l, dirs, frame.omega, jm, frame.scale, link)
     p = pos_l.shape[0]
     correction = SensorCorrection(x.reshape(6, p), x_std.reshape(6, p), (null**2 < 0.5).reshape(6, p), rank)
@@ -1202,7 +1223,6 @@ def refine_prepared(
     -----
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
-    given = data
     given = data
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
@@ -1511,17 +1531,18 @@ def _with_sensors(
     data, pos_l, dirs, omega, frame, link = model
     jm, r, grad, s2 = linear
     terms = sensor_terms(theta, data, pos_l, dirs, omega, jm, r, frame.scale, link)
-    q, v, sv, sensor_std = _sensor_outcome(terms, jm, bounds, grad)
+    proj = _projection(terms, jm)
+    q, v, sv, sensor_std = _sensor_outcome(terms, proj, bounds, grad)
     misfit = budgeted((q, v, sv)) or misfit
-    test = _sensor_gate(terms, (jm, r), bounds, grad, (s2, std))
+    test = _sensor_gate(terms, proj, (jm, r), bounds, grad, (s2, std))
     if estimate is None:  # by default: the noise measured apart from the residual the test reads
         estimate = test.flagged and link is None and data.noise_from == "pretrigger"
     correction, after = None, None
     if estimate:
-        left = pseudo_inverse(jm.T @ jm, symmetric=True)[0] @ (jm.T @ r)  # the Gauss-Newton step left: -left
+        left = proj.hp @ (jm.T @ r)  # the Gauss-Newton step left: -left
         theta, std, sensor_std, correction = _corrected(
             theta, data, (pos_l, dirs), frame, jm, replace(terms, data=terms.data - terms.cross.T @ left), bounds,
-            grad, std, link,
+            grad, std, link, proj,
         )  # fmt: skip
         theta = theta - left
         rest = np.repeat(np.arange(6), v.size // 6) >= _ESTIMATED_KINDS  # what the correction leaves: positions
@@ -1543,7 +1564,7 @@ def _unsettled(move: Array, std: dict[str, Array]) -> bool:
     return bool(np.any(np.abs(move[TESTED_OUTPUTS]) > _SETTLED * sd))
 
 
-def _sensor_gate(terms: SensorTerms, linear: tuple[Array, Array], bounds: Any, grad: Array,
+def _sensor_gate(terms: SensorTerms, proj: _Projection, linear: tuple[Array, Array], bounds: Any, grad: Array,
                  noise: tuple[float, dict[str, Array]]) -> SensorTest:  # fmt: skip
     """:func:`rigidid.core.timedomain.sensor_test.body_change_test` of the sensors as stated: the score
     ``G~^T (I - P_J) r`` (`linear` is ``(jm, r)``), the CG's and J/m's first-order move under
@@ -1558,10 +1579,7 @@ def _sensor_gate(terms: SensorTerms, linear: tuple[Array, Array], bounds: Any, g
     """
     s2, std = noise
     jm, r = linear
-    hp = pseudo_inverse(jm.T @ jm, symmetric=True)[0]
-    move = hp @ terms.cross
-    q = terms.gram - terms.cross.T @ move
-    q = 0.5 * (q + q.T)
+    hp, move, q = proj.hp, proj.move, proj.q
     v = _sensor_moments(bounds, terms.gram.shape[0] // 6)[0]
     v = np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
     effect = grad[TESTED_OUTPUTS] @ move @ np.linalg.solve(v[:, None] * q + np.eye(v.size), np.diag(v))
