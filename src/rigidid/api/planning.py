@@ -286,12 +286,18 @@ def predicted_records_budget(
     import numpy as np
 
     from rigidid.api.records import sensor_bounds
-    from rigidid.core.plan import default_impacts, predict_records_budget
+    from rigidid.core.plan import (
+        RECORDS_DURATION,
+        RECORDS_NOISE,
+        RECORDS_SAMPLE_RATE,
+        default_impacts,
+        predict_records_budget,
+    )
     from rigidid.limits import check_number, check_record_size
 
-    sample_rate = 512.0 if sample_rate is None else sample_rate
-    duration = 8.0 if duration is None else duration
-    noise = 0.01 if noise is None else noise
+    sample_rate = RECORDS_SAMPLE_RATE if sample_rate is None else sample_rate
+    duration = RECORDS_DURATION if duration is None else duration
+    noise = RECORDS_NOISE if noise is None else noise
     for value, name in ((sample_rate, "sample_rate"), (duration, "duration"), (noise, "record_noise")):
         check_number(value, name, positive=True)
     planned = default_impacts(positions) if impacts is None else [

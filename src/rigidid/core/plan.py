@@ -46,7 +46,10 @@ if TYPE_CHECKING:
 __all__ = [
     "AXIS_COS",
     "INERTIAL_PARAMETERS",
+    "RECORDS_DURATION",
+    "RECORDS_NOISE",
     "RECORDS_NOISE_EVALUATIONS",
+    "RECORDS_SAMPLE_RATE",
     "RECORDS_TIME_CONSTANTS",
     "RIGID_LOADS",
     "Finding",
@@ -243,6 +246,15 @@ the refit's sensor map from the whole decays differs by 1.1e-4 at most on chain_
 constants: 3.5e-5, 3: 1.3e-3; ``benchmarks/plan_budget.py --length``): its signatures and Jacobian hold
 the decay's energy, ``exp(-10)`` of which lies beyond. The map is computed on that much only."""
 
+RECORDS_SAMPLE_RATE = 512.0
+"""Samples per second (Hz) of a planned records test when none is given (``rigidid simulate``'s default)."""
+
+RECORDS_DURATION = 8.0
+"""Free decay per planned record (s) when none is given (``rigidid simulate``'s default)."""
+
+RECORDS_NOISE = 0.01
+"""Noise of a planned record relative to each channel's RMS over its free decay, when none is given."""
+
 RECORDS_NOISE_SEED = 20231
 """Seed of the white noise the planned decays carry in :func:`planned_decays`."""
 
@@ -331,9 +343,9 @@ def planned_decays(
     directions: ArrayLike,
     impacts: list[tuple[Array, Array]] | None = None,
     *,
-    sample_rate: float = 512.0,
-    duration: float = 8.0,
-    noise: float = 0.01,
+    sample_rate: float = RECORDS_SAMPLE_RATE,
+    duration: float = RECORDS_DURATION,
+    noise: float = RECORDS_NOISE,
 ) -> PlannedDecays | None:
     """The decays the refit would fit in a planned test, simulated from the body estimate.
 
@@ -406,9 +418,9 @@ def predict_records_budget(
     bounds: SensorBounds,
     impacts: list[tuple[Array, Array]] | None = None,
     *,
-    sample_rate: float = 512.0,
-    duration: float = 8.0,
-    noise: float = 0.01,
+    sample_rate: float = RECORDS_SAMPLE_RATE,
+    duration: float = RECORDS_DURATION,
+    noise: float = RECORDS_NOISE,
 ) -> RecordsBudget | None:
     """The refit's sensor budget for a planned impact test, before the test.
 
