@@ -153,6 +153,7 @@ def budgeted_misfit_test(
     systematic: Array,
     moments: tuple[Array, Array],
     false_alarm: float = FALSE_ALARM,
+    absorbed: float = 0.0,
 ) -> MisfitTest | None:
     """The residual against the pre-trigger's noise plus the misfit the stated sensor errors leave.
 
@@ -166,6 +167,11 @@ def budgeted_misfit_test(
         projector on the fit's Jacobian and linear terms).
     moments : (ndarray, ndarray), shape (k,) each
         Per error, ``E x^2`` and ``Var x^2`` (:meth:`rigidid.core.sensor_budget.SensorBounds.moments`).
+    absorbed : float
+        Degrees of freedom of the noise that a correction fitted from the same residual took
+        (the sensors' errors estimated with the body: ``2 tr(S Q) - tr(S Q S Q)``, about one per
+        well-determined error; ``_after_correction`` in :mod:`rigidid.core.timedomain.refine`): the noise's
+        expected part is less by that many times the mean noise variance per residual.
 
     Returns
     -------
@@ -183,7 +189,9 @@ def budgeted_misfit_test(
     adds the noise's (``2 u^2 m`` times the decimation filter's inflation, and ``2 u^2
     m^2 / d2`` for ``u`` estimated from ``d2`` pre-trigger samples) and their cross term
     ``4 E X``. ``R`` is taken as a gamma variable of that mean and variance
-    (Satterthwaite), its upper tail by the Wilson-Hilferty cube root.
+    (Satterthwaite), its upper tail by the Wilson-Hilferty cube root. A correction's `absorbed`
+    degrees of freedom come off the noise's mean (its variance's change, of the same relative
+    order, is left out).
     """
     if any(c < 8 for c in pre_counts[: len(lengths)]):
         return None
@@ -205,7 +213,7 @@ def budgeted_misfit_test(
     mean_x = float(d @ v)
     var_x = float(2.0 * (v @ (q**2) @ v - np.sum(d**2 * v**2)) + np.sum(d**2 * sv))
     unit = noise_mean / sum(n * dof_fraction * channels for n in lengths)  # mean noise variance per residual
-    mean = noise_mean + mean_x
+    mean = noise_mean - absorbed * unit + mean_x
     var = noise_var + var_x + 4.0 * mean_x * unit
     nu = 2.0 * mean**2 / var  # chi-square degrees of freedom of the gamma approximation
     z = ((rss / mean) ** (1.0 / 3.0) - (1.0 - 2.0 / (9.0 * nu))) / math.sqrt(2.0 / (9.0 * nu))

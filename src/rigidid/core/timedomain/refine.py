@@ -983,6 +983,58 @@ the model's misfit), and forced, one of 8 answers had the inertia 25 % off, 9 st
 while the position cell came within target in 10 of 10 (chain_matrix seeds 200-219, 300-309)."""
 
 
+def _estimated_prior(v: Array) -> Array:
+    """The prior variances `v` (6 p,) of the sensor errors the correction estimates, zero for those it leaves at
+    their prior (kinds from :data:`_ESTIMATED_KINDS` on: positions). The one place the correction, the sensor
+    test, the skew's joint score and the after-check's budget (:func:`_after_correction`) take them from."""
+    return np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
+
+
+def _after_correction(q: Array, v: Array) -> tuple[Array, float]:
+    """The misfit's quadratic form in the true sensor errors once the correction is made, and the noise's
+    degrees of freedom the correction takes: what the after-check (:attr:`SensorTest.explains`) budgets.
+
+    Parameters
+    ----------
+    q : ndarray, shape (6 p, 6 p)
+        ``Q = G~^T (I - P_J) G~`` (:class:`_Projection`).
+    v : ndarray, shape (6 p,)
+        The errors' prior variances (every kind: the estimated ones' prior is :func:`_estimated_prior`'s).
+
+    Returns
+    -------
+    q_after : ndarray, shape (6 p, 6 p)
+        ``F^T Q F``, ``F = I - S Q``: ``E |.|^2`` of the errors' part is ``sum_k q_after_kk v_k``.
+    absorbed : float
+        ``2 tr(S Q) - tr(S Q S Q)``.
+
+    Notes
+    -----
+    Linearised at the refit's minimum, the residual is ``r = R x + e`` with ``R = (I - P_J) G~`` (``Q = R^T
+    R``), ``x`` the true errors (drawn from their prior: mean 0, variances ``V``), ``e`` the noise projected off
+    the fit (unit variance per weighted residual). The correction (:func:`_sensor_correction`) estimates
+    ``x^ = S R^T r`` with ``S = (V_e Q + I)^-1 V_e`` (``V_e`` the estimated errors' prior variances, zero for
+    the others; ``S`` the posterior covariance, zero outside the estimated rows and columns), and leaves
+
+    ``r_a = r - R x^ = R F x + (I - R S R^T) e``,  ``F = I - S Q``,
+
+    so ``E |r_a|^2 = tr(V F^T Q F) + (m - 2 tr(S Q) + tr(S Q S Q))`` (``m`` the noise's degrees of freedom).
+    On the estimated errors alone this is ``m - tr(S Q)``: the errors' remaining part ``x - x^`` (covariance
+    ``S``) costs ``tr(S Q) - tr(S Q S Q)`` and its correlation with the noise gives back ``2 (tr(S Q) - tr(S Q S
+    Q))``, as for any linear least-squares fit of ``tr(S Q)`` effective parameters. Errors left at their
+    prior (positions) cost ``tr(V_p F_p^T Q F_p)``: their signatures less what the estimated ones absorb.
+    A later Gauss-Newton pass starts from ``r_a`` (its correction is then about zero), so its residual is what
+    this describes; the nonlinearity of the passes is left out (its size is the passes' last move, under
+    :data:`_SETTLED` of the body's standard errors).
+    """
+    ve = _estimated_prior(v)
+    s = np.linalg.solve(ve[:, None] * q + np.eye(v.size), np.diag(ve))
+    sq = s @ q
+    f = np.eye(v.size) - sq
+    q_after = f.T @ q @ f
+    return 0.5 * (q_after + q_after.T), float(2.0 * np.trace(sq) - np.trace(sq @ sq))
+
+
 def _sensor_correction(
     terms: SensorTerms, proj: _Projection, bounds: Any, grad: Array
 ) -> tuple[Array, Array, Array, dict[str, dict[str, Array]], Array]:
@@ -1008,7 +1060,7 @@ def _sensor_correction(
     """
     move, q = proj.move, proj.q
     v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
-    v_all, v = v, np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)  # positions: prior only
+    v_all, v = v, _estimated_prior(v)  # positions: prior only
     system = v[:, None] * q + np.eye(v.size)
     earlier = getattr(bounds, "earlier", None)  # a later pass: the prior stays on the total (_Centred)
     rhs = v * terms.data if earlier is None else v * terms.data - np.where(v > 0.0, earlier, 0.0)
@@ -1289,7 +1341,7 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
     if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
         theta, std, misfit, sensor_std, correction, test = _with_sensors(
             (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad, s2), sensor_bounds,
-            estimate_sensors, lambda bounds_terms: _misfit(r, data, dof / n_res, q_fit, bounds_terms),
+            estimate_sensors, lambda form, absorbed=0.0: _misfit(r, data, dof / n_res, q_fit, form, absorbed),
         )  # fmt: skip
     g, j, k, c = frame.physical(theta)  # with the sensors' correction, the body moved with it
     lam, *_ = _modes(theta, pos_l, dirs, False)
@@ -1382,7 +1434,7 @@ def _joint_delay_score(
     r, jm = _evaluate(th, data, pos_l, dirs, omega, True, wide)
     terms = sensor_terms(th, data, pos_l, dirs, omega, jm, r, scale, wide)
     v = _sensor_moments(bounds, p)[0]
-    free = (np.repeat(np.arange(6), p) < _ESTIMATED_KINDS) & (v > 0.0)
+    free = _estimated_prior(v) > 0.0
     cross, n_t = terms.cross[:, free], th.size
     normal = np.block([[jm.T @ jm, -cross], [-cross.T, terms.gram[np.ix_(free, free)] + np.diag(1.0 / v[free])]])
     cov = pseudo_inverse(normal, symmetric=True)[0]
@@ -1504,7 +1556,7 @@ def _with_sensors(
     linear: tuple[Array, Array, Array, float],
     bounds: Any,
     estimate: bool | None,
-    budgeted: Callable[[tuple[Array, Array, Array]], MisfitTest | None],
+    budgeted: Callable[..., MisfitTest | None],
 ) -> tuple[Array, dict[str, Array], MisfitTest | None, dict[str, dict[str, Array]], SensorCorrection | None,
            SensorTest]:  # fmt: skip
     """The stated sensor tolerances in the refit: the misfit they leave expected by the acceptance test,
@@ -1513,7 +1565,8 @@ def _with_sensors(
 
     `fit` is ``(theta, std, misfit)``, `model` ``(data, pos_l, dirs, omega, frame, link)``, `linear`
     ``(jm, r, grad, s2)`` at the minimum; `budgeted` the misfit test given the tolerances' quadratic form
-    and moments. Returns theta, std, misfit, sensor_std, the correction (or None) and the test.
+    and moments (and the noise's degrees of freedom a correction takes: the after-check,
+    :func:`_after_correction`). Returns theta, std, misfit, sensor_std, the correction (or None) and the test.
 
     Notes
     -----
@@ -1545,8 +1598,8 @@ def _with_sensors(
             grad, std, link, proj,
         )  # fmt: skip
         theta = theta - left
-        rest = np.repeat(np.arange(6), v.size // 6) >= _ESTIMATED_KINDS  # what the correction leaves: positions
-        explained = budgeted((q, np.where(rest, v, 0.0), np.where(rest, sv, 0.0)))
+        q_after, absorbed = _after_correction(q, v)  # what the correction leaves, and the noise it takes
+        explained = budgeted((q_after, v, sv), absorbed)
         after = None if explained is None else explained.p_value
     return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate), misfit_after=after)
 
@@ -1580,8 +1633,7 @@ def _sensor_gate(terms: SensorTerms, proj: _Projection, linear: tuple[Array, Arr
     s2, std = noise
     jm, r = linear
     hp, move, q = proj.hp, proj.move, proj.q
-    v = _sensor_moments(bounds, terms.gram.shape[0] // 6)[0]
-    v = np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
+    v = _estimated_prior(_sensor_moments(bounds, terms.gram.shape[0] // 6)[0])
     effect = grad[TESTED_OUTPUTS] @ move @ np.linalg.solve(v[:, None] * q + np.eye(v.size), np.diag(v))
     tested = grad[TESTED_OUTPUTS]
     white = s2 * np.einsum("ij,jk,ik->i", tested, hp, tested)
@@ -1809,11 +1861,13 @@ def _misfit(
     dof_fraction: float,
     factor: int,
     systematic: tuple[Array, Array, Array] | None = None,
+    absorbed: float = 0.0,
 ) -> MisfitTest | None:
     """:func:`~rigidid.core.timedomain.acceptance.misfit_test` of the fit's residual against the pre-trigger.
 
     With `systematic` (the sensor errors' quadratic form and moments, :func:`_sensor_outcome`):
-    :func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`.
+    :func:`~rigidid.core.timedomain.acceptance.budgeted_misfit_test`, less the noise's `absorbed` degrees of
+    freedom (a correction's, :func:`_after_correction`).
     """
     if data.noise_from != "pretrigger" or data.pre_m2 is None or len(data.pre_counts) != len(data.decays):
         return None
@@ -1827,7 +1881,8 @@ def _misfit(
     if systematic is not None:
         q, v, sv = systematic
         p = data.sigma.size
-        return budgeted_misfit_test(r, lengths, p, dof_fraction, data.pre_counts, variance, rho, q, (v, sv))
+        return budgeted_misfit_test(r, lengths, p, dof_fraction, data.pre_counts, variance, rho, q, (v, sv),
+                                    absorbed=absorbed)  # fmt: skip
     return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, rho)
 
 

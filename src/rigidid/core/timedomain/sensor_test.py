@@ -67,7 +67,8 @@ class SensorTest:
         Whether the sensors' errors were then estimated with the body (by the test, or forced).
     misfit_after : float or None
         With the sensors estimated: the p-value of the misfit test of the last corrected refit's residual
-        against the noise plus what the correction leaves (the positions' tolerances). Below the
+        against the noise plus what the correction leaves (the positions' tolerances, less what the estimated
+        errors absorb of them; the estimated errors' remaining part, less the noise the correction takes). Below the
         false-alarm rate the correction has not explained the records (an unmodelled skew, say, that the
         gains and tilts partly absorb): by default the plain refit is then kept.
     """
