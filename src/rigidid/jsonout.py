@@ -495,7 +495,7 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     delays estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
     ``mains_hum_hz``, with the sensors' errors estimated ``sensor_corrections``, with stated tolerances the
     sensor test's ``sensor_test`` (``statistic``, ``dof``, ``p_value``, ``false_alarm_rate``,
-    ``sensors_estimated``, ``correction_misfit_p_value``), and, when the sensors'
+    ``sensors_estimated``, ``correction_misfit_p_value``, ``correction_false_alarm_rate``), and, when the sensors'
     tolerances were propagated, ``sensor_budget`` (per source,
     ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
     head = {
@@ -523,7 +523,8 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
         test = bound.sensor_test
         out["sensor_test"] = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
                               "false_alarm_rate": test.false_alarm, "sensors_estimated": test.estimated,
-                              "correction_misfit_p_value": test.misfit_after}  # fmt: skip
+                              "correction_misfit_p_value": test.misfit_after,
+                              "correction_false_alarm_rate": test.after_false_alarm}  # fmt: skip
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

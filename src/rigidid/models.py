@@ -525,8 +525,13 @@ class SensorTestEntry(_Strict):
     correction_misfit_p_value: float | None = Field(
         default=None,
         description="when the sensors were estimated (or tried by default): the misfit test's p-value of the last "
-        "corrected refit against the noise plus the positions' tolerances; below false_alarm_rate the default "
-        "keeps the plain refit (sensors_estimated false)",
+        "corrected refit against the noise plus what the correction leaves of the tolerances; below "
+        "correction_false_alarm_rate the default keeps the plain refit (sensors_estimated false)",
+    )
+    correction_false_alarm_rate: float | None = Field(
+        default=None,
+        description="the rate correction_misfit_p_value is judged at (0.001; absent in results written before it, "
+        "when it was false_alarm_rate)",
     )
 
 
