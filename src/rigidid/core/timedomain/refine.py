@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -1275,7 +1276,6 @@ def refine_prepared(
     -----
     The model, the fit and the bound are :func:`refine_body`'s (eq. (19)).
     """
-    given = data
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
     data = _settled(data, chain, estimate_delays, float(dt))
@@ -1287,13 +1287,11 @@ def refine_prepared(
     link = _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
-    out = _refined(
+    out, plain = _refined(
         _Start(data, link, hum, chain), dt, (pos, dirs, pos_l, frame, theta0), max_evaluations,
         (sensor_bounds, estimate_sensors, sensor_passes),
     )  # fmt: skip
-    options = {"max_evaluations": max_evaluations, "drift": drift, "chain": chain, "sensor_bounds": sensor_bounds}
-    return _plain_kept(out, estimate_sensors, (given, dt, positions, directions), body,
-                       options | {"estimate_delays": estimate_delays})  # fmt: skip
+    return _plain_kept(out, estimate_sensors, plain)
 
 
 @dataclass(frozen=True)
@@ -1310,9 +1308,12 @@ class _Start:
 
 
 def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations: int,
-             sensing: tuple[Any, bool | None, int]) -> Refinement:  # fmt: skip
+             sensing: tuple[Any, bool | None, int]) -> tuple[Refinement, Callable[[], Refinement] | None]:  # fmt: skip
     """:func:`refine_prepared` from its start: `sensors` is ``(pos, dirs, pos_l, frame, theta0)`` (`theta0` with
-    the delays' parameters when fitted), `sensing` ``(sensor_bounds, estimate_sensors, sensor_passes)``."""
+    the delays' parameters when fitted), `sensing` ``(sensor_bounds, estimate_sensors, sensor_passes)``.
+
+    Returns the refinement and, when the sensors were corrected, the plain refit's (this pass's fit without the
+    correction, as ``estimate_sensors=False`` gives it) on call (:func:`_plain_kept`), else None."""
     pos, dirs, pos_l, frame, theta0 = sensors
     sensor_bounds, estimate_sensors, sensor_passes = sensing
     data, link, omega, p = start.data, start.link, frame.omega, pos.shape[0]
@@ -1338,11 +1339,35 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
     sensor_std, correction, test, fitted = None, None, None, theta
+    fit_at = (data, pos_l, dirs, omega, frame, link), (jm, r, grad, s2)
+    assemble = partial(_assembled, start, (frame, pos_l, dirs, s2), (cost, n_res, nfev, converged))
+
+    def budgeted(form: tuple[Array, Array, Array], absorbed: float = 0.0) -> MisfitTest | None:
+        return _misfit(r, data, dof / n_res, q_fit, form, absorbed)
+
+    plain: Callable[[], Refinement] | None = None
     if sensor_bounds is not None:  # the sensors' signatures in this fit's model (the chain, delays, hum in it)
+        plain_fit = (theta, std, misfit)
         theta, std, misfit, sensor_std, correction, test = _with_sensors(
-            (theta, std, misfit), (data, pos_l, dirs, omega, frame, link), (jm, r, grad, s2), sensor_bounds,
-            estimate_sensors, lambda form, absorbed=0.0: _misfit(r, data, dof / n_res, q_fit, form, absorbed),
+            plain_fit, *fit_at, sensor_bounds, estimate_sensors, budgeted
         )  # fmt: skip
+        if correction is not None:  # the plain refit, made again on call: what estimate_sensors=False gives
+            plain = partial(_plain_refinement, assemble, plain_fit, fit_at, sensor_bounds, budgeted)
+    out = assemble(theta, fitted, (std, misfit, sensor_std, correction, test), sensor_bounds)
+    if correction is not None and sensor_passes > 1 and _unsettled(grad @ (theta - fitted), std):
+        out = _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+    return out, plain
+
+
+def _assembled(start: _Start, model: tuple[Any, ...], stats: tuple[Any, ...], theta: Array, fitted: Array,
+               outcome: tuple[Any, ...], sensor_bounds: Any) -> Refinement:  # fmt: skip
+    """The :class:`Refinement` of :func:`_refined` at `theta` (`fitted` the fit's own minimum): `model` is
+    ``(frame, pos_l, dirs, s2)``, `stats` ``(cost, residuals, evaluations, converged)``, `outcome` ``(std, misfit,
+    sensor_std, correction, test)``; the delays' results, or with the sensors corrected the skew's joint score."""
+    frame, pos_l, dirs, s2 = model
+    cost, n_res, nfev, converged = stats
+    std, misfit, sensor_std, correction, test = outcome
+    data, link, omega = start.data, start.link, frame.omega
     g, j, k, c = frame.physical(theta)  # with the sensors' correction, the body moved with it
     lam, *_ = _modes(theta, pos_l, dirs, False)
     rejected = (misfit is not None and not misfit.accepted) or (misfit is None and cost >= _GOOD_COST)
@@ -1355,30 +1380,36 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
         delays, delays_std, score = _delay_results(
             theta, std, link, rejected, (data, pos_l, dirs, omega, start.chain, s2)
         )  # fmt: skip
-    out = Refinement(
+    return Refinement(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
         std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
         converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=start.hum,
         sensor_std=sensor_std, sensor_correction=correction, sensor_test=test,
     )  # fmt: skip
-    if correction is not None and sensor_passes > 1 and _unsettled(grad @ (theta - fitted), std):
-        out = _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
-    return out
 
 
-def _plain_kept(corrected: Refinement, estimate: bool | None, inputs: tuple[Any, ...], body: tuple[ArrayLike, ...],
-                options: dict[str, Any]) -> Refinement:  # fmt: skip
+def _plain_refinement(assemble: Callable[..., Refinement], plain_fit: tuple[Any, ...], fit_at: tuple[Any, ...],
+                      sensor_bounds: Any, budgeted: Callable[..., MisfitTest | None]) -> Refinement:  # fmt: skip
+    """The first pass's fit without the sensors' correction, as :func:`_refined` makes it with
+    ``estimate_sensors=False`` (the same fit, its sensor terms formed again): `plain_fit` ``(theta, std, misfit)``
+    at its minimum before :func:`_with_sensors`, `fit_at` its model and linearisation."""
+    theta = plain_fit[0]
+    again = (theta, dict(plain_fit[1]), plain_fit[2])  # _delay_results takes the delays' std out of its dict
+    model, linear = fit_at
+    _, std, misfit, sensor_std, _, test = _with_sensors(again, model, linear, sensor_bounds, False, budgeted)
+    return assemble(theta, theta, (std, misfit, sensor_std, None, test), sensor_bounds)
+
+
+def _plain_kept(corrected: Refinement, estimate: bool | None, plain: Callable[[], Refinement] | None) -> Refinement:
     """`corrected`, or by default (`estimate` None) when the sensors' correction left a residual the noise and
-    the positions' tolerances do not explain (:attr:`rigidid.core.timedomain.sensor_test.SensorTest.explains`),
-    the plain refit of `inputs` (data, dt, positions, directions) from `body`, its sensor test marked not
-    estimated."""
+    what the correction leaves of the tolerances do not explain
+    (:attr:`rigidid.core.timedomain.sensor_test.SensorTest.explains`), the plain refit (`plain`: the first pass's
+    fit without the correction, bit-identical to a refit with ``estimate_sensors=False``), its sensor test the
+    corrected one's marked not estimated."""
     test = corrected.sensor_test
-    if estimate is not None or test is None or test.explains:
+    if estimate is not None or test is None or test.explains or plain is None:
         return corrected
-    g, j, k, c = body
-    plain = refine_prepared(*inputs, center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c,
-                            estimate_sensors=False, **options)  # fmt: skip
-    return replace(plain, sensor_test=replace(test, estimated=False))
+    return replace(plain(), sensor_test=replace(test, estimated=False))
 
 
 def _started(pos: Array, dirs: Array, body: tuple[ArrayLike, ...]) -> tuple[Array, _Frame, Array]:
@@ -1687,7 +1718,7 @@ def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array
             assert first.delays is not None
             theta0 = np.concatenate([theta0, first.delays[list(link.free)] * frame.omega])
     centred = _Centred(getattr(bounds, "bounds", bounds), getattr(bounds, "earlier", 0.0) + x.value.ravel())
-    second = _refined(
+    second, _ = _refined(
         replace(start, data=data2, link=link), dt, (pos2, dirs2, pos_l, frame, theta0), max_evaluations,
         (centred, True, passes),
     )  # fmt: skip
