@@ -974,16 +974,19 @@ def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega:
 
 _ESTIMATED_KINDS = 6
 """Sensor errors estimated with the body and tested by the sensor test: all six kinds, gains, the two tilts
-and the three position shifts (kinds 0-5; the shifts the records do not determine, along a sensor's own axis
-or common to all, keep their prior through ``V``). Positions were once kept at their prior (3): freed, the
-test flagged 5 of 20 clean runs at its 1 % rate. The cause was the score's, not the positions': with the fit
-stopped short of its minimum, ``G~^T r`` holds the step left along the Jacobian, and the test read it as a
-sensor error; the position shifts' columns took it up most (chain_matrix clean, default tolerances, seeds 506
-and 509: T 29.9 and 55.2 on 9 dof with the positions, 10.3 and 11.5 without them). With the score
-``G~^T (I - P_J) r`` (:func:`_sensor_gate`) the same runs give 13.0 and 8.8, and 60 clean runs (seeds
-500-559) flag 1 at 1 % (a run the test without positions flags too), 3 at 5 %, mean T 8.8 on 9 dof, KS p
-0.30, while the position cell comes within the per-run target in 20 of 20 (seeds 500-519; 12 of 20 on
-400-419 with positions at their prior)."""
+and the three position shifts (kinds 0-5; what the records do not determine, a shift along a sensor's own
+axis, whose signature is zero, or a shift common to all, keeps its prior through ``V``).
+
+Positions were kept at their prior (3) while the test, with them freed, flagged 5 of 20 clean runs at its
+1 % rate (benchmarks/chain_matrix.py clean, default tolerances, seeds 200-219: T 24-67 on 9 dof). The
+cause was the score's: the CG enters the model only through ``p - g``, so the sum of every sensor's shift
+columns is minus the CG's Jacobian column (outside ``J``'s span: 1e-13 of its norm), and a fit stopped
+short of its minimum leaves ``J^T r`` there, which ``G~^T r`` read as a common shift (the same five runs
+without the positions: T 2.4-10.2). The score ``G~^T (I - P_J) r`` (:func:`_sensor_gate`) takes that step
+out: the same 20 runs flag none at 1 % (1 at 5 %, KS p 0.41); seeds 500-559 flag 1 of 60 at 1 % (a run
+flagged without the positions too), 3 at 5 %, mean T 8.8, KS p 0.30. The chain_matrix position cell then
+comes within the per-run target in 20 of 20 (seeds 500-519; 12 of 20 on 400-419 with the positions at
+their prior)."""
 
 
 def _sensor_correction(
