@@ -517,7 +517,15 @@ def _print_sensor_tests(rows: list[dict[str, object]]) -> None:
     est = sum(bool(t["sensors_estimated"]) for t in tests)  # type: ignore[index]
     print(f"    sensor test: {len(tests)} runs, estimated {est}, p < 0.01: {np.sum(p < 0.01)}, p < 0.05: "
           f"{np.sum(p < 0.05)}, p < 0.5: {np.sum(p < 0.5)}, mean T/dof "
-          f"{np.mean([t['statistic'] / max(t['dof'], 1) for t in tests]):.2f}", flush=True)  # type: ignore[index]  # fmt: skip
+          f"{np.mean([t['statistic'] / max(t['dof'], 1) for t in tests]):.2f}, KS of the p-values against uniform "
+          f"{_ks_uniform(p):.2f}", flush=True)  # type: ignore[index]  # fmt: skip
+
+
+def _ks_uniform(p: np.ndarray) -> float:
+    """The Kolmogorov-Smirnov test's p-value of `p` against the uniform law (the sensor test's null)."""
+    from scipy.stats import kstest
+
+    return float(kstest(p, "uniform").pvalue)
 
 
 def main() -> None:

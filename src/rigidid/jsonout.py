@@ -473,7 +473,8 @@ def corrections_by_sensor(correction: SensorCorrection, ids: Sequence[str]) -> d
     -------
     dict of str to dict
         Per id: ``gain``, ``gain_std``, ``tilt_rad`` and ``tilt_std_rad`` (two each) and ``determined``
-        (gain, tilt 1, tilt 2); positions are not estimated and not listed.
+        (gain, tilt 1, tilt 2); ``shift`` and ``shift_std`` (the position's x, y, z, layout length) and
+        ``shift_determined`` (three each).
     """
     out = {}
     for i, name in enumerate(ids):
@@ -483,6 +484,9 @@ def corrections_by_sensor(correction: SensorCorrection, ids: Sequence[str]) -> d
             "tilt_rad": [float(v) for v in correction.value[1:3, i]],
             "tilt_std_rad": [float(v) for v in correction.std[1:3, i]],
             "determined": [bool(v) for v in correction.determined[:3, i]],
+            "shift": [float(v) for v in correction.value[3:, i]],
+            "shift_std": [float(v) for v in correction.std[3:, i]],
+            "shift_determined": [bool(v) for v in correction.determined[3:, i]],
         }
     return out
 

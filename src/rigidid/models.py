@@ -505,6 +505,16 @@ class SensorCorrectionEntry(_Strict):
     determined: list[bool] = Field(
         description="whether the records determine the gain and each tilt (else the tolerance's prior holds)"
     )
+    shift: list[float] | None = Field(
+        default=None,
+        description="its position shifted along x, y, z (layout length; absent in results written before it)",
+    )
+    shift_std: list[float] | None = Field(default=None, description="their posterior standard deviations")
+    shift_determined: list[bool] | None = Field(
+        default=None,
+        description="whether the records determine each shift (never the one along the sensor's own axis; "
+        "else the tolerance's prior holds)",
+    )
 
 
 class SensorTestEntry(_Strict):
@@ -593,7 +603,7 @@ class RecordBoundResult(BaseModel):
     )
     sensor_corrections: dict[str, SensorCorrectionEntry] | None = Field(
         default=None,
-        description="--estimate-sensors: per sensor id, its errors estimated with the body (positions are not)",
+        description="per sensor id, its errors estimated with the body (gains, tilts, position shifts)",
     )
     sensor_test: SensorTestEntry | None = Field(
         default=None,

@@ -32,8 +32,8 @@ def _p_values(draws: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     q = r_mat.T @ r_mat
     half = np.repeat([3.0, 3.0, 3.0, 2.0, 2.0, 2.0], 2)  # rectangular half-widths
     v, sv = half**2 / 3.0, 4.0 * half**4 / 45.0
-    q_after, absorbed = _after_correction(q, v)
     est = np.repeat(np.arange(6), 2) < 3
+    q_after, absorbed = _after_correction(q, v, np.where(est, v, 0.0))
     info = q[np.ix_(est, est)] + np.diag(1.0 / v[est])
     rest = ~est
     new, old = [], []

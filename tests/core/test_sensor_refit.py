@@ -217,3 +217,45 @@ def test_with_the_noise_taken_from_the_residual_the_sensors_are_not_estimated_by
     assert fit.sensor_test is not None and fit.sensor_test.flagged and not fit.sensor_test.estimated
     assert fit.sensor_correction is None
     np.testing.assert_allclose(fit.center_of_gravity, body.center_of_gravity, atol=1e-9)
+
+
+def test_a_sensor_off_its_stated_position_is_flagged_and_its_shift_estimated() -> None:
+    """Issue 23: positions are estimated with the body when the sensor test flags them.
+
+    Sensor 1 (reading z) sits 4 mm off its stated position along x, twice the stated tolerance (2 mm);
+    noise 0.1 %. The shift moves the CG 15 noise std (plain refit); the test flags it (T 750 on 9 dof),
+    the correction puts the shift on sensor 1 (2.7 mm, std 0.64 mm: a common part of the eight shifts is a
+    move of the CG no records can tell, so the estimate is shrunk towards it) and the body within its
+    intervals. Exact sensors, same tolerances: not flagged, the answer the plain refit's, bit for bit.
+    """
+    bounds = SensorBounds(sensitivity=0.0, orientation_deg=0.0, transverse=0.0, position=0.002)
+    shift = np.zeros((8, 3))
+    shift[0, 0] = 0.004
+    records, body = _records(np.ones(8), shift, np.random.default_rng(0), noise=1e-3)
+    fit = _fit(records, _truth(body), bounds, estimate_sensors=None)
+    test, x = fit.sensor_test, fit.sensor_correction
+    assert test is not None and test.flagged and test.estimated and x is not None
+    est, sd = x.value[3:], x.std[3:]
+    assert np.unravel_index(np.argmax(np.abs(est)), est.shape) == (0, 0)  # the largest shift: sensor 1's x
+    assert x.determined[3, 0] and not x.determined[5, 0]  # along its own axis (z) nothing is seen
+    assert est[0, 0] > 3.0 * sd[0, 0]  # observed 4.2 std from zero
+    assert abs(est[0, 0] - 0.004) < 3.0 * sd[0, 0]  # observed 2.1 std short of the truth
+    assert fit.sensor_std is not None
+    err = np.concatenate([fit.center_of_gravity - body.center_of_gravity,
+                          np.diag(fit.inertia_per_mass - body.inertia_tensor / body.mass)])  # fmt: skip
+    std = np.sqrt(np.concatenate([fit.std["center_of_gravity"], np.diag(fit.std["inertia_per_mass"])]) ** 2
+                  + sum(np.concatenate([s["center_of_gravity"], np.diag(s["inertia_per_mass"])]) ** 2
+                        for s in fit.sensor_std.values()))  # fmt: skip
+    assert np.max(np.abs(err / std)) < 3.0  # observed 1.4
+    from rigidid.jsonout import corrections_by_sensor
+    from rigidid.models import SensorCorrectionEntry
+
+    entry = SensorCorrectionEntry(**corrections_by_sensor(x, [f"s{i}" for i in range(8)])["s0"])
+    assert entry.shift == list(est[:, 0]) and entry.shift_std == list(sd[:, 0])
+    assert entry.shift_determined == [bool(v) for v in x.determined[3:, 0]]
+    exact, _ = _records(np.ones(8), np.zeros((8, 3)), np.random.default_rng(0), noise=1e-3)
+    auto = _fit(exact, _truth(body), bounds, estimate_sensors=None)
+    plain = _fit(exact, _truth(body), bounds, estimate_sensors=False)
+    assert auto.sensor_test is not None and not auto.sensor_test.flagged and auto.sensor_correction is None
+    np.testing.assert_array_equal(auto.center_of_gravity, plain.center_of_gravity)
+    np.testing.assert_array_equal(auto.inertia_per_mass, plain.inertia_per_mass)

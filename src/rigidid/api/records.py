@@ -482,7 +482,7 @@ def with_refinement(
     estimate_delays : bool
         Fit each channel's delay relative to the first (``--estimate-delays``).
     estimate_sensors : bool or None
-        Estimate each sensor's gain and axis errors with the body (positions stay at their prior), the
+        Estimate each sensor's gain, axis and position errors with the body, the
         tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
         a sensor whose estimate is beyond 3 times its tolerance is named
         (:func:`implausible_sensors`). None (the default): when the sensor test flags sensor errors that

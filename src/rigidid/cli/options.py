@@ -225,7 +225,7 @@ EstimateSensors = Annotated[
     bool | None,
     typer.Option(
         "--estimate-sensors/--no-estimate-sensors",
-        help="With --records and more than six channels: estimate each sensor's gain and axis errors "
+        help="With --records and more than six channels: estimate each sensor's gain, axis and position errors "
         "with the body in the refit (the layout's tolerances as their prior); a sensor beyond 3x its tolerance "
         "is named. Default: only when the records show sensor errors that move the body (the sensor test, "
         "false-alarm rate 1 %) and no chain is modelled; --no-estimate-sensors: never.",
