@@ -334,7 +334,8 @@ def sensor_z(sensors: dict[str, np.ndarray], corrections: dict) -> np.ndarray:  
     unit = reading / size[:, None]
     z = []
     for i, est in enumerate(corrections[f"c{i + 1}"] for i in range(len(axes))):
-        truth = (size[i] - 1.0, float(unit[i] @ e1[i]), float(unit[i] @ e2[i]))
+        along = float(unit[i] @ axes[i])  # rigidid's axis: normalise(a + t1 e1 + t2 e2), the records over 1 + gain
+        truth = (size[i] - 1.0, float(unit[i] @ e1[i]) / along, float(unit[i] @ e2[i]) / along)
         value = (est["gain"], *est["tilt_rad"])
         std = (est["gain_std"], *est["tilt_std_rad"])
         z += [(v - t) / sd for v, t, sd, d in zip(value, truth, std, est["determined"], strict=True) if d and sd > 0]
