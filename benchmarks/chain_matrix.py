@@ -577,7 +577,9 @@ def main() -> None:
                          default_tolerances=args.default_tolerances)  # fmt: skip
             rows.append(r)
             if args.clean_bound:
-                clean.append(clean_target(r, run_cell(cell, s, twin=True)))
+                twin = run_cell(cell, s, twin=True)
+                clean.append(clean_target(r, twin))
+                r["twin_se"] = twin.get("noise_se")
             if args.runs:
                 test = r.get("sensor_test") or {}
                 print(f"    seed {r['seed']}: exit {r['exit']} errors {r.get('errors')} floor {r['floor']} "
@@ -586,7 +588,7 @@ def main() -> None:
                       f"z {np.round(r['z'], 2).tolist() if 'z' in r else None} sensor test T {test.get('statistic')} "
                       f"dof {test.get('dof')} p {test.get('p_value')} estimated {test.get('sensors_estimated')} "
                       f"p after {test.get('correction_misfit_p_value')}"
-                      + (f" target(clean) {clean[-1]}" if clean else ""), flush=True)  # type: ignore[union-attr]  # fmt: skip
+                      + (f" target(clean) {clean[-1]} clean se {r.get('twin_se')}" if clean else ""), flush=True)  # type: ignore[union-attr]  # fmt: skip
         _print_sensor_tests(rows)
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)

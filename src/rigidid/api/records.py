@@ -536,8 +536,8 @@ def with_refinement(
         tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
         a sensor whose estimate is beyond 3 times its tolerance is named
         (:func:`implausible_sensors`). None (the default): when the sensor test flags sensor errors that
-        move the body (:mod:`rigidid.core.timedomain.sensor_test`), through the chain, delays or hum
-        when they are modelled; False: never (the plain refit).
+        move the body (:mod:`rigidid.core.timedomain.sensor_test`), through the chain or delays when they
+        are modelled (not with mains hum: the noise then from the residual); False: never (the plain refit).
 
     Returns
     -------
