@@ -44,6 +44,25 @@ def test_peak_count_in_blocks_is_the_whole_records() -> None:
     np.testing.assert_array_equal(count.peak, np.abs(x).max(axis=0))
 
 
+def test_a_flat_top_during_the_pulse_only_leaves_the_decay_unclipped() -> None:
+    """Issue 23: the acceleration peaks during the hammer's pulse; an overload there (chain_matrix's clip80 cell:
+    every flat top in the 3 ms pulse) does not clip the free decay after it, which the fit reads."""
+    y = _decay()
+    start = 8
+    pulse = np.zeros_like(y)
+    pulse[start - 6 : start - 2] = 4.0 * np.abs(y).max()  # the pulse's peak, clipped at 80 % of it
+    x = y + pulse
+    limit, lower = 0.8 * np.abs(x).max(), 0.3 * np.abs(y).max()  # the second: the decay's peaks clipped too
+    columns = np.column_stack([np.clip(x, -limit, limit), np.clip(x, -lower, lower), x])
+    assert clipped_channels([columns]).tolist() == [True, True, False]
+    assert clipped_channels([columns], [start]).tolist() == [False, True, False]
+    count = PeakCount(3)
+    for first in range(0, columns.shape[0], 37):
+        count.add(columns[first : first + 37])
+    assert count.clipped(start).tolist() == [False, True, False]
+    assert count.last[0] == start - 3
+
+
 @pytest.fixture(scope="module")
 def clipped(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[Path]]:
     folder = tmp_path_factory.mktemp("clipped")

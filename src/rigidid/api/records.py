@@ -115,7 +115,11 @@ def estimate_modes(
     from rigidid.core.timedomain.clipping import clipped_channels
 
     ids = tuple(s.id for s in lay.sensors)
-    kept = _unclipped(ids, [clipped_channels([data]) for data, _ in arrays])
+    whole = [clipped_channels([data]) for data, _ in arrays]
+    starts = [_decay_start(data, dt) if mask.any() else 0 for mask, (data, dt) in zip(whole, arrays, strict=True)]
+    in_decay = [clipped_channels([data], [k]) if mask.any() else mask
+                for mask, k, (data, _) in zip(whole, starts, arrays, strict=True)]  # fmt: skip
+    kept = _unclipped(ids, _pulse_clipped(ids, whole, in_decay))
     columns = list(range(len(ids)) if kept is None else kept)
     result = estimate(
         [data[:, columns] for data, _ in arrays],
@@ -152,6 +156,46 @@ def _warn_hits(impacts: Sequence[Any], names: Sequence[str], dt: float) -> None:
         DoubleHitWarning,
         stacklevel=3,
     )
+
+
+def _decay_start(data: NDArray[np.float64], dt: float, energy: NDArray[np.float64] | None = None) -> int:
+    """The first row of `data`'s free decay (:func:`~rigidid.core.timedomain.preprocess.find_impact`, as the
+    estimation finds it); 0 when it finds none (the estimation then says why)."""
+    from rigidid.core.timedomain.preprocess import find_impact
+
+    try:
+        return int(find_impact(data, dt, energy=energy).start)
+    except InputError:
+        return 0
+
+
+def _pulse_clipped(
+    ids: Sequence[str], whole: Sequence[NDArray[np.bool_]], in_decay: Sequence[NDArray[np.bool_]]
+) -> list[NDArray[np.bool_]]:
+    """`in_decay` (per record, the channels clipped in the free decay), with a ClippedChannelWarning naming
+    those clipped only before it (`whole`: anywhere), during the hammer's pulse: they are kept in the fit.
+
+    The acceleration peaks during the pulse; an overload there leaves the free decay the fit reads as the
+    sensor gave it (chain_matrix's clip80 cell: every flat top within the 3 ms pulse). Leaving such a channel
+    out cost the sensors' correction its redundancy (10 sensors to 8: the inertia's noise std 3-5 times).
+    """
+    anywhere = np.zeros(len(ids), dtype=bool)
+    for mask in in_decay:
+        anywhere |= mask
+    where: dict[int, list[int]] = {}
+    for k, (w, d) in enumerate(zip(whole, in_decay, strict=True)):
+        for c in np.flatnonzero(w & ~d & ~anywhere):
+            where.setdefault(int(c), []).append(k + 1)
+    if where:
+        from rigidid.errors import ClippedChannelWarning
+
+        named = ", ".join(f"{ids[c]!r} (record {', '.join(map(str, where[c]))})" for c in sorted(where))
+        warnings.warn(
+            f"channels clipped during the impact only (flat tops before the free decay), kept in the fit: {named}",
+            ClippedChannelWarning,
+            stacklevel=4,
+        )
+    return list(in_decay)
 
 
 def _unclipped(ids: Sequence[str], clipped: Sequence[NDArray[np.bool_]]) -> tuple[int, ...] | None:
@@ -361,7 +405,13 @@ def _estimate_streamed(
     factor = streamed[0].factor
     dts = [r.dt for r in streamed]
     cascaded = streamed[0].stages[1] > 1
-    kept = _unclipped(ids, [r.clipped for r in streamed if r.clipped is not None])
+    whole = [r.clipped for r in streamed if r.clipped is not None]
+    in_decay = [
+        r.clipped if not r.clipped.any() or r.clip_last is None
+        else r.clipped & (r.clip_last >= r.offset + _decay_start(r.data, r.dt, r.energy) * r.factor)
+        for r in streamed if r.clipped is not None
+    ]  # fmt: skip
+    kept = _unclipped(ids, _pulse_clipped(ids, whole, in_decay))
     columns = list(range(len(ids)) if kept is None else kept)
     try:
         result = estimate(
@@ -486,8 +536,8 @@ def with_refinement(
         tolerances as their prior (:class:`rigidid.core.timedomain.refine.SensorCorrection`);
         a sensor whose estimate is beyond 3 times its tolerance is named
         (:func:`implausible_sensors`). None (the default): when the sensor test flags sensor errors that
-        move the body (:mod:`rigidid.core.timedomain.sensor_test`) and no chain, delays or hum are
-        modelled; False: never (the plain refit).
+        move the body (:mod:`rigidid.core.timedomain.sensor_test`), through the chain or delays when they
+        are modelled (not with mains hum: the noise then from the residual); False: never (the plain refit).
 
     Returns
     -------

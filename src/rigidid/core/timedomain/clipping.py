@@ -7,7 +7,10 @@ sampled a few tens of times per period, reaches its peak once; two samples at
 the same largest magnitude are chance, three are an overload. A clipped
 channel misstates the motion of every mode during the overload, biasing the
 estimated shapes (issue 22: inertia 15 % off at a clip of 30 % of the peak),
-so it is named and left out of the fit rather than absorbed.
+so it is named and left out of the fit rather than absorbed. An overload during
+the hammer's pulse only, where the acceleration peaks, leaves the free decay the
+fit reads unclipped: the channel is then kept (``starts`` of
+:func:`clipped_channels`; a slow recovery of the input stage after it is not seen).
 
 The count is kept block by block (:class:`PeakCount`), so a reader can follow
 it while it streams a file at its raw rate.
@@ -44,25 +47,33 @@ class PeakCount:
     def __init__(self, channels: int) -> None:
         self.peak = np.zeros(channels)
         self.count = np.zeros(channels, dtype=np.int64)
+        self.last = np.full(channels, -1, dtype=np.int64)  # the last row (from 0) at the peak
+        self.rows = 0
 
     def add(self, block: ArrayLike) -> None:
         """Take in a block of samples (rows) by channels."""
         x = np.abs(np.asarray(block, dtype=float))
-        if x.shape[0] == 0:
+        n = x.shape[0]
+        if n == 0:
             return
         top = x.max(axis=0)
-        at_top = (x >= top * (1.0 - PEAK_TOLERANCE)).sum(axis=0)
+        at = x >= top * (1.0 - PEAK_TOLERANCE)
+        at_top = at.sum(axis=0)
+        last = self.rows + n - 1 - np.argmax(at[::-1], axis=0)
         higher = top > self.peak * (1.0 + PEAK_TOLERANCE)
         same = ~higher & (top >= self.peak * (1.0 - PEAK_TOLERANCE))
         self.count = np.where(higher, at_top, np.where(same, self.count + at_top, self.count))
+        self.last = np.where(higher | same, last, self.last)
         self.peak = np.where(higher, top, self.peak)
+        self.rows += n
 
-    def clipped(self) -> NDArray[np.bool_]:
-        """Channels whose peak is reached by at least :data:`CLIP_SAMPLES` samples (a zero channel is not)."""
-        return (self.count >= CLIP_SAMPLES) & (self.peak > 0.0)
+    def clipped(self, after: int = 0) -> NDArray[np.bool_]:
+        """Channels whose peak is reached by at least :data:`CLIP_SAMPLES` samples (a zero channel is not),
+        the last of them at row `after` or later (a flat top only before `after`: not clipped there)."""
+        return (self.count >= CLIP_SAMPLES) & (self.peak > 0.0) & (self.last >= after)
 
 
-def clipped_channels(records: Sequence[ArrayLike]) -> NDArray[np.bool_]:
+def clipped_channels(records: Sequence[ArrayLike], starts: Sequence[int] | None = None) -> NDArray[np.bool_]:
     """Channels clipped in any of the records.
 
     Parameters
@@ -70,6 +81,10 @@ def clipped_channels(records: Sequence[ArrayLike]) -> NDArray[np.bool_]:
     records : sequence of array_like, shape (n_k, p)
         Samples by channels, one record per impact, at the rate they were
         acquired (decimation smooths flat tops away).
+    starts : sequence of int, optional
+        Per record, the first row of the free decay: a channel whose flat top
+        ends before it (an overload during the hammer's pulse, where the
+        acceleration peaks) is not clipped in the decay the fit reads. None: anywhere.
 
     Returns
     -------
@@ -92,8 +107,9 @@ def clipped_channels(records: Sequence[ArrayLike]) -> NDArray[np.bool_]:
     [False, True]
     """
     out: NDArray[np.bool_] | None = None
-    for record in records:
+    for k, record in enumerate(records):
         count = PeakCount(np.asarray(record).shape[1])
         count.add(record)
-        out = count.clipped() if out is None else out | count.clipped()
+        mask = count.clipped(0 if starts is None else int(starts[k]))
+        out = mask if out is None else out | mask
     return np.zeros(0, dtype=bool) if out is None else out

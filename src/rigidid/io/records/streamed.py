@@ -87,6 +87,9 @@ class StreamedRecord:
     clipped : ndarray of bool or None
         Per channel, whether its peak is a flat top at the raw rate
         (:class:`~rigidid.core.timedomain.clipping.PeakCount`).
+    clip_last : ndarray of int or None
+        Per channel, the last raw row (from 0) at its peak: a flat top ending before the free decay
+        (an overload during the hammer's pulse) leaves the decay unclipped.
     trend : Trend or None
         The DC offset and drift taken out of `data`, in the file's rows
         (:func:`~rigidid.io.records.checks.take_out_trend`); None: none mattered.
@@ -114,6 +117,7 @@ class StreamedRecord:
     trend: Trend | None = None
     scale_exponent: int = 0
     captured: CapturedDecay | None = None
+    clip_last: NDArray[np.int64] | None = None
 
 
 def read_record_streamed(
@@ -209,7 +213,7 @@ def read_record_streamed(
     dt_error = _stamp_uncertainty(source, times) if source.dt is None else 0.0
     return StreamedRecord(
         done.data, dt * done.factor, done.factor, done.offset, times.rows, done.energy, done.spectrum, done.stages,
-        dt_error * done.factor, tops.clipped(), trend, exponent, done.captured,
+        dt_error * done.factor, tops.clipped(), trend, exponent, done.captured, tops.last,
     )  # fmt: skip
 
 
