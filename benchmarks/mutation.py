@@ -279,9 +279,9 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "sensor-gate-inverted",
         "core/timedomain/refine.py",
-        'estimate = test.flagged and link is None and data.noise_from == "pretrigger"',
-        'estimate = test.flagged and link is not None and data.noise_from == "pretrigger"',
-        "the sensor test's default inverted: sensors estimated only with a chain (issue 23)",
+        'estimate = test.flagged and data.noise_from == "pretrigger"',
+        'estimate = not test.flagged and data.noise_from == "pretrigger"',
+        "the sensor test's default inverted: sensors estimated when it does not flag (issue 23)",
         ("tests/core/test_sensor_refit.py",),
     ),
     Mutant(
