@@ -10,7 +10,7 @@ any other pytest exit (collection error, no tests) stops the run.
 
 Usage, from the repository root::
 
-    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 31
+    PYTHONPATH=src nice -n 10 python benchmarks/mutation.py            # all 35
     PYTHONPATH=src python benchmarks/mutation.py --only mounts-norm-axis frf-residual-dof
     python benchmarks/mutation.py --list
 """
@@ -291,6 +291,38 @@ MUTANTS: tuple[Mutant, ...] = (
         "x_w, y_w = design / np.sqrt(level)[:, None], target / level[:, None]",
         "the first-order mass line's data weighted by the level, its design by the level's root (issue 21)",
         ("tests/core/test_massline.py::test_first_order_mass_line_weights_each_line_by_its_noise_level",),
+    ),
+    Mutant(
+        "sensor-positions-kept",
+        "core/timedomain/refine.py",
+        "_ESTIMATED_KINDS = 6",
+        "_ESTIMATED_KINDS = 3",
+        "the sensors' positions left at their prior again: the position cell's runs miss the target (issue 23)",
+        ("tests/core/test_sensor_refit.py::test_a_sensor_off_its_stated_position_is_flagged_and_its_shift_estimated",),
+    ),
+    Mutant(
+        "after-check-no-absorbed-noise",
+        "core/timedomain/refine.py",
+        "float(2.0 * np.trace(sq) - np.trace(sq @ sq))",
+        "0.0",
+        "the after-check forgets the noise the correction fits: corrections dropped too often (issue 23)",
+        ("tests/core/test_after_check.py",),
+    ),
+    Mutant(
+        "clip-pulse-counted",
+        "core/timedomain/clipping.py",
+        " & (self.last >= after)",
+        "",
+        "a channel clipped during the hammer's pulse only left out of the fit again (issue 23)",
+        ("tests/test_clipping.py",),
+    ),
+    Mutant(
+        "hum-decaying-line-kept",
+        "core/timedomain/hum.py",
+        "return late >= STEADY * early",
+        "return True",
+        "a mode's decaying misfit near 50/60 Hz declared hum (issue 23)",
+        ("tests/core/test_hum.py",),
     ),
 )
 
