@@ -43,9 +43,9 @@ on the exact modes read through the same sensors) plus 6 of the clean case's sta
      the channels' pre-trigger noise), then the kernel (``oracle poles``: the same at the true poles);
    - ``mix``: per figure, the minimum-variance combination of refit and candidate (weights from their joint
      covariance: noise from the clean runs, sensors from ``R``, ``K`` over the cell's stated distribution);
-   - ``sensors estimated``: the refit with the sensors' gains and axes estimated jointly, the stated
+   - ``sensors estimated``: the refit with the sensors' gains, axes and positions estimated jointly, the stated
      tolerances as their prior (``refine_body(..., estimate_sensors=True)``, what ``--estimate-sensors``
-     does); ``--free-positions`` frees the positions too (an experiment: refine keeps them at their prior);
+     does; the positions were an experiment, ``--free-positions``, until rigidid estimated them);
      ``--clean-default-tolerances``: in the clean cell it states rigidid's default tolerances (exact sensors:
      what estimating them costs when there is nothing to correct).
 """
@@ -446,8 +446,6 @@ def main() -> None:
     parser.add_argument("--candidate-cells", default="clean," + ",".join(CELLS))
     parser.add_argument("--clean-default-tolerances", action="store_true", help="the clean cell's 'sensors "
                         "estimated' states the default tolerances")  # fmt: skip
-    parser.add_argument("--free-positions", action="store_true", help="'sensors estimated' frees the positions too "
-                        "(an experiment: refine's estimated kinds set to all six)")  # fmt: skip
     args = parser.parse_args()
     if args.cache is not None and args.cache.exists():
         saved = np.load(args.cache)
@@ -460,10 +458,6 @@ def main() -> None:
         cell_table(r_map, k_map, std, args.draws, args.qp_draws)
     global CLEAN_DEFAULT
     CLEAN_DEFAULT = args.clean_default_tolerances
-    if args.free_positions:  # the experiment: gains, axes and positions estimated (refine keeps positions at prior)
-        import rigidid.core.timedomain.refine as refine
-
-        setattr(refine, "_ESTIMATED_KINDS", 6)  # noqa: B010
     if args.candidate:
         candidate_table(args.candidate, r_map, k_map, tuple(args.candidate_cells.split(",")))
 

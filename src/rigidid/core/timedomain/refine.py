@@ -973,31 +973,6 @@ def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega:
     return np.linalg.norm(null[:, theta.size :], axis=0), int(np.sum(keep))
 
 
-_ESTIMATED_KINDS = 6
-"""Sensor errors estimated with the body and tested by the sensor test: all six kinds, gains, the two tilts
-and the three position shifts (kinds 0-5; what the records do not determine, a shift along a sensor's own
-axis, whose signature is zero, or a shift common to all, keeps its prior through ``V``).
-
-Positions were kept at their prior (3) while the test, with them freed, flagged 5 of 20 clean runs at its
-1 % rate (benchmarks/chain_matrix.py clean, default tolerances, seeds 200-219: T 24-67 on 9 dof). The
-cause was the score's: the CG enters the model only through ``p - g``, so the sum of every sensor's shift
-columns is minus the CG's Jacobian column (outside ``J``'s span: 1e-13 of its norm), and a fit stopped
-short of its minimum leaves ``J^T r`` there, which ``G~^T r`` read as a common shift (the same five runs
-without the positions: T 2.4-10.2). The score ``G~^T (I - P_J) r`` (:func:`_sensor_gate`) takes that step
-out: the same 20 runs flag none at 1 % (1 at 5 %, KS p 0.41); seeds 500-559 flag 1 of 60 at 1 % (a run
-flagged without the positions too), 3 at 5 %, mean T 8.8, KS p 0.30. The chain_matrix position cell then
-comes within the per-run target in 20 of 20 (seeds 500-519; 12 of 20 on 400-419 with the positions at
-their prior)."""
-
-
-def _estimated_prior(v: Array) -> Array:
-    """The prior variances `v` (6 p,) of the sensor errors the correction estimates, zero for those it leaves at
-    their prior (kinds from :data:`_ESTIMATED_KINDS` on: none while all six are estimated). The one place the
-    correction, the sensor test, the skew's joint score and the after-check's budget (:func:`_after_correction`)
-    take them from."""
-    return np.where(np.repeat(np.arange(6), v.size // 6) < _ESTIMATED_KINDS, v, 0.0)
-
-
 def _after_correction(q: Array, v: Array, ve: Array) -> tuple[Array, float]:
     """The misfit's quadratic form in the true sensor errors once the correction is made, and the noise's
     degrees of freedom the correction takes: what the after-check (:attr:`SensorTest.explains`) budgets.
@@ -1009,7 +984,8 @@ def _after_correction(q: Array, v: Array, ve: Array) -> tuple[Array, float]:
     v : ndarray, shape (6 p,)
         The errors' prior variances (every kind).
     ve : ndarray, shape (6 p,)
-        The estimated errors' prior variances, zero for those left at their prior (:func:`_estimated_prior`).
+        The estimated errors' prior variances, zero for errors left at their prior (the refit estimates every
+        kind: `v` itself).
 
     Returns
     -------
@@ -1032,7 +1008,7 @@ def _after_correction(q: Array, v: Array, ve: Array) -> tuple[Array, float]:
     On the estimated errors alone this is ``m - tr(S Q)``: the errors' remaining part ``x - x^`` (covariance
     ``S``) costs ``tr(S Q) - tr(S Q S Q)`` and its correlation with the noise gives back ``2 (tr(S Q) - tr(S Q S
     Q))``, as for any linear least-squares fit of ``tr(S Q)`` effective parameters. Errors left at their
-    prior (none while :data:`_ESTIMATED_KINDS` is 6; positions before) cost ``tr(V_p F_p^T Q F_p)``: their
+    prior (none in the refit; positions until issue 23's position cell) cost ``tr(V_p F_p^T Q F_p)``: their
     signatures less what the estimated ones absorb.
     A later Gauss-Newton pass starts from ``r_a`` (its correction is then about zero), so its residual is what
     this describes; the nonlinearity of the passes is left out (its size is the passes' last move, under
@@ -1058,6 +1034,17 @@ def _sensor_correction(
     ``(J^T J)^+ J^T G~ (V Q + I)^-1 x``; the noise in ``x`` adds
     ``(V Q + I)^-1 V Q V (V Q + I)^-T`` through the same map.
 
+    Every kind is estimated: the gains, the two tilts and the three position shifts; what the records do not
+    determine (a shift along a sensor's own axis, whose signature is zero, or a shift common to all) keeps its
+    prior through ``V``. Positions were once kept at their prior, because with them freed the sensor test
+    flagged 5 of 20 clean runs at its 1 % rate (benchmarks/chain_matrix.py clean, default tolerances, seeds
+    200-219: T 24-67 on 9 dof). The cause was the score's: the CG enters the model only through ``p - g``, so
+    the sum of every sensor's shift columns is minus the CG's Jacobian column, and a fit stopped short of its
+    minimum leaves ``J^T r`` there, which ``G~^T r`` read as a common shift. The score ``G~^T (I - P_J) r``
+    (:func:`_sensor_gate`) takes that step out: the same 20 runs flag none at 1 %; seeds 500-559 flag 1 of 60,
+    mean T 8.8, KS p 0.30; the position cell comes within the per-run target in 20 of 20 (seeds 500-519; 12
+    of 20 on 400-419 with the positions at their prior).
+
     Returns
     -------
     x, x_std : ndarray, shape (6 p,)
@@ -1070,12 +1057,11 @@ def _sensor_correction(
     """
     move, q = proj.move, proj.q
     v, _, per_source = _sensor_moments(bounds, terms.gram.shape[0] // 6)
-    v_all, v = v, _estimated_prior(v)  # the kinds estimated
     system = v[:, None] * q + np.eye(v.size)
     earlier = getattr(bounds, "earlier", None)  # a later pass: the prior stays on the total (_Centred)
     rhs = v * terms.data if earlier is None else v * terms.data - np.where(v > 0.0, earlier, 0.0)
     x: Array = np.linalg.solve(system, rhs).astype(float)
-    x_var: Array = np.where(v > 0.0, np.diag(np.linalg.solve(system, np.diag(v))), v_all)
+    x_var: Array = np.where(v > 0.0, np.diag(np.linalg.solve(system, np.diag(v))), v)
     left = grad @ move @ np.linalg.solve(system, np.eye(v.size))  # physical value per unit true error, remaining
     std = {source: _physical_std(np.sqrt((left**2) @ var)) for source, var in per_source.items()}
     # a variance (q is a Schur complement, positive semi-definite): below zero only by rounding, where the
@@ -1474,7 +1460,7 @@ def _joint_delay_score(
     r, jm = _evaluate(th, data, pos_l, dirs, omega, True, wide)
     terms = sensor_terms(th, data, pos_l, dirs, omega, jm, r, scale, wide)
     v = _sensor_moments(bounds, p)[0]
-    free = _estimated_prior(v) > 0.0
+    free = v > 0.0
     cross, n_t = terms.cross[:, free], th.size
     normal = np.block([[jm.T @ jm, -cross], [-cross.T, terms.gram[np.ix_(free, free)] + np.diag(1.0 / v[free])]])
     cov = pseudo_inverse(normal, symmetric=True)[0]
@@ -1643,7 +1629,7 @@ def _with_sensors(
         )  # fmt: skip
         theta = theta - left
         # what the correction leaves, and the noise it takes
-        q_after, absorbed = _after_correction(q, v, _estimated_prior(v))
+        q_after, absorbed = _after_correction(q, v, v)
         explained = budgeted((q_after, v, sv), absorbed)
         after = None if explained is None else explained.p_value
     return theta, std, misfit, sensor_std, correction, replace(test, estimated=bool(estimate), misfit_after=after)
@@ -1678,7 +1664,7 @@ def _sensor_gate(terms: SensorTerms, proj: _Projection, linear: tuple[Array, Arr
     s2, std = noise
     jm, r = linear
     hp, move, q = proj.hp, proj.move, proj.q
-    v = _estimated_prior(_sensor_moments(bounds, terms.gram.shape[0] // 6)[0])
+    v = _sensor_moments(bounds, terms.gram.shape[0] // 6)[0]
     effect = grad[TESTED_OUTPUTS] @ move @ np.linalg.solve(v[:, None] * q + np.eye(v.size), np.diag(v))
     tested = grad[TESTED_OUTPUTS]
     white = s2 * np.einsum("ij,jk,ik->i", tested, hp, tested)
