@@ -1375,9 +1375,10 @@ def _assembled(start: _Start, model: tuple[Any, ...], stats: tuple[Any, ...], th
         delays, delays_std, score = _delay_results(
             theta, std, link, rejected, (data, pos_l, dirs, omega, start.chain, s2)
         )  # fmt: skip
+    body_std = {key: value for key, value in std.items() if key != "delay"}  # the delays' is `delays_std`
     return Refinement(
         center_of_gravity=g, inertia_per_mass=j, stiffness_per_mass=k, damping_per_mass=c, poles=lam * omega,
-        std=std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
+        std=body_std, normalised_cost=cost, noise_from=data.noise_from, residuals=n_res, evaluations=nfev,
         converged=converged, misfit=misfit, delays=delays, delays_std=delays_std, delay_score=score, hum=start.hum,
         sensor_std=sensor_std, sensor_correction=correction, sensor_test=test,
     )  # fmt: skip
@@ -1389,9 +1390,8 @@ def _plain_refinement(assemble: Callable[..., Refinement], plain_fit: tuple[Any,
     ``estimate_sensors=False`` (the same fit, its sensor terms formed again): `plain_fit` ``(theta, std, misfit)``
     at its minimum before :func:`_with_sensors`, `fit_at` its model and linearisation."""
     theta = plain_fit[0]
-    again = (theta, dict(plain_fit[1]), plain_fit[2])  # _delay_results takes the delays' std out of its dict
     model, linear = fit_at
-    _, std, misfit, sensor_std, _, test = _with_sensors(again, model, linear, sensor_bounds, False, budgeted)
+    _, std, misfit, sensor_std, _, test = _with_sensors(plain_fit, model, linear, sensor_bounds, False, budgeted)
     return assemble(theta, theta, (std, misfit, sensor_std, None, test), sensor_bounds)
 
 
@@ -1423,14 +1423,14 @@ def _delay_results(
 ) -> tuple[Array | None, Array | None, Array | None]:
     """The fitted delays and their std (s), or, for a rejected fit without them, the delay score (:func:`delay_step`).
 
-    `fit` is ``(data, pos_l, dirs, omega, chain, s2)``; ``std``'s ``"delay"`` entry is taken out.
+    `fit` is ``(data, pos_l, dirs, omega, chain, s2)``; the delays' std is ``std``'s ``"delay"`` entry.
     """
     data, pos_l, dirs, omega, chain, s2 = fit
     p = pos_l.shape[0]
     if link is not None and link.free:
         delays, delays_std = np.zeros(p), np.zeros(p)
         delays[list(link.free)] = theta[N_PARAMETERS:] / omega
-        delays_std[list(link.free)] = std.pop("delay") / omega
+        delays_std[list(link.free)] = std["delay"] / omega
         return delays, delays_std, None
     if not rejected or p < 2:
         return None, None, None
