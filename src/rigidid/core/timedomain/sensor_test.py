@@ -85,11 +85,9 @@ class SensorTest:
         Whether the sensors' errors were then estimated with the body (by the test, or forced).
     misfit_after : float or None
         With the sensors estimated: the p-value of the misfit test of the last corrected refit's residual
-        against the noise plus what the correction leaves (the tolerances of any kind left at its prior, less
-        what the estimated errors absorb of them; the estimated errors' remaining part; less the noise the
-        correction takes). Below
-        `after_false_alarm` the correction has not explained the records (an unmodelled skew, say, that the
-        gains and tilts partly absorb): by default the plain refit is then kept.
+        against the noise plus what the correction leaves (the estimated errors' remaining part, less the noise
+        the correction takes). Below `after_false_alarm` the correction has not explained the records (an
+        unmodelled skew, say, that the gains and tilts partly absorb): by default the plain refit is then kept.
     after_false_alarm : float
         The rate the after-check (`misfit_after`) is judged at (:data:`AFTER_FALSE_ALARM`).
     """
