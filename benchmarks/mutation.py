@@ -324,6 +324,38 @@ MUTANTS: tuple[Mutant, ...] = (
         "a mode's decaying misfit near 50/60 Hz declared hum (issue 23)",
         ("tests/core/test_hum.py",),
     ),
+    Mutant(
+        "band-noise-white",
+        "core/timedomain/pretrigger.py",
+        "z = decimate(r, factor) if factor > 1 else r",
+        "z = decimate(r.std(axis=0) * np.random.default_rng(0).standard_normal(r.shape), factor) if factor > 1 else r",
+        "the pre-trigger's noise taken as white, not measured in the fit's band (issue 23)",
+        ("tests/core/test_pretrigger.py",),
+    ),
+    Mutant(
+        "band-noise-hum-left",
+        "core/timedomain/pretrigger.py",
+        "basis = np.column_stack([np.ones(n), *waves])",
+        "basis = np.ones((n, 1))",
+        "the hum left in the pre-trigger's noise (issue 23)",
+        ("tests/core/test_pretrigger.py", "tests/core/test_chain.py"),
+    ),
+    Mutant(
+        "skew-refit-unconfirmed-kept",
+        "api/records.py",
+        "abs(skewed.delays[i]) > _SKEW_Z * skewed.delays_std[i] for i, _ in late if i < len(skewed.delays)",
+        "True for i, _ in late",
+        "a skew refit whose fitted delays do not confirm the score kept (issue 23)",
+        ("tests/test_skew_refit.py",),
+    ),
+    Mutant(
+        "diverged-correction-raises",
+        "core/timedomain/refine.py",
+        "with contextlib.suppress(np.linalg.LinAlgError):",
+        "with contextlib.suppress(KeyError):",
+        "a sensor correction whose later pass diverges takes the whole refit down (issue 23)",
+        ("tests/core/test_sensor_refit.py",),
+    ),
 )
 
 

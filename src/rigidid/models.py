@@ -529,7 +529,7 @@ class SensorTestEntry(_Strict):
     false_alarm_rate: float = Field(description="the rate the test was run at: below it, the test flags")
     sensors_estimated: bool = Field(
         description="whether the sensors' errors were estimated with the body (sensor_corrections): by default "
-        "when the test flags (through the chain when one is modelled; not with mains hum); always with "
+        "when the test flags (through the chain when one is modelled; not without a pre-trigger); always with "
         "--estimate-sensors, never with "
         "--no-estimate-sensors"
     )

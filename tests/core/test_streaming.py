@@ -110,6 +110,9 @@ def test_prepared_decays_equal_prepare_decays_on_whole_records() -> None:
     )  # fmt: skip
     assert streamed.dt == whole.dt and streamed.noise_from == whole.noise_from
     np.testing.assert_allclose(streamed.sigma, whole.sigma, rtol=1e-12)
+    assert streamed.pre_held is not None and whole.pre_held is not None  # the pre-trigger's rows held
+    for a, b in zip(streamed.pre_held, whole.pre_held, strict=True):
+        np.testing.assert_array_equal(a, b)
     for a, b in zip(streamed.decays, whole.decays, strict=True):
         np.testing.assert_allclose(a, b, rtol=0.0, atol=STREAMED_DECIMATION)
 
@@ -195,6 +198,9 @@ def test_impacts_and_decays_read_in_one_pass_equal_the_whole_record_routines() -
     data = streaming.prepared_from(passes, 4, DT, q)
     assert data.dt == ref.dt and data.pre_counts == ref.pre_counts
     np.testing.assert_allclose(data.sigma, ref.sigma, rtol=1e-12)
+    assert data.pre_held is not None and ref.pre_held is not None
+    for a, b in zip(data.pre_held, ref.pre_held, strict=True):
+        np.testing.assert_array_equal(a, b)
     for a, b in zip(data.decays, ref.decays, strict=True):
         np.testing.assert_allclose(a, b, rtol=0.0, atol=STREAMED_DECIMATION)
 
@@ -219,6 +225,8 @@ def test_the_decay_captured_while_decimating_is_the_refits_pass_at_its_factor() 
                                MAX_ROWS // 4 + 1)  # fmt: skip
     assert captured.decay.rows == ref.rows and captured.decay.pre_count == ref.pre_count
     np.testing.assert_allclose(captured.decay.pre_m2, ref.pre_m2, rtol=1e-12)
+    assert captured.decay.pre_held is not None and ref.pre_held is not None
+    np.testing.assert_array_equal(captured.decay.pre_held, ref.pre_held)
     np.testing.assert_allclose(captured.decay.decay, ref.decay, rtol=0.0, atol=STREAMED_DECIMATION)
     near = [replace(whole, onset=whole.onset + 30, start=whole.start - 20)]
     assert streaming.captured_decays([captured], 4, 4 * captured.factor, near, 100) is not None

@@ -228,7 +228,8 @@ EstimateSensors = Annotated[
         help="With --records and more than six channels: estimate each sensor's gain, axis and position errors "
         "with the body in the refit (the layout's tolerances as their prior); a sensor beyond 3x its tolerance "
         "is named. Default: only when the records show sensor errors that move the body (the sensor test, "
-        "false-alarm rate 1 %), through the chain when one is modelled, not with mains hum; --no-estimate-sensors: "
+        "false-alarm rate 1 %), through the chain when one is modelled, not without a pre-trigger; "
+        "--no-estimate-sensors: "
         "never.",
         show_default=False,
         rich_help_panel=RECORDS_PANEL,

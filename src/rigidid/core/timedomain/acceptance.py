@@ -76,7 +76,7 @@ def misfit_test(
     lengths: Sequence[int],
     channels: int,
     dof_fraction: float,
-    pre_counts: Sequence[int],
+    pre_counts: Sequence[float],
     pre_variance: Array,
     correlation: Array,
     false_alarm: float = FALSE_ALARM,
@@ -93,8 +93,9 @@ def misfit_test(
         Channels per row.
     dof_fraction : float
         The residual's degrees of freedom over its length (parameters and linear terms out).
-    pre_counts : sequence of int
-        Pre-trigger samples of each impact.
+    pre_counts : sequence of float
+        Pre-trigger samples of each impact: its variance's degrees of freedom plus one (white-equivalent
+        samples when the variance was measured in the fit's band, :mod:`rigidid.core.timedomain.pretrigger`).
     pre_variance : ndarray, shape (impacts, channels)
         The pre-trigger's noise variance per impact and channel, in the residual's
         weighted units and at the fit's rate (the decimation filter's noise gain applied).
@@ -147,7 +148,7 @@ def budgeted_misfit_test(
     lengths: Sequence[int],
     channels: int,
     dof_fraction: float,
-    pre_counts: Sequence[int],
+    pre_counts: Sequence[float],
     pre_variance: Array,
     correlation: Array,
     systematic: Array,

@@ -19,6 +19,9 @@ start's model cannot reproduce, the tail of a decaying sinusoid at 47 or 63 Hz) 
 pair as strongly, but decays: on 25 kg bodies with modes at 45-63 Hz and sensors within +-3 %,
 +-3 degrees, it scored z = 16-73 in the earlier half and below 1 in the later
 (``benchmarks/chain_regimes.py``, cell ``compact``).
+
+The pre-trigger holds the hum too: its noise is measured with the lines found taken out
+(:mod:`rigidid.core.timedomain.pretrigger`).
 """
 
 from __future__ import annotations

@@ -16,6 +16,7 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
@@ -32,6 +33,7 @@ from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.chain import ChainModel, ChannelChain
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
+from rigidid.core.timedomain.pretrigger import PRE_HELD, band_noise
 from rigidid.core.timedomain.sensor_test import TESTED_OUTPUTS, SensorTest, body_change_test, noise_inflation
 from rigidid.errors import InputError
 
@@ -122,8 +124,8 @@ class Refinement:
         With ``estimate_delays``: each channel's delay (s) beyond the stated chain's,
         relative to the reference channel (0 there), and its standard error.
     delay_score : ndarray, shape (2, p), or None
-        Without ``estimate_delays``, when the fit was not accepted (with ``estimate_sensors``, also when no
-        misfit test could reject it: the hum modelled, no pre-trigger): the one Gauss-Newton
+        Without ``estimate_delays``, when the fit was not accepted (with the sensors corrected, always, the
+        sensors freed with the delays; kept when the correction is dropped, :func:`_plain_kept`): the one Gauss-Newton
         step's delay of each channel (s) and its z score (delay over standard error), the
         test for an unmodelled skew (:func:`delay_step`).
     hum : tuple of (float, float, float)
@@ -387,6 +389,15 @@ class PreparedDecays:
     pre_m2 : ndarray, shape (records, p), or None
         Their squared deviations from the record's pre-trigger mean, per channel
         (for the acceptance test, :mod:`rigidid.core.timedomain.acceptance`).
+    pre_held : tuple of ndarray, shape (k_i, p), or None
+        Each pre-trigger's first rows (raw rate, at most
+        :data:`~rigidid.core.timedomain.pretrigger.PRE_HELD`): its noise in the fit's band is measured on
+        them once the hum is known (:func:`_with_hum`), which sets `sigma`, `pre_variance` and `pre_dof`.
+    pre_variance : ndarray, shape (records, p), or None
+        Each record's pre-trigger variance per channel in the fit's band (None: not measured; the
+        acceptance test then takes `pre_m2` as white noise).
+    pre_dof : tuple of float
+        Its degrees of freedom per record (:class:`~rigidid.core.timedomain.pretrigger.BandNoise`).
     """
 
     decays: list[Array]  # (n_i, p)
@@ -396,6 +407,9 @@ class PreparedDecays:
     drift: bool = False
     pre_counts: tuple[int, ...] = ()
     pre_m2: Array | None = None
+    pre_held: tuple[Array, ...] | None = None
+    pre_variance: Array | None = None
+    pre_dof: tuple[float, ...] = ()
 
 
 _Data = PreparedDecays
@@ -416,7 +430,10 @@ def columns_of(data: PreparedDecays, channels: Sequence[int]) -> PreparedDecays:
     """
     cols = list(channels)
     m2 = None if data.pre_m2 is None else data.pre_m2[:, cols]
-    return replace(data, decays=[d[:, cols] for d in data.decays], sigma=data.sigma[cols], pre_m2=m2)
+    held = None if data.pre_held is None else tuple(x[:, cols] for x in data.pre_held)
+    variance = None if data.pre_variance is None else data.pre_variance[:, cols]
+    return replace(data, decays=[d[:, cols] for d in data.decays], sigma=data.sigma[cols], pre_m2=m2, pre_held=held,
+                   pre_variance=variance)  # fmt: skip
 
 
 def pretrigger_sigma(counts: Sequence[int], squares: Sequence[Array], n_records: int, factor: int) -> tuple[Array, str]:
@@ -494,10 +511,12 @@ def prepare_decays(
 
     Notes
     -----
-    The pre-trigger is ``r[:onset - 2]``; its level per channel is the
+    The pre-trigger is ``r[:onset - 2]``; its level per channel is first the
     RMS about each record's mean, scaled by the fit filter's noise gain
-    (:func:`pretrigger_sigma`). :mod:`rigidid.io.records.refit` builds the same
-    from record files read in row blocks.
+    (:func:`pretrigger_sigma`, white noise); its first
+    :data:`~rigidid.core.timedomain.pretrigger.PRE_HELD` rows are held, so the refit then
+    measures the noise in its own band (:func:`_in_band`). :mod:`rigidid.io.records.refit` builds
+    the same from record files read in row blocks.
     """
     p = records[0].shape[1]
     pre = [r[: max(0, o - 2)] for r, o in zip(records, onsets, strict=True)]
@@ -510,8 +529,10 @@ def prepare_decays(
     decays = cut_decays(decays, p)
     squares = [((x - x.mean(axis=0)) ** 2).sum(axis=0) if x.shape[0] > 1 else np.zeros(p) for x in pre]
     counts = [x.shape[0] for x in pre]
+    held = tuple(np.array(x[:PRE_HELD], dtype=float) for x in pre)
     sigma, noise_from = pretrigger_sigma(counts, squares, len(records), factor)
-    return PreparedDecays(decays, sigma, dt * factor, noise_from, pre_counts=tuple(counts), pre_m2=np.array(squares))
+    return PreparedDecays(decays, sigma, dt * factor, noise_from, pre_counts=tuple(counts), pre_m2=np.array(squares),
+                          pre_held=held)  # fmt: skip
 
 
 _prepare = prepare_decays
@@ -1190,7 +1211,7 @@ def refine_body(
     derivatives ``dlambda_k = (V^-1 dA V)_kk``, ``dV = V C``,
     ``C_jk = (V^-1 dA V)_jk / (lambda_k - lambda_j)``. Residuals are divided
     by each channel's noise level: from the pre-trigger (at least 32 samples
-    per record; scaled by the anti-alias filter's noise gain), otherwise from
+    per record; measured in the fit's band, :mod:`rigidid.core.timedomain.pretrigger`), otherwise from
     the start's own residual, then from the fit's. The Cramér-Rao bound is
     ``(J^T J)^-1`` in whitened units, mapped to the physical values by their
     derivatives (delta method). At most :data:`MAX_ROWS` residuals are fitted
@@ -1350,7 +1371,9 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
             plain = partial(_plain_refinement, assemble, plain_fit, fit_at, sensor_bounds, budgeted)
     out = assemble(theta, fitted, (std, misfit, sensor_std, correction, test), sensor_bounds)
     if correction is not None and sensor_passes > 1 and _unsettled(grad @ (theta - fitted), std):
-        out = _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
+        # a next pass whose model has not six underdamped modes: this pass is kept (its after-check judges it)
+        with contextlib.suppress(np.linalg.LinAlgError):
+            out = _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
     return out, plain
 
 
@@ -1400,11 +1423,15 @@ def _plain_kept(corrected: Refinement, estimate: bool | None, plain: Callable[[]
     what the correction leaves of the tolerances do not explain
     (:attr:`rigidid.core.timedomain.sensor_test.SensorTest.explains`), the plain refit (`plain`: the first pass's
     fit without the correction, bit-identical to a refit with ``estimate_sensors=False``), its sensor test the
-    corrected one's marked not estimated."""
+    corrected one's marked not estimated, and the corrected fit's skew score (with the sensors freed) when the plain
+    one has none (an unmodelled skew is what the correction most often cannot explain: the records' API then refits
+    with the delays fitted)."""
     test = corrected.sensor_test
     if estimate is not None or test is None or test.explains or plain is None:
         return corrected
-    return replace(plain(), sensor_test=replace(test, estimated=False))
+    kept = plain()
+    score = corrected.delay_score if kept.delay_score is None else kept.delay_score
+    return replace(kept, sensor_test=replace(test, estimated=False), delay_score=score)
 
 
 def _started(pos: Array, dirs: Array, body: tuple[ArrayLike, ...]) -> tuple[Array, _Frame, Array]:
@@ -1485,30 +1512,31 @@ def _link(
 def _with_hum(
     link: _Link | None, theta0: Array, data: PreparedDecays, model: tuple[Any, ...]
 ) -> tuple[_Link | None, tuple[tuple[float, float, float], ...], PreparedDecays, Array]:
-    """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual.
+    """`link` with the hum :func:`~rigidid.core.timedomain.hum.find_hum` finds in the start's residual, and the
+    noise measured in the fit's band (:func:`_in_band`) with the hum's lines out of the pre-trigger.
 
     `model` is ``(pos_l, dirs, omega, chain, estimate_delays, dt)`` (`dt` the raw sample interval).
-    Returns the link, the hum found, the data and the start. With hum, the pre-trigger's noise levels
-    hold the hum too (its power, far above the noise's, cannot be subtracted from them to the noise's
-    precision), so the levels come from the residual (``noise_from`` ``"residual"``, no misfit test):
-    of a pilot fit (:data:`_PILOT` evaluations) with the hum modelled and the levels of the start's
-    residual, whose end is the start returned (the start's own residual holds its misfit and would
-    weight the channels by it).
+    Returns the link, the hum found, the data and the start. With hum, the fit starts from a pilot fit
+    (:data:`_PILOT` evaluations) with the hum modelled and the levels of the start's residual (the start's own
+    residual holds its misfit and would weight the channels by it). Without the pre-trigger's rows
+    (`data.pre_held` None) or too few of them, the pre-trigger's levels hold the hum, so with hum they come from
+    the residual (``noise_from`` ``"residual"``, no misfit test).
     """
     from rigidid.core.timedomain.hum import find_hum
 
-    pos_l, dirs, omega, chain, estimate_delays, _ = model
+    pos_l, dirs, omega, chain, estimate_delays, dt = model
     r0 = _residual(theta0, data, pos_l, dirs, omega, link)
     parts, row, p = [], 0, pos_l.shape[0]
     for d in data.decays:
         parts.append(r0[row : row + d.size].reshape(-1, p))
         row += d.size
     found = tuple(find_hum(parts, data.dt))
+    measured = _in_band(data, [f for f, _, _ in found], dt)
     if not found:
-        return link, (), data, theta0
+        return link, (), data if measured is None else measured, theta0
     link = _link(chain, omega, p, estimate_delays, [f for f, _, _ in found])
-    data = replace(data, sigma=np.ones(p), noise_from="residual")
-    per = _evaluate(theta0, data, pos_l, dirs, omega, False, link)[0].reshape(-1, p)
+    data = replace(data, sigma=np.ones(p), noise_from="residual") if measured is None else measured
+    per = _evaluate(theta0, replace(data, sigma=np.ones(p)), pos_l, dirs, omega, False, link)[0].reshape(-1, p)
     pilot = replace(data, sigma=np.sqrt(np.mean(per**2, axis=0)) + 1e-300)
 
     def both(theta: Array) -> tuple[Array, Array]:
@@ -1519,6 +1547,21 @@ def _with_hum(
 
     theta = _levenberg_marquardt(fun, both, theta0, _PILOT, per.size)[0]
     return link, found, data, theta
+
+
+def _in_band(data: PreparedDecays, frequencies: Sequence[float], dt: float) -> PreparedDecays | None:
+    """`data` with its noise measured in the fit's band on the pre-trigger's rows, the hum at `frequencies` out
+    (:func:`~rigidid.core.timedomain.pretrigger.band_noise`; `dt` the raw sample interval): the levels, and each
+    record's variance and degrees of freedom for the acceptance test. The levels replace the white-noise
+    ones of :func:`pretrigger_sigma` and a stated anti-alias filter's ratio (:func:`_settled`): the band's noise is
+    measured, whatever its colour. None when the levels do not come from the pre-trigger, its rows are not
+    held, or they are too few."""
+    if data.noise_from != "pretrigger" or data.pre_held is None or len(data.pre_held) != len(data.decays):
+        return None
+    noise = band_noise(data.pre_held, dt, max(1, round(data.dt / dt)), frequencies)
+    if noise is None:
+        return None
+    return replace(data, sigma=noise.sigma, pre_variance=noise.variance, pre_dof=noise.dof, pre_held=None)
 
 
 def _settled(
@@ -1615,10 +1658,11 @@ def _with_sensors(
     misfit = budgeted((q, v, sv)) or misfit
     test = _sensor_gate(terms, proj, (jm, r), bounds, grad, (s2, std))
     if estimate is None:  # by default: the noise measured apart from the residual the test reads
-        # with a link too (a chain, fitted delays); not with the noise from the residual, hum's included: on
-        # benchmarks/chain_matrix.py's "all" cell (hum: noise from the residual) the correction, forced, came out
-        # worse than the plain refit (seed 501: inertia 52 % off against 36 %, floor 13.8 %; sens+orient+
-        # transverse+position alone, forced: 55 %, the positions' errors not estimated)
+        # with a link too (a chain, fitted delays, hum: its lines out of the pre-trigger's noise); not with the
+        # noise from the residual: when hum took the noise from the residual, on benchmarks/chain_matrix.py's
+        # "all" cell the correction, forced, came out worse than the plain refit (seed 501: inertia 52 % off
+        # against 36 %, floor 13.8 %; sens+orient+transverse+position alone, forced: 55 %, the positions'
+        # errors not estimated then), with no misfit test to drop it
         estimate = test.flagged and data.noise_from == "pretrigger"
     correction, after = None, None
     if estimate:
@@ -1706,8 +1750,9 @@ def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array
     unit = 1.0 / (1.0 + x.value[0])
     data = start.data
     m2 = None if data.pre_m2 is None else data.pre_m2 * unit**2
+    variance = None if data.pre_variance is None else data.pre_variance * unit**2
     sigma = data.sigma * unit if data.noise_from == "pretrigger" else np.ones_like(data.sigma)
-    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=sigma, pre_m2=m2)
+    data2 = replace(data, decays=[d * unit for d in data.decays], sigma=sigma, pre_m2=m2, pre_variance=variance)
     body = (first.center_of_gravity, first.inertia_per_mass, first.stiffness_per_mass, first.damping_per_mass)
     pos2 = pos + x.value[3:].T
     pos_l, frame, theta0 = _started(pos2, dirs2, body)
@@ -1790,7 +1835,8 @@ def _reduced(data: PreparedDecays, basis: Array | None, step: int = 1) -> _Reduc
         constant += float(np.sum(rest**2))
         decays.append(cols)
         left.append(rest)
-    reduced = replace(data, decays=decays, sigma=np.ones(basis.shape[1]), dt=data.dt * step, pre_m2=None)
+    reduced = replace(data, decays=decays, sigma=np.ones(basis.shape[1]), dt=data.dt * step, pre_m2=None,
+                      pre_variance=None)  # fmt: skip
     return _Reduced(reduced, basis.T * w[None, :], constant, tuple(left))
 
 
@@ -1904,17 +1950,21 @@ def _misfit(
         return None
     from rigidid.core.timedomain.intervals import noise_correlation
 
-    gain = float(np.sum(fir_taps(factor) ** 2)) if factor > 1 else 1.0
-    counts = np.asarray(data.pre_counts, dtype=float)
-    variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
+    if data.pre_variance is not None:  # measured in the fit's band (:func:`_in_band`)
+        counts = np.asarray(data.pre_dof, dtype=float) + 1.0
+        variance = data.pre_variance / data.sigma[None, :] ** 2
+    else:  # white noise: the raw pre-trigger's variance times the decimation filter's gain
+        gain = float(np.sum(fir_taps(factor) ** 2)) if factor > 1 else 1.0
+        counts = np.asarray(data.pre_counts, dtype=float)
+        variance = data.pre_m2 / np.maximum(counts - 1.0, 1.0)[:, None] * gain / data.sigma[None, :] ** 2
     lengths = [d.shape[0] for d in data.decays]
     rho = noise_correlation(factor)
     if systematic is not None:
         q, v, sv = systematic
         p = data.sigma.size
-        return budgeted_misfit_test(r, lengths, p, dof_fraction, data.pre_counts, variance, rho, q, (v, sv),
+        return budgeted_misfit_test(r, lengths, p, dof_fraction, list(counts), variance, rho, q, (v, sv),
                                     absorbed=absorbed)  # fmt: skip
-    return misfit_test(r, lengths, data.sigma.size, dof_fraction, data.pre_counts, variance, rho)
+    return misfit_test(r, lengths, data.sigma.size, dof_fraction, list(counts), variance, rho)
 
 
 def _linear_per_impact(p: int, drift: bool | int) -> int:

@@ -56,6 +56,7 @@ from rigidid.core.timedomain.preprocess import (
     find_impact,
     segment_power,
 )
+from rigidid.core.timedomain.pretrigger import PRE_HELD
 from rigidid.core.timedomain.refine import MAX_ROWS, PreparedDecays, cut_decays, fit_factor, pretrigger_sigma
 from rigidid.errors import InputError
 
@@ -676,12 +677,16 @@ class DecayPass:
         Their squared deviations from their mean, per channel.
     decay : ndarray, shape (m, p)
         ``decimate(record[start:], factor)``, at most `cap` rows of it.
+    pre_held : ndarray, shape (k, p), or None
+        The pre-trigger's first rows, at most
+        :data:`~rigidid.core.timedomain.pretrigger.PRE_HELD` (its noise in the fit's band).
     """
 
     rows: int
     pre_count: int
     pre_m2: Array
     decay: Array
+    pre_held: Array | None = None
 
 
 def decay_pass(blocks: Blocks, channels: int, start: int, pre_end: int, factor: int, cap: int) -> DecayPass:
@@ -703,19 +708,27 @@ def decay_pass(blocks: Blocks, channels: int, start: int, pre_end: int, factor: 
         if stop > start:
             feed.push(values[max(0, start - row) :])
         row = stop
-    return DecayPass(row, pre.count, pre.m2, feed.finish())
+    return DecayPass(row, pre.count, pre.m2, feed.finish(), pre.held())
 
 
 class _Moments:
-    """Count and squared deviations from the mean per channel, merged block by block (Chan, Golub and LeVeque)."""
+    """Count and squared deviations from the mean per channel, merged block by block (Chan, Golub and LeVeque),
+    and the first :data:`~rigidid.core.timedomain.pretrigger.PRE_HELD` rows."""
 
     def __init__(self, channels: int) -> None:
         self.count, self.mean, self.m2 = 0, np.zeros(channels), np.zeros(channels)
+        self.rows: list[Array] = []
+
+    def held(self) -> Array:
+        """The rows held, in order."""
+        return np.concatenate(self.rows) if self.rows else np.zeros((0, self.mean.shape[0]))
 
     def add(self, x: Array) -> None:
         n_b = x.shape[0]
         if n_b == 0:
             return
+        if self.count < PRE_HELD:
+            self.rows.append(np.array(x[: PRE_HELD - self.count], dtype=float))
         mean_b = x.mean(axis=0)
         m2_b = ((x - mean_b) ** 2).sum(axis=0)
         total = self.count + n_b
@@ -815,8 +828,10 @@ def prepared_from(read: Sequence[DecayPass], channels: int, dt: float, q: int) -
     """
     decays = cut_decays([r.decay for r in read], channels)
     sigma, noise_from = pretrigger_sigma([r.pre_count for r in read], [r.pre_m2 for r in read], len(read), q)
+    held = [r.pre_held for r in read if r.pre_held is not None]
     return PreparedDecays(decays, sigma, dt * q, noise_from, pre_counts=tuple(r.pre_count for r in read),
-                          pre_m2=np.array([r.pre_m2 for r in read]))  # fmt: skip
+                          pre_m2=np.array([r.pre_m2 for r in read]),
+                          pre_held=tuple(held) if len(held) == len(read) else None)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -946,7 +961,8 @@ class DecayScan:
         if self.feed is None or self.guess != impact or impact.onset - 2 < lo:
             return LocatedDecay(impact, None)
         self.pre.add(window[: impact.onset - 2 - lo])
-        return LocatedDecay(impact, DecayPass(scan.row, self.pre.count, self.pre.m2, self.feed.finish()))
+        pre = self.pre
+        return LocatedDecay(impact, DecayPass(scan.row, pre.count, pre.m2, self.feed.finish(), pre.held()))
 
 
 def located_decays(
