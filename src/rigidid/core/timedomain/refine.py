@@ -1183,8 +1183,9 @@ def refine_body(
         With `sensor_bounds`: estimate every sensor's gain, axis and position errors with the
         body (the redundancy of more than six channels), the tolerances as their prior; the
         body corrected (``sensor_correction``). None: only when the sensor test flags
-        (``sensor_test``, :mod:`rigidid.core.timedomain.sensor_test`) and the noise is the pre-trigger's (not
-        with mains hum), through the chain and fitted delays when they are modelled; otherwise the plain refit.
+        (``sensor_test``, :mod:`rigidid.core.timedomain.sensor_test`) and the noise is the pre-trigger's (with
+        mains hum too, its lines taken out), through the chain and fitted delays when they are modelled;
+        otherwise the plain refit.
 
     Returns
     -------
@@ -1424,8 +1425,8 @@ def _plain_kept(corrected: Refinement, estimate: bool | None, plain: Callable[[]
     (:attr:`rigidid.core.timedomain.sensor_test.SensorTest.explains`), the plain refit (`plain`: the first pass's
     fit without the correction, bit-identical to a refit with ``estimate_sensors=False``), its sensor test the
     corrected one's marked not estimated, and the corrected fit's skew score (with the sensors freed) when the plain
-    one has none (an unmodelled skew is what the correction most often cannot explain: the records' API then refits
-    with the delays fitted)."""
+    one has none (an unmodelled skew is one thing a correction cannot explain: the records' API then refits with
+    the delays fitted)."""
     test = corrected.sensor_test
     if estimate is not None or test is None or test.explains or plain is None:
         return corrected
@@ -1571,7 +1572,9 @@ def _settled(
 
     With the delays estimated, :data:`_DELAY_SKIP` more samples (a late channel reads the impact's end there).
     With an anti-alias filter and a decimated fit, the pre-trigger's noise levels (and squares) are scaled
-    for the noise's colour (:meth:`ChainModel.decimated_noise_ratio`; `dt` the raw sample interval).
+    for the noise's colour (:meth:`ChainModel.decimated_noise_ratio`; `dt` the raw sample interval): the levels
+    the hum's detection whitens by, and the fallback when the pre-trigger is too short to measure the noise in
+    the fit's band (:func:`_in_band`, which otherwise replaces them).
     """
     q = max(1, round(data.dt / dt)) if dt > 0.0 else 1
     if chain is not None and q > 1 and data.noise_from == "pretrigger":
