@@ -493,6 +493,7 @@ def run_cell(
             row["z_kernel"] = z_k
         row["silent"] = bool(np.max(np.abs(z)) > 4 and not warned)
         row["sensor_test"] = crb.get("sensor_test")
+        row["ac_coupling"] = crb.get("ac_coupling")
         noise = (crb.get("sensor_budget") or {}).get("noise")
         if noise is not None:  # the target: within 1.25 x the floor plus 6 of the noise's (clean bound's) std
             row["target"] = _within(row, noise)
@@ -520,6 +521,14 @@ def clean_target(row: dict[str, object], twin: dict[str, object]) -> bool:
     if row["exit"] != 0 or "noise_se" not in twin or "errors" not in row:
         return False
     return all(e <= 1.25 * f + 6 * u for e, f, u in zip(row["errors"], row["floor"], twin["noise_se"], strict=True))  # type: ignore[call-overload]
+
+
+def _coupling_text(found: object) -> str:
+    """A run's unstated AC coupling test (``ac_coupling``): its corner, p-value and whether it was modelled."""
+    if not isinstance(found, dict):
+        return ""
+    return (f" ac corner {found['corner_hz']:.3g} Hz (std {found['corner_std_hz']}) p {found['p_value']:.2g} "
+            f"interior {found.get('interior')} modelled {found['modelled']}")  # fmt: skip
 
 
 def _print_sensor_tests(rows: list[dict[str, object]]) -> None:
@@ -595,9 +604,15 @@ def main() -> None:
                       f"plain kept {r.get('plain_kept')} noise se {r.get('noise_se')} "
                       f"z {np.round(r['z'], 2).tolist() if 'z' in r else None} sensor test T {test.get('statistic')} "
                       f"dof {test.get('dof')} p {test.get('p_value')} estimated {test.get('sensors_estimated')} "
-                      f"p after {test.get('correction_misfit_p_value')}"
+                      f"p after {test.get('correction_misfit_p_value')}" + _coupling_text(r.get("ac_coupling"))
                       + (f" target(clean) {clean[-1]} clean se {r.get('twin_se')}" if clean else ""), flush=True)  # type: ignore[union-attr]  # fmt: skip
         _print_sensor_tests(rows)
+        found = [r["ac_coupling"] for r in rows if isinstance(r.get("ac_coupling"), dict)]
+        if found:
+            print(f"    ac coupling test: {len(found)} runs, flagged "
+                  f"{sum(f['p_value'] < f['false_alarm_rate'] and f.get('interior', True) for f in found)}, "  # type: ignore[index, union-attr]
+                  f"modelled "
+                  f"{sum(bool(f['modelled']) for f in found)}", flush=True)  # type: ignore[index]  # fmt: skip
         done = [r for r in rows if r["exit"] == 0]
         errs = np.array([r["errors"] for r in done]) if done else np.full((1, 2), np.nan)
         fl = np.array([r["floor"] for r in rows])

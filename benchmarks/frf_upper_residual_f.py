@@ -30,7 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from frf_coverage import near, simulated
 from rigidid.core import massline
-from rigidid.core.massline import chi2_quantile, upper_residual_f
+from rigidid.core.chisquare import chi2_quantile
+from rigidid.core.massline import upper_residual_f
 from rigidid.errors import RigididError
 
 

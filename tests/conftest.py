@@ -49,3 +49,20 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     after the others have finished; handed out first, the short ones fill in around it.
     """
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
+def refit_with_warnings(layout, records, **options):  # type: ignore[no-untyped-def]
+    """The records route on records held in memory, as ``identify --records`` runs it (modes, identification,
+    refit with exact sensors stated unless `options` say otherwise), and every warning it gave."""
+    import warnings
+
+    from rigidid import api
+    from rigidid.core.sensor_budget import SensorBounds
+
+    options.setdefault("tolerances", SensorBounds(0.0, 0.0, 0.0, 0.0))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        modes, estimate = api.estimate_rigid_modes(layout, records)
+        start = api.identify(layout, modes)
+        result = api.with_refinement(start, records, estimate, **options)
+    return result, caught

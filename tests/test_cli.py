@@ -67,6 +67,8 @@ def test_failure_writes_nothing_and_prints_one_line(tmp_path: Path) -> None:
         (("--modes", "1,2,x"), "--modes: expected mode labels"),
         (("--modes", "1,2,3,4,5,7"), "--modes: mode 7 is not in the modes file"),
         (("--estimate-delays",), "--estimate-delays: needs impact records and the refit"),
+        (("--estimate-highpass",), "--estimate-highpass: needs impact records and the refit"),
+        (("--no-estimate-highpass",), "--no-estimate-highpass: needs impact records and the refit"),
     ],
 )
 def test_bad_options(args: tuple[str, ...], message: str) -> None:

@@ -499,9 +499,11 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
     delays estimated ``channel_delays`` (per channel id ``delay_s`` and ``std_s``), with hum found
     ``mains_hum_hz``, with the sensors' errors estimated ``sensor_corrections``, with stated tolerances the
     sensor test's ``sensor_test`` (``statistic``, ``dof``, ``p_value``, ``false_alarm_rate``,
-    ``sensors_estimated``, ``correction_misfit_p_value``, ``correction_false_alarm_rate``), and, when the sensors'
-    tolerances were propagated, ``sensor_budget`` (per source,
-    ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and ``tolerances`` (the bounds used)."""
+    ``sensors_estimated``, ``correction_misfit_p_value``, ``correction_false_alarm_rate``), without a stated
+    high-pass the AC coupling's test ``ac_coupling`` (``corner_hz``, ``corner_std_hz``, ``statistic``, ``dof``,
+    ``p_value``, ``false_alarm_rate``, ``interior``, ``modelled``), and, when the sensors' tolerances were propagated,
+    ``sensor_budget`` (per source, ``noise`` first, the std of ``center_of_gravity`` and ``inertia_tensor``) and
+    ``tolerances`` (the bounds used)."""
     head = {
         "method": "Cramér-Rao bound at the output-error estimate on the records",
         "normalised_cost": bound.normalised_cost,
@@ -529,6 +531,12 @@ def record_bound_to_dict(bound: RecordBound) -> dict[str, Any]:
                               "false_alarm_rate": test.false_alarm, "sensors_estimated": test.estimated,
                               "correction_misfit_p_value": test.misfit_after,
                               "correction_false_alarm_rate": test.after_false_alarm}  # fmt: skip
+    if bound.coupling is not None:
+        found = bound.coupling
+        out["ac_coupling"] = {"corner_hz": found.corner_hz, "corner_std_hz": _none_if_inf(found.corner_std_hz),
+                              "statistic": found.statistic, "dof": found.dof, "p_value": found.p_value,
+                              "false_alarm_rate": found.false_alarm, "interior": found.interior,
+                              "modelled": found.modelled}  # fmt: skip
     if bound.sensor_budget is not None:
         inertia = "inertia_per_mass" if bound.per_mass else "inertia_tensor"
         out["sensor_budget"] = {

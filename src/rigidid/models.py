@@ -517,6 +517,33 @@ class SensorCorrectionEntry(_Strict):
     )
 
 
+class AcCouplingEntry(_Strict):
+    """The score test for an AC coupling the layout's chain does not state (issue 23)."""
+
+    corner_hz: float = Field(
+        description="the first-order high-pass corner common to the channels whose transient e^(-2 pi f t) per "
+        "channel and impact best explains the refit's residual (Hz)"
+    )
+    corner_std_hz: float | None = Field(
+        description="its standard error from the statistic's profile (null: the corner is at the edge of the "
+        "rates tried)"
+    )
+    statistic: float = Field(description="chi-square score statistic of those transients at that corner")
+    dof: int = Field(description="its degrees of freedom (channels times impacts)")
+    p_value: float = Field(description="its p-value, Bonferroni-corrected over the 30 corners tried")
+    false_alarm_rate: float = Field(
+        description="the rate the test is judged at (1e-9): below it, and with interior true, the test flags"
+    )
+    interior: bool = Field(
+        description="whether the statistic peaks inside the corners tried (half the longest decay's inverse to half "
+        "the lowest rigid-body frequency); false: not taken for a coupling, whatever the p-value"
+    )
+    modelled: bool = Field(
+        description="whether the refit reported models a high-pass at corner_hz on every channel (by default when "
+        "the test flags)"
+    )
+
+
 class SensorTestEntry(_Strict):
     """The score test of the sensors as stated at the plain refit's minimum (issue 23)."""
 
@@ -609,6 +636,11 @@ class RecordBoundResult(BaseModel):
     sensor_test: SensorTestEntry | None = Field(
         default=None,
         description="with sensor tolerances: the test of the sensors as stated, and whether they were estimated",
+    )
+    ac_coupling: AcCouplingEntry | None = Field(
+        default=None,
+        description="without a high-pass in the layout's chain: the test for an AC coupling nobody stated, and "
+        "whether the refit models it",
     )
 
 

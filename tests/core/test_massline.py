@@ -193,7 +193,8 @@ def test_upper_residual_f_follows_its_chi2_under_noise_correlated_through_the_se
     bodies). Over 300 draws the standardised ``(F - 1) / sqrt(2 / nu)`` has SD 0.98-1.06 over six seeds
     (0.85-1.15 allowed; with ``nu = b 6 q = 36``, the test before, 1.9-2.4) and the share beyond the 5 %
     quantile is 4-6.3 % (2-9 % allowed; 14-19 % with ``nu = 36``)."""
-    from rigidid.core.massline import chi2_quantile, upper_residual_f
+    from rigidid.core.chisquare import chi2_quantile
+    from rigidid.core.massline import upper_residual_f
 
     rng = np.random.default_rng(3)
     n, cols = 150, 18

@@ -58,15 +58,15 @@ def _records(gain: np.ndarray, shift: np.ndarray, rng: np.random.Generator, axes
 
 
 def _fit(records: list[np.ndarray], start, bounds: SensorBounds | None, evaluations: int = 240,  # type: ignore[no-untyped-def]
-         estimate_sensors: bool | None = False):  # fmt: skip
-    """The refit from `start` (g, J/m, K/m, C/m), with the stated tolerances `bounds`."""
+         estimate_sensors: bool | None = False, **options):  # fmt: skip
+    """The refit from `start` (g, J/m, K/m, C/m), with the stated tolerances `bounds`; `options` to refine_body."""
     _, pos, dirs = layout_arrays(load_layout(SAMPLE / "layout.json"))
     impacts = [find_impact(r, 1.0 / RATE) for r in records]
     return refine_body(
         records, 1.0 / RATE, pos, dirs, starts=[i.start for i in impacts], onsets=[i.onset for i in impacts],
         decimation=1, center_of_gravity=start[0], inertia_per_mass=start[1], stiffness_per_mass=start[2],
         damping_per_mass=start[3], sensor_bounds=bounds, max_evaluations=evaluations,
-        estimate_sensors=estimate_sensors,
+        estimate_sensors=estimate_sensors, **options,
     )  # fmt: skip
 
 

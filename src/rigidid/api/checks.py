@@ -331,7 +331,7 @@ def rates_verdict(
     errors: StandardErrors | None, ident: Identification, positions: Array, rates: MountRates
 ) -> list[tuple[type[Warning], str]]:
     """Warnings about per-mount rates: a split that is not unique, rates at zero, mounts that miss the stiffness."""
-    from rigidid.core.massline import chi2_quantile
+    from rigidid.core.chisquare import chi2_quantile
     from rigidid.core.mounts import split_misfit
     from rigidid.errors import PhysicalPlausibilityWarning
 

@@ -510,6 +510,7 @@ def with_refinement(
     chain: ChainModel | None = None,
     estimate_delays: bool = False,
     estimate_sensors: bool | None = None,
+    estimate_highpass: bool | None = None,
 ) -> IdentifyResult:
     """Refine the body on the records by output error (maximum likelihood), started from `result`.
 
@@ -539,6 +540,11 @@ def with_refinement(
         move the body (:mod:`rigidid.core.timedomain.sensor_test`), through the chain, delays or hum when
         they are modelled (not with the noise from the residual: no pre-trigger); False: never (the plain
         refit).
+    estimate_highpass : bool or None
+        Without a high-pass in `chain`: model an AC coupling, one first-order high-pass common to the channels,
+        at the corner the score test of the refit's residual finds (:mod:`rigidid.core.timedomain.coupling`).
+        None (the default): when the test flags it (``--estimate-highpass``); False: tested, never modelled
+        (``--no-estimate-highpass``); True: always modelled.
 
     Returns
     -------
@@ -589,6 +595,7 @@ def with_refinement(
             estimate_delays=delays,
             sensor_bounds=bounds,
             estimate_sensors=estimate_sensors,
+            estimate_highpass=estimate_highpass,
         ),
         progress,
         bounds,
@@ -680,8 +687,9 @@ def _refit(
     return _accept_refinement(result, refinement, tolerances, ids)
 
 
-def _run_fit(result: IdentifyResult, fit: Any, delays: bool, why: str = "") -> Any:
-    """``fit(delays)``, or None with a RefinementWarning (`why` before its reason) when it fails."""
+def _run_fit(result: IdentifyResult, fit: Any, delays: bool, why: str = "", keep_plain: bool = False) -> Any:
+    """``fit(delays)``, or None with a RefinementWarning (`why` before its reason) when it fails: the answer from
+    the modes kept, or with `keep_plain` the plain refit (a skew's refit that failed after a plain one passed)."""
     import warnings
 
     from rigidid.errors import RefinementWarning
@@ -689,9 +697,10 @@ def _run_fit(result: IdentifyResult, fit: Any, delays: bool, why: str = "") -> A
     try:
         return fit(delays)
     except (np.linalg.LinAlgError, InputError, ValueError) as exc:
+        kept = "kept the refit without them" if keep_plain else "kept the answer from the modes"
         warnings.warn(
-            f"{why}refinement on the records failed ({exc}); kept the answer from the modes"
-            + suspect_mode(result.identification),
+            f"{why}refinement on the records failed ({exc}); {kept}"
+            + ("" if keep_plain else suspect_mode(result.identification)),
             RefinementWarning,
             stacklevel=4,
         )
@@ -718,12 +727,16 @@ def _refit_skewed(
 
     ids, late = named
     where = _skew_where(late, ids)
-    first = refit_verdict(plain)[1]
-    skewed = _run_fit(result, fit, True, f"the plain refit was rejected ({first}); with the channels' delays "
-                      f"estimated (a skew on {where}), ")  # fmt: skip
+    plain_kept, first = refit_verdict(plain)
+    why = (
+        f"the refit's residual named a skew on {where}, and with the channels' delays estimated the "
+        if plain_kept
+        else f"the plain refit was rejected ({first}); with the channels' delays estimated (a skew on {where}), "
+    )
+    skewed = _run_fit(result, fit, True, why, keep_plain=plain_kept)
     if skewed is None:
         _warn_delays(plain, ids, plain.frequency_hz, late)
-        return result
+        return _accept_refinement(result, plain, tolerances, ids) if plain_kept else result
     keep, reason = refit_verdict(skewed)
     if keep and not _confirmed(skewed, late):  # the score's skew not in the fit: a misfit the score read as one
         if refit_verdict(plain)[0]:
@@ -789,8 +802,9 @@ def _skew_where(late: list[tuple[int, str]], ids: Sequence[str]) -> str:
 
 
 def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: list[tuple[int, str]]) -> None:
-    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, or an unmodelled skew's score
-    (the channels `late`, :func:`_late_channels`); a HumWarning naming the mains hum the refit modelled."""
+    """ChainWarnings: an estimated delay beyond a quarter period of the top mode, an AC coupling the refit found and
+    modelled (:mod:`rigidid.core.timedomain.coupling`), or an unmodelled skew's score (the channels `late`,
+    :func:`_late_channels`); a HumWarning naming the mains hum the refit modelled."""
     import warnings
 
     from rigidid.errors import ChainWarning
@@ -813,6 +827,25 @@ def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: l
             + ", ".join(f"{hz:g} Hz (amplitude {amp:.3g} noise std, z = {z:.0f})" for hz, z, amp in refinement.hum)
             + ": modelled in the refit as a sinusoid per channel and impact",
             HumWarning,
+            stacklevel=3,
+        )
+    found = refinement.coupling
+    if found is not None and found.flagged and not found.modelled:
+        warnings.warn(
+            "the refit's residual shows an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after "
+            f"each impact, score {found.statistic:.0f} on {found.dof} degrees of freedom, p = {found.p_value:.2g}, "
+            f"corner {found.corner_hz:.3g} Hz): not modelled (--no-estimate-highpass); state the sensors' "
+            "highpass_hz in the layout's chain block",
+            ChainWarning,
+            stacklevel=3,
+        )
+    if found is not None and found.modelled:
+        warnings.warn(
+            "the refit's residual showed an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after "
+            f"each impact, score {found.statistic:.0f} on {found.dof} degrees of freedom, p = {found.p_value:.2g}): "
+            f"modelled a first-order high-pass at {found.corner_hz:.3g} Hz (std {found.corner_std_hz:.2g} Hz) on "
+            "every channel; state the sensors' highpass_hz in the layout's chain block",
+            ChainWarning,
             stacklevel=3,
         )
     if late:
@@ -1030,6 +1063,7 @@ def refine_records(
     stream_above: int | None = None,
     estimate_delays: bool = False,
     estimate_sensors: bool | None = None,
+    estimate_highpass: bool | None = None,
 ) -> IdentifyResult:
     """:func:`with_refinement` on record files, whose memory does not grow with the records' length.
 
@@ -1054,7 +1088,7 @@ def refine_records(
         smaller ones are read whole.
     estimate_delays : bool
         Fit each channel's delay (:func:`with_refinement`); the layout's ``chain`` is modelled.
-    estimate_sensors : bool or None
+    estimate_sensors, estimate_highpass : bool or None
         As for :func:`with_refinement`.
 
     Returns
@@ -1121,6 +1155,7 @@ def refine_records(
         return with_refinement(
             result, raw, replace(estimate, impacts=found), progress=progress, tolerances=sensor_bounds(lay),
             chain=chain_model(lay), estimate_delays=estimate_delays, estimate_sensors=estimate_sensors,
+            estimate_highpass=estimate_highpass,
         )  # fmt: skip
     estimate = replace(estimate, impacts=tuple(impacts))
     ident = result.identification
@@ -1139,7 +1174,7 @@ def refine_records(
             inertia_per_mass=ident.inertia_per_mass, stiffness_per_mass=ident.stiffness_per_mass,
             damping_per_mass=ident.damping_per_mass, drift=estimate.trends is not None, sensor_bounds=bounds,
             chain=_kept(chain_model(lay), estimate.channels), estimate_delays=delays,
-            estimate_sensors=estimate_sensors,
+            estimate_sensors=estimate_sensors, estimate_highpass=estimate_highpass,
         )  # fmt: skip
 
     bounds = sensor_bounds(lay)
@@ -1293,6 +1328,7 @@ def identify_test(
     force: ForceOptions | None = None,
     estimate_delays: bool = False,
     estimate_sensors: bool | None = None,
+    estimate_highpass: bool | None = None,
     **identify_options: Any,
 ) -> TestRun:
     """Load a test, estimate its modes from the records if asked, identify: what ``rigidid identify`` does.
@@ -1326,6 +1362,9 @@ def identify_test(
     estimate_sensors : bool or None
         In the refit, estimate each sensor's errors with the body (:func:`with_refinement`; None: when
         the sensor test flags them).
+    estimate_highpass : bool or None
+        In the refit, model an AC coupling nobody stated (:func:`with_refinement`; None: when its score test
+        flags it).
     **identify_options
         Passed to :func:`rigidid.api.identification.identify` (`mass`, `modes_used`, `method`, `uncertainty`,
         `noise`, `seed`, `mounts`).
@@ -1338,7 +1377,7 @@ def identify_test(
         return _identify_test(
             layout, inputs, records=records, modal=modal, units=units, geometry=geometry, refine=refine,
             resample=resample, spectrum=spectrum, progress=progress, force=force, estimate_delays=estimate_delays,
-            estimate_sensors=estimate_sensors,
+            estimate_sensors=estimate_sensors, estimate_highpass=estimate_highpass,
             **identify_options,
         )  # fmt: skip
 
@@ -1382,6 +1421,7 @@ def _identify_test(
     force: ForceOptions | None,
     estimate_delays: bool = False,
     estimate_sensors: bool | None = None,
+    estimate_highpass: bool | None = None,
     **identify_options: Any,
 ) -> TestRun:
     """:func:`identify_test`'s work."""
@@ -1432,7 +1472,8 @@ def _identify_test(
         assert estimate is not None
         try:
             with named_source(src), noted(notes, RefinementWarning):
-                result = _refit_test(result, data, paths, estimate, progress, estimate_delays, estimate_sensors)
+                result = _refit_test(result, data, paths, estimate, progress, estimate_delays,
+                                     (estimate_sensors, estimate_highpass))  # fmt: skip
         except BaseException:
             checks.pass_on(held)
             raise
@@ -1452,17 +1493,20 @@ def _refit_test(
     estimate: ModalEstimate,
     progress: ProgressCallback | None,
     estimate_delays: bool,
-    estimate_sensors: bool | None,
+    estimating: tuple[bool | None, bool | None],
 ) -> IdentifyResult:
-    """The refit on the test's records: read in row blocks from `paths`, else on the records held."""
+    """The refit on the test's records: read in row blocks from `paths`, else on the records held; `estimating` is
+    ``(estimate_sensors, estimate_highpass)``."""
+    sensors, highpass = estimating
     if paths is not None:
         return refine_records(
             result, paths, data.layout, estimate, progress=progress, estimate_delays=estimate_delays,
-            estimate_sensors=estimate_sensors,
+            estimate_sensors=sensors, estimate_highpass=highpass,
         )  # fmt: skip
     return with_refinement(
         result, data.records, estimate, progress=progress, tolerances=sensor_bounds(data.layout),
-        chain=chain_model(data.layout), estimate_delays=estimate_delays, estimate_sensors=estimate_sensors,
+        chain=chain_model(data.layout), estimate_delays=estimate_delays, estimate_sensors=sensors,
+        estimate_highpass=highpass,
     )  # fmt: skip
 
 

@@ -29,6 +29,7 @@ from rigidid.cli.options import (
     Decimate,
     Draws,
     EstimateDelays,
+    EstimateHighpass,
     EstimateSensors,
     ForceColumn,
     ForceUnit,
@@ -99,6 +100,7 @@ def identify(
     torque_axis: TorqueAxis = None,
     refine: Refine = True,
     estimate_sensors: EstimateSensors = None,
+    estimate_highpass: EstimateHighpass = None,
     force: ForceColumn = None,
     frf_out: FrfOut = None,
     estimate_delays: EstimateDelays = False,
@@ -124,6 +126,9 @@ def identify(
         if estimate_delays and not (records and refine):
             raise InputError("needs impact records and the refit (--records, without --no-refine)",
                              source="--estimate-delays")  # fmt: skip
+        if estimate_highpass is not None and not (records and refine):
+            flag = "--estimate-highpass" if estimate_highpass else "--no-estimate-highpass"
+            raise InputError("needs impact records and the refit (--records, without --no-refine)", source=flag)
         noise = noise_overrides(
             frequency=frequency_noise, damping=damping_noise, shape=shape_noise, position=position_noise,
             angle_deg=angle_noise,
@@ -132,7 +137,7 @@ def identify(
         run = identify_files(
             layout, inputs, records, units, modal, mass=mass, modes_used=modes_used, method=method, draws=uncertainty,
             noise=noise, seed=seed, resample=resample, geometry=geometry, mounts=mounts, refine=refine,
-            estimate_sensors=estimate_sensors, **_force_options(force, frf_out),
+            estimate_sensors=estimate_sensors, estimate_highpass=estimate_highpass, **_force_options(force, frf_out),
             **({"estimate_delays": True} if estimate_delays else {}),
         )  # fmt: skip
         result, estimate = run.result, run.estimate

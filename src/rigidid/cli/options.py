@@ -236,6 +236,18 @@ EstimateSensors = Annotated[
     ),
 ]
 
+EstimateHighpass = Annotated[
+    bool | None,
+    typer.Option(
+        "--estimate-highpass/--no-estimate-highpass",
+        help="With --records and no highpass_hz in the layout's chain: model an AC coupling (one first-order "
+        "high-pass on every channel) at the corner the refit's residual shows. Default: only when its score test "
+        "finds one (false-alarm rate 1e-9); --no-estimate-highpass: tested and reported, never modelled.",
+        show_default=False,
+        rich_help_panel=RECORDS_PANEL,
+    ),
+]
+
 Units = Annotated[
     str | None,
     typer.Option(help="Units of a UFF file without dataset 164, as LENGTH,MASS (e.g. in,lb).", metavar="L,M"),
@@ -318,6 +330,7 @@ FLAGS = {
     "pretrigger": "--pretrigger",
     "force": "--force",
     "estimate_sensors": "--estimate-sensors",
+    "estimate_highpass": "--estimate-highpass",
     "estimate_delays": "--estimate-delays",
     "sample_rate": "--sample-rate",
     "duration": "--duration",

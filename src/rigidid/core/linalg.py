@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["numerical_rank", "pseudo_inverse", "rank_tolerance", "solve_rows"]
+__all__ = ["numerical_rank", "pseudo_inverse", "rank_tolerance", "solve_rows", "svd"]
 
 Array = NDArray[np.float64]
 BArray = NDArray[np.bool_]
@@ -147,7 +147,37 @@ def pseudo_inverse(matrix: ArrayLike, *, symmetric: bool = False) -> tuple[Array
         keep = w > rank_tolerance(max(float(w[-1]), 0.0), rows)
         inverse: Array = (v[:, keep] / w[keep]) @ v[:, keep].T
         return inverse, int(np.sum(keep))
-    u, s, vt = np.linalg.svd(a, full_matrices=False)
+    u, s, vt = svd(a, full_matrices=False)
     keep = s > rank_tolerance(s[0], rows)
     inverse = (vt[keep].T / s[keep]) @ u[:, keep].T
     return inverse, int(np.sum(keep))
+
+
+def svd(matrix: ArrayLike, full_matrices: bool = True) -> tuple[Array, Array, Array]:
+    """``U, s, V^T`` of a real matrix, by LAPACK's divide and conquer, else its QR iteration.
+
+    numpy's ``svd`` (``gesdd``) can fail to converge on a matrix with singular values down at the
+    rounding floor (an R factor of exactly dependent columns: the sensors' errors the records do not
+    determine, chain_matrix's "all" cell seed 1005), where ``gesvd`` converges; it is tried then.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (n, m)
+    full_matrices : bool
+        As numpy's.
+
+    Returns
+    -------
+    u : ndarray, shape (n, n) or (n, k)
+    s : ndarray, shape (k,)
+        Descending.
+    vt : ndarray, shape (m, m) or (k, m)
+    """
+    a = np.asarray(matrix, dtype=float)
+    try:
+        u, s, vt = np.linalg.svd(a, full_matrices=full_matrices)
+    except np.linalg.LinAlgError:
+        from scipy.linalg import svd as qr_iteration
+
+        u, s, vt = qr_iteration(a, full_matrices=full_matrices, lapack_driver="gesvd")
+    return u, s, vt

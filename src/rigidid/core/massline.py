@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rigidid.core.chisquare import chi2_quantile
 from rigidid.core.frfmodes import PEAK_SHORTFALL_Z, PeakShortfall, peak_split, residue_limit, scaled_frame
 from rigidid.core.frfstats import BodyIntervals, body_intervals, misfit_units
 from rigidid.core.geometry import sensor_matrix, skew
@@ -501,17 +502,6 @@ def _residual_needed(plain: RigidFrfFit, full: RigidFrfFit, n_basis: int) -> boo
             return True
     f_stat, dof = upper_residual_f(plain.misfit_rows, full.misfit_rows, n_basis)
     return bool(f_stat * dof > chi2_quantile(dof, UPPER_RESIDUAL_Z))
-
-
-def chi2_quantile(dof: float, z: float) -> float:
-    """The upper quantile of ``chi2(dof)`` at the normal quantile `z` (Wilson-Hilferty).
-
-    ``(x / nu)^(1/3)`` is nearly normal with mean ``1 - 2 / (9 nu)`` and variance ``2 / (9 nu)``, so
-    ``x = nu (1 - 2 / (9 nu) + z sqrt(2 / (9 nu)))^3``: within 2 % of the exact quantile at 0.1-5 % for
-    ``nu >= 3`` (at ``nu = 10``, 0.1 %: 29.76 against 29.59), ``nu`` need not be an integer.
-    """
-    c = 2.0 / (9.0 * dof)
-    return float(dof * (1.0 - c + z * np.sqrt(c)) ** 3)
 
 
 def _exact_verdict(fit: RigidFrfFit, origin: Array, span: float) -> tuple[float, str, BodyIntervals | None]:

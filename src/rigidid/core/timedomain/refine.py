@@ -27,11 +27,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigidid.core.geometry import layout_frame, normalise_directions, sensor_matrix
-from rigidid.core.linalg import pseudo_inverse
+from rigidid.core.linalg import pseudo_inverse, svd
 from rigidid.core.optimize import levenberg_marquardt
 from rigidid.core.statespace import modal_from_poles
 from rigidid.core.timedomain.acceptance import MisfitTest, budgeted_misfit_test, misfit_test
 from rigidid.core.timedomain.chain import ChainModel, ChannelChain
+from rigidid.core.timedomain.coupling import CouplingScore, coupling_score, modal_gram
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate, fir_taps
 from rigidid.core.timedomain.pretrigger import PRE_HELD, band_noise
 from rigidid.core.timedomain.sensor_test import TESTED_OUTPUTS, SensorTest, body_change_test, noise_inflation
@@ -143,6 +144,10 @@ class Refinement:
         With stated sensor tolerances: the score test of the sensors as stated at the plain
         refit's minimum (:func:`rigidid.core.timedomain.sensor_test.body_change_test`), and whether
         the sensors were then estimated.
+    coupling : CouplingScore or None
+        The score test for an AC coupling the chain does not state, at the plain refit's minimum
+        (:mod:`rigidid.core.timedomain.coupling`; None with a stated high-pass); ``modelled`` when this
+        refit models the corner it found (by default when the test flags it).
     """
 
     center_of_gravity: Array
@@ -164,6 +169,7 @@ class Refinement:
     sensor_std: dict[str, dict[str, Array]] | None = None
     sensor_correction: SensorCorrection | None = None
     sensor_test: SensorTest | None = None
+    coupling: CouplingScore | None = None
 
     @property
     def frequency_hz(self) -> Array:
@@ -828,15 +834,10 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     k = 6 * p
     cross, gram, proj = np.zeros((theta.size, k)), np.zeros((k, k)), np.zeros(k)
     row = 0
-    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
+    for sig, off in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
         n = sig.shape[0]
-        # g (k, c) lives in channel c only; G~ = G - S (S^T S)^-1 S^T G; r and J are orthogonal to S already
+        gram += off.gram()  # r and J are orthogonal to the linear columns already: G~ = G in their products
         sig_c = sig.transpose(2, 0, 1)  # (c, n, kind): batched products per channel (BLAS, not einsum loops)
-        sg = np.matmul(scaled.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(-1, k)
-        block = np.matmul(sig_c.transpose(0, 2, 1), sig_c)
-        own = np.zeros((p, 6, p, 6))
-        own[np.arange(p), :, np.arange(p), :] = block
-        gram += own.transpose(1, 0, 3, 2).reshape(k, k) - sg.T @ inv @ sg
         jr = jm[row : row + n * p].reshape(n, p, theta.size)
         cross += np.matmul(jr.transpose(1, 2, 0), sig_c).transpose(1, 2, 0).reshape(theta.size, k)
         proj += np.einsum("nc,nkc->kc", r[row : row + n * p].reshape(n, p), sig).reshape(k)
@@ -844,12 +845,67 @@ def sensor_terms(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: fl
     return SensorTerms(cross, gram, proj)
 
 
-def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, scale: float,
-                       link: _Link | None = None) -> Iterator[tuple[Array, Array, Array]]:  # fmt: skip
-    """Per impact: the column-normalised design ``S`` (n, p, m), ``(S^T S)^+``, the signatures (n, 6, p).
+@dataclass(frozen=True)
+class _OffColumns:
+    """One impact's sensor signatures off its linear columns, kept in their structure (:func:`_impact_signatures`).
 
-    With `link`, every virtual sensor reads through its channel's chain ``H_c(s_k)`` (the fitted delay
-    included) and ``S`` holds the chain's nuisance columns (AC transients, hum), as :func:`_evaluate`'s."""
+    The linear columns are the modal ones (``Re`` and ``-Im`` of ``e^{s_k t} phi_ck``, across the channels) and
+    each channel's own (offset, drift, the chain's transients, hum: ``L_c``). With ``P_c`` the projector off
+    ``L_c`` and ``M~ = P M`` the modal columns off them, ``P_S = P - M~ (M~^T M~)^+ M~^T``; a signature lives in
+    one channel, so ``G~ = P G - M~ (M~^T M~)^+ B`` with ``B = M~^T P G`` (12 by 6 p), formed from per-channel
+    sums over time, never from the design (``n p`` by ``12 + q p``).
+    """
+
+    local: Array  # (n, kind, p): each channel's signatures off its own columns, P G
+    groups: tuple[tuple[Array, CArray], ...]  # (channels, e^{s t} off their columns (n, 6)) per set of columns
+    shapes: CArray  # (p, 6) the weighted shapes
+    inv: Array  # (12, 12): (M~^T M~)^+
+    b: Array  # (12, kind p)
+
+    def gram(self) -> Array:
+        """``G~^T G~`` (6 p, 6 p), columns ``kind p + c``."""
+        _, kinds, p = self.local.shape
+        block = np.matmul(self.local.transpose(2, 1, 0), self.local.transpose(2, 0, 1))  # (c, kind, kind)
+        own = np.zeros((kinds, p, kinds, p))
+        own[:, np.arange(p), :, np.arange(p)] = block
+        out: Array = own.reshape(kinds * p, kinds * p) - self.b.T @ self.inv @ self.b
+        return out
+
+    def explicit(self) -> Array:
+        """``G~`` written out, (n p, 6 p) (for the determined errors' rank, :func:`_augmented_null`)."""
+        n, kinds, p = self.local.shape
+        g = (self.local[:, None, :, :] * np.eye(p)[None, :, None, :]).reshape(n * p, kinds * p)
+        modal = np.zeros((n, p, 12))
+        for channels, e in self.groups:
+            u = e[:, None, :] * self.shapes[channels][None]
+            modal[:, channels] = np.concatenate([u.real, -u.imag], axis=2)
+        out: Array = g - modal.reshape(n * p, 12) @ (self.inv @ self.b)
+        return out
+
+
+def _local_columns(t: Array, drift: bool, extra: Array | None, p: int) -> list[tuple[Array, Array]]:
+    """Each channel's own linear columns as :func:`_design` has them, grouped: ``(channels, orthonormal basis)``."""
+    base = [np.ones(t.size)] + ([t / max(float(t[-1]), 1e-300)] if drift else [])
+    sets: dict[bytes, tuple[list[int], Array]] = {}
+    for c in range(p):
+        own = [] if extra is None else [extra[:, c, m] for m in range(extra.shape[2]) if np.any(extra[:, c, m] != 0.0)]
+        cols = np.column_stack(base + own)
+        sets.setdefault(cols.tobytes(), ([], cols))[0].append(c)
+    out = []
+    for channels, cols in sets.values():
+        q, rr = np.linalg.qr(cols)
+        d = np.abs(np.diag(rr))
+        out.append((np.array(channels), q[:, d > 1e-12 * max(float(np.max(d)), 1e-300)]))
+    return out
+
+
+def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega: float, scale: float,
+                       link: _Link | None = None) -> Iterator[tuple[Array, _OffColumns]]:  # fmt: skip
+    """Per impact: the signatures (n, 6, p) and what is left of them off the linear columns (:class:`_OffColumns`).
+
+    The modal amplitudes are the least-squares ones with the linear columns (as the fit's). With `link`, every
+    virtual sensor reads through its channel's chain ``H_c(s_k)`` (the fitted delay included) and each channel's
+    columns hold the chain's nuisance ones (AC transients, hum), as :func:`_evaluate`'s."""
     from rigidid.core.sensor_budget import axis_normals
 
     p = pos_l.shape[0]
@@ -862,21 +918,36 @@ def _impact_signatures(theta: Array, data: _Data, pos_l: Array, dirs: Array, ome
     phi_v[3:] = (phi_v[3:] - phi_v[0]) / scale
     if link is not None:  # each channel's chain: linear, so the position's difference passes through it too
         phi_v = phi_v * link.transfer(theta, lam, p)[0][None]
-    phi = phi_v[0]
     w = 1.0 / data.sigma
+    phi = phi_v[0] * w[:, None]
     for y in data.decays:
         n = y.shape[0]
         t: Array = np.arange(n, dtype=float) * (data.dt * omega)
-        extra = None if link is None else link.nuisance(t)
-        design, ex = _design(lam, phi * w[:, None], t, data.drift, extra)
-        norms = np.sqrt(np.einsum("ij,ij->j", design, design))
+        ex = np.exp(np.outer(t, lam))  # (n, 6)
+        groups = _local_columns(t, data.drift, None if link is None else link.nuisance(t), p)
+        yw = y * w
+        gram, fit, tilde = np.zeros((12, 12)), np.zeros(12), []
+        for channels, q in groups:
+            e = ex - q @ (q.T @ ex)
+            gram += modal_gram(e, phi[channels])
+            u = (e.T @ (yw[:, channels] - q @ (q.T @ yw[:, channels]))) * phi[channels].T  # (6, c)
+            fit += np.concatenate([u.real.sum(axis=1), -u.imag.sum(axis=1)])
+            tilde.append(e)
+        norms = np.sqrt(np.maximum(np.diag(gram), 0.0))
         norms = np.where(norms > 0.0, norms, 1.0)
-        flat = design / norms
-        inv = pseudo_inverse(flat.T @ flat, symmetric=True)[0]
-        beta = inv @ (flat.T @ (y * w).reshape(-1)) / norms
+        inv = pseudo_inverse(gram / np.outer(norms, norms), symmetric=True)[0] / np.outer(norms, norms)
+        beta = inv @ fit
         modal = ex * (beta[:6] + 1j * beta[6:12])  # (n, 6)
         sig = (modal.real @ phi_v.real.reshape(-1, 6).T - modal.imag @ phi_v.imag.reshape(-1, 6).T).reshape(n, 6, p) * w
-        yield flat.reshape(n, p, -1), inv, sig  # sig: (n, kind, sensor)
+        local, b = np.empty_like(sig), np.zeros((12, 6, p))
+        for (channels, q), e in zip(groups, tilde, strict=True):
+            part = sig[:, :, channels]
+            local[:, :, channels] = part - np.einsum("nq,qjc->njc", q, np.einsum("nq,njc->qjc", q, part))
+            v = np.einsum("nk,njc->kjc", e, local[:, :, channels]) * phi[channels].T[:, None, :]  # (6, kind, c)
+            b[:6, :, channels] = v.real
+            b[6:, :, channels] = -v.imag
+        yield sig, _OffColumns(local, tuple((c, e) for (c, _), e in zip(groups, tilde, strict=True)), phi, inv,
+                               b.reshape(12, 6 * p))  # fmt: skip
 
 
 def _sensor_moments(bounds: Any, p: int) -> tuple[Array, Array, dict[str, Array]]:
@@ -979,16 +1050,14 @@ def _augmented_null(theta: Array, data: _Data, pos_l: Array, dirs: Array, omega:
     p = pos_l.shape[0]
     blocks = []
     row = 0
-    for scaled, inv, sig in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
+    for sig, off in _impact_signatures(theta, data, pos_l, dirs, omega, scale, link):
         n = sig.shape[0]
-        g = (sig[:, None, :, :] * np.eye(p)[None, :, None, :]).reshape(n * p, 6 * p)
-        flat = scaled.reshape(n * p, -1)
-        gt = g - flat @ (inv @ (flat.T @ g))
+        gt = off.explicit()
         blocks.append(np.linalg.qr(np.hstack([jm[row : row + n * p], gt]), mode="r"))
         row += n * p
     r = np.linalg.qr(np.vstack(blocks), mode="r")
     norms = np.linalg.norm(r, axis=0)
-    _, sv, vt = np.linalg.svd(r / np.where(norms > 0.0, norms, 1.0))
+    _, sv, vt = svd(r / np.where(norms > 0.0, norms, 1.0))
     keep = sv > rank_tolerance(sv[0], row)
     null = vt[~keep]
     return np.linalg.norm(null[:, theta.size :], axis=0), int(np.sum(keep))
@@ -1143,6 +1212,7 @@ def refine_body(
     estimate_delays: bool = False,
     sensor_bounds: Any = None,
     estimate_sensors: bool | None = False,
+    estimate_highpass: bool | None = False,
 ) -> Refinement:
     """Fit CG, J/m, K/m and C/m to the free decays of every impact (output error).
 
@@ -1186,6 +1256,11 @@ def refine_body(
         (``sensor_test``, :mod:`rigidid.core.timedomain.sensor_test`) and the noise is the pre-trigger's (with
         mains hum too, its lines taken out), through the chain and fitted delays when they are modelled;
         otherwise the plain refit.
+    estimate_highpass : bool or None
+        Without a high-pass in `chain`: model an AC coupling at the corner the score test of the plain
+        refit's residual finds (``coupling``, :mod:`rigidid.core.timedomain.coupling`), one first-order
+        high-pass common to the channels. None: only when the test flags it; False: never (the test is
+        still reported).
 
     Returns
     -------
@@ -1232,6 +1307,7 @@ def refine_body(
         data, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
         chain=chain, estimate_delays=estimate_delays, sensor_bounds=sensor_bounds, estimate_sensors=estimate_sensors,
+        estimate_highpass=estimate_highpass,
     )  # fmt: skip
 
 
@@ -1252,6 +1328,7 @@ def refine_prepared(
     sensor_bounds: Any = None,
     estimate_sensors: bool | None = False,
     sensor_passes: int = 5,
+    estimate_highpass: bool | None = False,
 ) -> Refinement:
     """:func:`refine_body` on decays already prepared (:func:`prepare_decays`, or read in row blocks).
 
@@ -1264,7 +1341,7 @@ def refine_prepared(
         factor is ``data.dt / dt``.
     positions, directions, center_of_gravity, inertia_per_mass, stiffness_per_mass, damping_per_mass, max_evaluations
         As for :func:`refine_body`.
-    sensor_bounds, estimate_sensors
+    sensor_bounds, estimate_sensors, estimate_highpass
         As for :func:`refine_body`.
     sensor_passes : int
         With the sensors estimated: at most this many Gauss-Newton passes on the sensors' errors, each a refit
@@ -1295,6 +1372,7 @@ def refine_prepared(
     """
     if drift is not None and drift != data.drift:
         data = replace(data, drift=drift)
+    given = data
     data = _settled(data, chain, estimate_delays, float(dt))
     pos = np.asarray(positions, dtype=float).reshape(-1, 3)
     dirs = normalise_directions(directions)
@@ -1304,11 +1382,24 @@ def refine_prepared(
     link = _link(chain, omega, pos.shape[0], estimate_delays)
     theta0 = theta0 if link is None else np.concatenate([theta0, np.zeros(len(link.free))])
     link, hum, data, theta0 = _with_hum(link, theta0, data, (pos_l, dirs, omega, chain, estimate_delays, float(dt)))
-    out, plain = _refined(
+    out, plain, coupling = _refined(
         _Start(data, link, hum, chain), dt, (pos, dirs, pos_l, frame, theta0), max_evaluations,
         (sensor_bounds, estimate_sensors, sensor_passes),
     )  # fmt: skip
-    return _plain_kept(out, estimate_sensors, plain)
+    later = out.coupling  # a later pass's, the sensors corrected (:func:`_next_pass`): their misfit out of it
+    if (coupling is None or not coupling.flagged) and later is not None and later.flagged:
+        coupling = later
+    out = replace(_plain_kept(out, estimate_sensors, plain), coupling=coupling)
+    if coupling is None or not (estimate_highpass or (estimate_highpass is None and coupling.flagged)):
+        return out
+    coupled = with_highpass(chain, pos.shape[0], coupling.corner_hz)
+    again = refine_prepared(
+        given, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
+        stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
+        chain=coupled, estimate_delays=estimate_delays, sensor_bounds=sensor_bounds, estimate_sensors=estimate_sensors,
+        sensor_passes=sensor_passes,
+    )  # fmt: skip
+    return replace(again, coupling=replace(coupling, modelled=True))
 
 
 @dataclass(frozen=True)
@@ -1325,12 +1416,14 @@ class _Start:
 
 
 def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations: int,
-             sensing: tuple[Any, bool | None, int]) -> tuple[Refinement, Callable[[], Refinement] | None]:  # fmt: skip
+             sensing: tuple[Any, bool | None, int]) -> tuple[Refinement, Callable[[], Refinement] | None,
+                                                              CouplingScore | None]:  # fmt: skip
     """:func:`refine_prepared` from its start: `sensors` is ``(pos, dirs, pos_l, frame, theta0)`` (`theta0` with
     the delays' parameters when fitted), `sensing` ``(sensor_bounds, estimate_sensors, sensor_passes)``.
 
-    Returns the refinement and, when the sensors were corrected, the plain refit's (this pass's fit without the
-    correction, as ``estimate_sensors=False`` gives it) on call (:func:`_plain_kept`), else None."""
+    Returns the refinement, when the sensors were corrected the plain refit's (this pass's fit without the
+    correction, as ``estimate_sensors=False`` gives it) on call (:func:`_plain_kept`), else None, and the score
+    test of an unstated AC coupling at the fit's minimum (:func:`_coupling`)."""
     pos, dirs, pos_l, frame, theta0 = sensors
     sensor_bounds, estimate_sensors, sensor_passes = sensing
     data, link, omega, p = start.data, start.link, frame.omega, pos.shape[0]
@@ -1355,6 +1448,7 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
     lengths = [d.shape[0] for d in data.decays]
     std = _bound(theta, jm, s2, frame, pos_l, dirs, r, lengths, q_fit, n_linear, grad, reduced)
     misfit = _misfit(r, data, dof / n_res, q_fit)
+    coupling = _coupling(theta, (r, jm), data, (pos_l, dirs, omega), link, s2)
     sensor_std, correction, test, fitted = None, None, None, theta
     fit_at = (data, pos_l, dirs, omega, frame, link), (jm, r, grad, s2)
     assemble = partial(_assembled, start, (frame, pos_l, dirs, s2), (cost, n_res, nfev, converged))
@@ -1375,7 +1469,7 @@ def _refined(start: _Start, dt: float, sensors: tuple[Any, ...], max_evaluations
         # a next pass whose model has not six underdamped modes: this pass is kept (its after-check judges it)
         with contextlib.suppress(np.linalg.LinAlgError):
             out = _next_pass(out, start, dt, (pos, dirs), sensor_bounds, max_evaluations, sensor_passes - 1)
-    return out, plain
+    return out, plain, coupling
 
 
 def _assembled(start: _Start, model: tuple[Any, ...], stats: tuple[Any, ...], theta: Array, fitted: Array,
@@ -1548,6 +1642,51 @@ def _with_hum(
 
     theta = _levenberg_marquardt(fun, both, theta0, _PILOT, per.size)[0]
     return link, found, data, theta
+
+
+def _coupling(theta: Array, fit: tuple[Array, Array], data: PreparedDecays, model: tuple[Array, Array, float],
+              link: _Link | None, s2: float) -> CouplingScore | None:  # fmt: skip
+    """The score test of an unstated AC coupling in the fit's weighted residual and Jacobian `fit` at `theta` (None
+    with a stated high-pass): the linear columns as :func:`_design`'s (the offsets, drifts and hum each channel has
+    its own of), decay rates from half the longest decay's inverse to half the lowest mode's natural frequency (a
+    corner above it is not tried: `interior` then false; `model` is ``(pos_l, dirs, omega)``, time in units of
+    ``1 / omega``)."""
+    pos_l, dirs, omega = model
+    if link is not None and link.chain.highpass_modes():
+        return None
+    r, jm = fit
+    p = pos_l.shape[0]
+    lam, phi, *_ = _modes(theta, pos_l, dirs, False)
+    if link is not None:
+        phi = phi * link.transfer(theta, lam, p)[0]
+    residuals, times, exps, local, tangent, row = [], [], [], [], [], 0
+    for y in data.decays:
+        n = y.shape[0]
+        t: Array = np.arange(n, dtype=float) * (data.dt * omega)
+        residuals.append(r[row : row + n * p].reshape(n, p))
+        tangent.append(jm[row : row + n * p].reshape(n, p, -1))
+        row += n * p
+        cols = [np.ones((n, 1))] + ([t[:, None] / max(float(t[-1]), 1e-300)] if data.drift else [])
+        if link is not None and link.hum:
+            from rigidid.core.timedomain.hum import hum_columns
+
+            cols.append(hum_columns(t, omega, link.hum, 1)[:, 0, :])
+        times.append(t)
+        exps.append(np.exp(np.outer(t, lam)))
+        local.append(np.hstack(cols))
+    slowest, fastest = 0.5 / max(float(t[-1]) for t in times), 0.5 * float(np.min(np.abs(lam)))
+    if fastest < 8.0 * slowest:  # decays too short to tell a coupling's transient from a drift
+        return None
+    return coupling_score(
+        residuals, times, exps, local, phi / data.sigma[:, None], variance=s2, rate_range=(slowest, fastest),
+        hz_per_rate=omega / (2.0 * math.pi), tangent=tangent,
+    )  # fmt: skip
+
+
+def with_highpass(chain: ChainModel | None, channels: int, corner_hz: float) -> ChainModel:
+    """`chain` (None: no chain) with a first-order high-pass at `corner_hz` on every channel (an AC coupling found)."""
+    base = chain.channels if chain is not None else (ChannelChain(),) * channels
+    return ChainModel(tuple(replace(c, highpass_hz=corner_hz, highpass_order=1) for c in base))
 
 
 def _in_band(data: PreparedDecays, frequencies: Sequence[float], dt: float) -> PreparedDecays | None:
@@ -1766,7 +1905,7 @@ def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array
             assert first.delays is not None
             theta0 = np.concatenate([theta0, first.delays[list(link.free)] * frame.omega])
     centred = _Centred(getattr(bounds, "bounds", bounds), getattr(bounds, "earlier", 0.0) + x.value.ravel())
-    second, _ = _refined(
+    second, _, later = _refined(
         replace(start, data=data2, link=link), dt, (pos2, dirs2, pos_l, frame, theta0), max_evaluations,
         (centred, True, passes),
     )  # fmt: skip
@@ -1780,7 +1919,7 @@ def _next_pass(first: Refinement, start: _Start, dt: float, sensors: tuple[Array
         test = replace(test, misfit_after=second.sensor_test.misfit_after)  # the last pass's residual
     return replace(second, sensor_correction=total, evaluations=first.evaluations + second.evaluations,
                    delay_score=first.delay_score if second.delay_score is None else second.delay_score,
-                   sensor_test=test)  # fmt: skip
+                   sensor_test=test, coupling=later if second.coupling is None else second.coupling)  # fmt: skip
 
 
 _COARSE_ROWS = 24_000
@@ -2085,6 +2224,8 @@ class RecordBound:
         The ids of `sensor_correction`'s columns.
     sensor_test : SensorTest or None
         The sensor test and whether the sensors were estimated (:attr:`Refinement.sensor_test`).
+    coupling : CouplingScore or None
+        The unstated AC coupling's test and whether it was modelled (:attr:`Refinement.coupling`).
     """
 
     center_of_gravity: Any
@@ -2106,6 +2247,7 @@ class RecordBound:
     sensor_correction: SensorCorrection | None = None
     corrected_sensors: tuple[str, ...] = ()
     sensor_test: SensorTest | None = None
+    coupling: CouplingScore | None = None
 
 
 def record_bound(
@@ -2187,4 +2329,5 @@ def record_bound(
         tolerances=tolerances,
         misfit=refinement.misfit,
         sensor_test=refinement.sensor_test,
+        coupling=refinement.coupling,
     )

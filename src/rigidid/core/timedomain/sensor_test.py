@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from rigidid.core.chisquare import chi2_sf
 from rigidid.core.linalg import pseudo_inverse
 from rigidid.core.timedomain.acceptance import FALSE_ALARM
 
@@ -134,8 +135,6 @@ def body_change_test(
     -------
     SensorTest
     """
-    from scipy.special import gammaincc
-
     b = effect @ score
     cov = variance * (effect @ gram @ effect.T)
     d = np.sqrt(np.maximum(np.diag(cov), 0.0))
@@ -145,7 +144,7 @@ def body_change_test(
     z = b[keep] / d[keep]
     inv, rank = pseudo_inverse(cov[np.ix_(keep, keep)] / np.outer(d[keep], d[keep]), symmetric=True)
     t = float(z @ inv @ z)
-    p = float(gammaincc(0.5 * rank, 0.5 * t)) if rank > 0 else 1.0
+    p = chi2_sf(t, rank) if rank > 0 else 1.0
     return SensorTest(t, int(rank), p, false_alarm)
 
 
