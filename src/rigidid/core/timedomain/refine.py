@@ -145,9 +145,10 @@ class Refinement:
         refit's minimum (:func:`rigidid.core.timedomain.sensor_test.body_change_test`), and whether
         the sensors were then estimated.
     coupling : CouplingScore or None
-        The score test for an AC coupling the chain does not state, at the plain refit's minimum
-        (:mod:`rigidid.core.timedomain.coupling`; None with a stated high-pass); ``modelled`` when this
-        refit models the corner it found (by default when the test flags it).
+        The score test for an AC coupling the chain does not state, at the plain refit's minimum, or, when that
+        one does not flag and the sensors were corrected, at the last later pass's (the sensors' misfit out of its
+        residual) when that one does (:mod:`rigidid.core.timedomain.coupling`; None with a stated high-pass);
+        ``modelled`` when this refit models the corner it found (by default when the test flags it).
     """
 
     center_of_gravity: Array
@@ -1392,7 +1393,7 @@ def refine_prepared(
     out = replace(_plain_kept(out, estimate_sensors, plain), coupling=coupling)
     if coupling is None or not (estimate_highpass or (estimate_highpass is None and coupling.flagged)):
         return out
-    coupled = with_highpass(chain, pos.shape[0], coupling.corner_hz)
+    coupled = _with_highpass(chain, pos.shape[0], coupling.corner_hz)
     again = refine_prepared(
         given, dt, positions, directions, center_of_gravity=center_of_gravity, inertia_per_mass=inertia_per_mass,
         stiffness_per_mass=stiffness_per_mass, damping_per_mass=damping_per_mass, max_evaluations=max_evaluations,
@@ -1683,7 +1684,7 @@ def _coupling(theta: Array, fit: tuple[Array, Array], data: PreparedDecays, mode
     )  # fmt: skip
 
 
-def with_highpass(chain: ChainModel | None, channels: int, corner_hz: float) -> ChainModel:
+def _with_highpass(chain: ChainModel | None, channels: int, corner_hz: float) -> ChainModel:
     """`chain` (None: no chain) with a first-order high-pass at `corner_hz` on every channel (an AC coupling found)."""
     base = chain.channels if chain is not None else (ChannelChain(),) * channels
     return ChainModel(tuple(replace(c, highpass_hz=corner_hz, highpass_order=1) for c in base))
