@@ -26,16 +26,23 @@ OTHER_Z = 5.0  # the other channels' fitted delays in their std (observed up to 
 INTERVAL_Z = 3.0  # CG and inertia errors in their reported std (observed up to 0.9)
 
 
-def test_a_skewed_channel_is_fitted_by_default_and_the_truth_is_within_the_intervals() -> None:
+def _skewed():  # type: ignore[no-untyped-def]
+    """four-mounts' body, its layout and records (0.2 % noise) with channel SKEWED one sample late."""
     body = body_from_file(load_body(SAMPLE / "body.json"))
     layout = load_layout(SAMPLE / "layout.json")
-    ids, pos, dirs = layout_arrays(layout)
+    _, pos, dirs = layout_arrays(layout)
     clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=0.5, pretrigger=0.1, noise=0.002,
                             seed=3)  # fmt: skip
     records = []
     for r in clean:
         r[1:, SKEWED] = r[:-1, SKEWED].copy()  # one sample late
         records.append((r, 1.0 / RATE))
+    return body, layout, records
+
+
+def test_a_skewed_channel_is_fitted_by_default_and_the_truth_is_within_the_intervals() -> None:
+    body, layout, records = _skewed()
+    ids = layout_arrays(layout)[0]
     result, caught = refit_with_warnings(layout, records)
     chain = [str(w.message) for w in caught if issubclass(w.category, ChainWarning)]
     assert len(chain) == 1 and "kept that refit" in chain[0] and f"{ids[SKEWED]} 0.00" in chain[0], chain
@@ -78,15 +85,7 @@ def test_a_skew_refit_that_fails_after_a_kept_plain_refit_keeps_the_plain_one(mo
     import rigidid.api.records as records_api
     import rigidid.core.timedomain.refine as refine_module
 
-    body = body_from_file(load_body(SAMPLE / "body.json"))
-    layout = load_layout(SAMPLE / "layout.json")
-    _, pos, dirs = layout_arrays(layout)
-    clean = impulse_records(body, pos, dirs, IMPACTS, sample_rate=RATE, duration=0.5, pretrigger=0.1, noise=0.002,
-                            seed=3)  # fmt: skip
-    records = []
-    for r in clean:
-        r[1:, SKEWED] = r[:-1, SKEWED].copy()
-        records.append((r, 1.0 / RATE))
+    _, layout, records = _skewed()
     real_fit, real_verdict = refine_module.refine_body, records_api.refit_verdict
 
     def failing_with_delays(*args, **kwargs):  # type: ignore[no-untyped-def]
