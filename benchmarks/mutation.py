@@ -335,8 +335,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "band-noise-hum-left",
         "core/timedomain/pretrigger.py",
-        "basis = np.column_stack([np.ones(n), *waves])",
-        "basis = np.ones((n, 1))",
+        "basis = np.column_stack([np.ones(n), hum_columns(",
+        "basis = np.ones((n, 1)); _lines = np.column_stack([np.ones(n), hum_columns(",
         "the hum left in the pre-trigger's noise (issue 23)",
         ("tests/core/test_pretrigger.py", "tests/core/test_chain.py"),
     ),

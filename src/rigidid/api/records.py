@@ -739,7 +739,7 @@ def _refit_skewed(
         return _accept_refinement(result, plain, tolerances, ids) if plain_kept else result
     keep, reason = refit_verdict(skewed)
     if keep and not _confirmed(skewed, late):  # the score's skew not in the fit: a misfit the score read as one
-        if refit_verdict(plain)[0]:
+        if plain_kept:
             warnings.warn(
                 f"the refit's residual named a skew on {where}, but refitted with the channels' delays estimated "
                 f"no named channel's delay is beyond {_SKEW_Z:g} standard errors: kept the refit without them",
@@ -830,21 +830,18 @@ def _warn_delays(refinement: Any, ids: Sequence[str], frequency_hz: Any, late: l
             stacklevel=3,
         )
     found = refinement.coupling
-    if found is not None and found.flagged and not found.modelled:
-        warnings.warn(
-            "the refit's residual shows an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after "
-            f"each impact, score {found.statistic:.0f} on {found.dof} degrees of freedom, p = {found.p_value:.2g}, "
-            f"corner {found.corner_hz:.3g} Hz): not modelled (--no-estimate-highpass); state the sensors' "
-            "highpass_hz in the layout's chain block",
-            ChainWarning,
-            stacklevel=3,
-        )
-    if found is not None and found.modelled:
-        warnings.warn(
-            "the refit's residual showed an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after "
-            f"each impact, score {found.statistic:.0f} on {found.dof} degrees of freedom, p = {found.p_value:.2g}): "
+    if found is not None and (found.modelled or found.flagged):
+        score = f"score {found.statistic:.0f} on {found.dof} degrees of freedom, p = {found.p_value:.2g}"
+        what = (
+            f"showed an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after each impact, {score}): "
             f"modelled a first-order high-pass at {found.corner_hz:.3g} Hz (std {found.corner_std_hz:.2g} Hz) on "
-            "every channel; state the sensors' highpass_hz in the layout's chain block",
+            "every channel"
+            if found.modelled
+            else f"shows an AC coupling nobody stated (a decay e^(-2 pi f t) on every channel after each impact, "
+            f"{score}, corner {found.corner_hz:.3g} Hz): not modelled (--no-estimate-highpass)"
+        )
+        warnings.warn(
+            f"the refit's residual {what}; state the sensors' highpass_hz in the layout's chain block",
             ChainWarning,
             stacklevel=3,
         )

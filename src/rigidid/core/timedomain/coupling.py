@@ -143,8 +143,7 @@ def coupling_statistic(
     if tangent is not None:
         return _with_tangent(columns, rates, tangent)
     stat, dof = np.zeros(g), np.zeros(g, dtype=int)
-    for parts in _per_impact(columns, rates):
-        s, w, keep = parts[0], parts[1], parts[2]
+    for s, w, keep, _ in _per_impact(columns, rates):
         for j in np.flatnonzero(keep):
             winv, rank = pseudo_inverse(w[j], symmetric=True)
             stat[j] += float(s[j] @ winv @ s[j])

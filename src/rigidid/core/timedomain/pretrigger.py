@@ -18,7 +18,6 @@ taken out. The readers keep at most :data:`PRE_HELD` rows of each pre-trigger (i
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -26,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigidid.core.linalg import numerical_rank
+from rigidid.core.timedomain.hum import hum_columns
 from rigidid.core.timedomain.preprocess import FIR_HALF_LENGTH, decimate
 
 __all__ = ["PRE_HELD", "BandNoise", "band_noise"]
@@ -99,9 +99,7 @@ def band_noise(held: Sequence[Array], dt: float, factor: int, frequencies: Seque
         m = n if factor <= 1 else n // factor - 2 * FIR_HALF_LENGTH - 1  # the decimated samples
         if m < _MIN_DOF * inflation + 2 * len(frequencies) + 1:
             return None
-        t = np.arange(n) * dt
-        waves = [f(2 * math.pi * hz * t) for hz in frequencies for f in (np.cos, np.sin)]
-        basis = np.column_stack([np.ones(n), *waves])
+        basis = np.column_stack([np.ones(n), hum_columns(np.arange(n, dtype=float) * dt, 1.0, frequencies, 1)[:, 0, :]])
         coef, _, _, s = np.linalg.lstsq(basis, x, rcond=None)
         r = x - basis @ coef
         raw = raw + ((x - x.mean(axis=0)) ** 2).sum(axis=0) / (n * len(held))

@@ -1667,14 +1667,11 @@ def _coupling(theta: Array, fit: tuple[Array, Array], data: PreparedDecays, mode
         residuals.append(r[row : row + n * p].reshape(n, p))
         tangent.append(jm[row : row + n * p].reshape(n, p, -1))
         row += n * p
-        cols = [np.ones((n, 1))] + ([t[:, None] / max(float(t[-1]), 1e-300)] if data.drift else [])
-        if link is not None and link.hum:
-            from rigidid.core.timedomain.hum import hum_columns
-
-            cols.append(hum_columns(t, omega, link.hum, 1)[:, 0, :])
+        # without a stated high-pass the link's nuisance is the hum alone, the same on every channel: one set
+        ((_, basis),) = _local_columns(t, data.drift, None if link is None else link.nuisance(t), p)
         times.append(t)
         exps.append(np.exp(np.outer(t, lam)))
-        local.append(np.hstack(cols))
+        local.append(basis)
     slowest, fastest = 0.5 / max(float(t[-1]) for t in times), 0.5 * float(np.min(np.abs(lam)))
     if fastest < 8.0 * slowest:  # decays too short to tell a coupling's transient from a drift
         return None
